@@ -1,0 +1,45 @@
+// The aperture's image: an n-bladed iris (regular polygon, corners on the circle of radius r)
+// with rotation and blade curvature, or a circle when blades < 3.
+#ifndef REALCAM_APERTURE_GLSL
+#define REALCAM_APERTURE_GLSL
+#include "common.glsl"
+
+struct Aperture {
+    int blades;        // < 3: circular
+    float rotation;    // radians; 0 puts a corner straight up (y up), as Blender/Cycles does
+    float curvature;   // 0: straight blades, 1: circular
+};
+
+// Signed distance in pixels from offset o (x right, y DOWN, image convention) to the edge of the
+// aperture image of circumradius r: negative inside.
+float aperture_sdf(vec2 o, float r, Aperture ap) {
+    float len = length(o);
+    float d_circle = len - r;
+    if (ap.blades < 3 || ap.curvature >= 1.0) return d_circle;
+    float sector = 2.0 * PI / float(ap.blades);
+    // Angle in the y-up frame, measured from the direction of the first edge's normal, which
+    // lies half a sector from the first corner (at 90 degrees + rotation).
+    float phi = atan(-o.y, o.x) - (0.5 * PI + ap.rotation + 0.5 * sector);
+    // Fold into the nearest edge's sector: [-sector/2, sector/2).
+    phi = phi - sector * floor(phi / sector + 0.5);
+    float apothem = r * cos(0.5 * sector);
+    float d_poly = len * cos(phi) - apothem;
+    return mix(d_poly, d_circle, ap.curvature);
+}
+
+// Area of the aperture image of circumradius r, in px^2.
+float aperture_area(float r, Aperture ap) {
+    float circle = PI * r * r;
+    if (ap.blades < 3) return circle;
+    float n = float(ap.blades);
+    float polygon = 0.5 * n * r * r * sin(2.0 * PI / n);
+    return mix(polygon, circle, ap.curvature);
+}
+
+// Fraction of the pixel at offset o covered by the aperture image (a one-pixel linear ramp
+// across the edge: antialiased, and exactly 1 for the centre pixel of a point-sized image).
+float aperture_coverage(vec2 o, float r, Aperture ap) {
+    return clamp(0.5 - aperture_sdf(o, r, ap), 0.0, 1.0);
+}
+
+#endif

@@ -1,0 +1,168 @@
+//! The camera a render uses: lens, aperture, sensor, shutter, ISO, film. Built from a lens file
+//! and the user's settings, checked against what the lens allows.
+
+use crate::lens_file::LensFile;
+use crate::optics::film::FilmCurve;
+use crate::optics::sensor::SensorFit;
+use crate::optics::{OpticsError, Sensor, ThinLens};
+use crate::passes::bokeh_gather::ApertureShape;
+
+#[derive(Debug, thiserror::Error)]
+pub enum CameraError {
+    #[error(transparent)]
+    Optics(#[from] OpticsError),
+    #[error("{what} is outside what the lens {lens:?} allows ({allowed}); pass --force to use it anyway")]
+    OutOfRange { what: String, lens: String, allowed: String },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// How sensor values become output values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilmMode {
+    /// Scene-referred linear sensor values (for compositing).
+    Linear,
+    /// Through the film's characteristic curve (display-referred).
+    Curve(FilmCurve),
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub lens_name: String,
+    pub lens: ThinLens,
+    pub aperture: ApertureShape,
+    pub sensor: Sensor,
+    pub sensor_fit: SensorFit,
+    pub shutter_s: f64,
+    pub iso: f64,
+    /// Luminance in cd/m^2 of one scene unit; sets the absolute exposure.
+    pub nits_per_unit: f64,
+    /// Apply the exposure gain (ISO, shutter, f-number). Off: sensor value = scene value.
+    pub exposure: bool,
+    pub vignetting: bool,
+    pub film: FilmMode,
+    /// User clamp on |CoC| in pixels.
+    pub max_coc_px: f64,
+}
+
+/// What the user asked for; `None` takes the lens file's or the default.
+#[derive(Clone, Debug, Default)]
+pub struct CameraRequest {
+    pub focal_length_mm: Option<f64>,
+    pub f_number: Option<f64>,
+    pub focus_distance_m: f64,
+    pub sensor: Option<String>,
+    pub sensor_fit: Option<SensorFit>,
+    pub shutter_s: f64,
+    pub iso: f64,
+    pub nits_per_unit: f64,
+    pub blades: Option<u32>,
+    pub blade_rotation_deg: Option<f64>,
+    pub exposure: bool,
+    pub vignetting: bool,
+    pub film: Option<FilmMode>,
+    pub max_coc_px: f64,
+    /// Allow settings outside the lens's range.
+    pub force: bool,
+}
+
+impl Camera {
+    pub fn new(lens_file: &LensFile, req: &CameraRequest) -> Result<Camera, CameraError> {
+        let focal_length_mm = req.focal_length_mm.unwrap_or(lens_file.focal_length_mm);
+        let f_number = req.f_number.unwrap_or(lens_file.f_number_min.max(2.8));
+        let focus_distance_mm = req.focus_distance_m * 1000.0;
+        let name = lens_file.name.clone();
+        let out_of_range = |what: String, allowed: String| CameraError::OutOfRange { what, lens: name.clone(), allowed };
+        if !req.force {
+            if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
+                return Err(out_of_range(
+                    format!("f/{f_number}"),
+                    format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max),
+                ));
+            }
+            if req.focus_distance_m < lens_file.focus_min_m {
+                return Err(out_of_range(
+                    format!("focus distance {} m", req.focus_distance_m),
+                    format!("closest focus {} m", lens_file.focus_min_m),
+                ));
+            }
+            if (focal_length_mm - lens_file.focal_length_mm).abs() > 1e-9 {
+                return Err(out_of_range(
+                    format!("focal length {focal_length_mm} mm"),
+                    format!("a prime of {} mm", lens_file.focal_length_mm),
+                ));
+            }
+        }
+        let lens = ThinLens::new(focal_length_mm, f_number, focus_distance_mm)?
+            .with_pupil_magnification(lens_file.pupil_magnification)?
+            .with_transmittance(lens_file.transmittance)?;
+        let sensor = Sensor::parse(req.sensor.as_deref().unwrap_or("full-frame"))?;
+        for (what, v) in [("shutter", req.shutter_s), ("ISO", req.iso), ("nits per unit", req.nits_per_unit)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(CameraError::Invalid(format!("{what} must be a positive number, got {v}")));
+            }
+        }
+        if !(req.max_coc_px.is_finite() && req.max_coc_px >= 0.0) {
+            return Err(CameraError::Invalid(format!("--max-coc must be >= 0 px, got {}", req.max_coc_px)));
+        }
+        let blades = req.blades.unwrap_or(lens_file.aperture.blades);
+        if blades == 1 || blades == 2 || blades > 32 {
+            return Err(CameraError::Invalid(format!("--blades {blades}: use 0 (circular) or 3..32")));
+        }
+        Ok(Camera {
+            lens_name: lens_file.name.clone(),
+            lens,
+            aperture: ApertureShape {
+                blades,
+                rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
+                curvature: lens_file.aperture.curvature,
+            },
+            sensor,
+            sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),
+            shutter_s: req.shutter_s,
+            iso: req.iso,
+            nits_per_unit: req.nits_per_unit,
+            exposure: req.exposure,
+            vignetting: req.vignetting,
+            film: req.film.unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
+            max_coc_px: req.max_coc_px,
+        })
+    }
+
+    /// Pixel pitch on the film for an image of this size.
+    pub fn pixel_pitch_mm(&self, width_px: u32, height_px: u32) -> f64 {
+        self.sensor.pixel_pitch_mm(width_px, height_px, self.sensor_fit)
+    }
+
+    /// Linear gain from scene value to sensor value (1 = saturation); 1 with exposure off.
+    pub fn exposure_gain(&self) -> f64 {
+        if self.exposure {
+            crate::optics::exposure::exposure_gain(&self.lens, self.shutter_s, self.iso, self.nits_per_unit)
+        } else {
+            1.0
+        }
+    }
+
+    /// Settings recorded as EXR attributes on the output.
+    pub fn attributes(&self) -> Vec<(String, String)> {
+        let l = &self.lens;
+        vec![
+            ("realcam/lens".into(), self.lens_name.clone()),
+            ("realcam/focal_length_mm".into(), format!("{}", l.focal_length_mm)),
+            ("realcam/f_number".into(), format!("{}", l.f_number)),
+            ("realcam/focus_distance_m".into(), format!("{}", l.focus_distance_mm / 1000.0)),
+            ("realcam/sensor_mm".into(), format!("{}x{}", self.sensor.width_mm, self.sensor.height_mm)),
+            ("realcam/shutter_s".into(), format!("{}", self.shutter_s)),
+            ("realcam/iso".into(), format!("{}", self.iso)),
+            ("realcam/aperture_blades".into(), format!("{}", self.aperture.blades)),
+            ("realcam/exposure_gain".into(), format!("{}", self.exposure_gain())),
+            (
+                "realcam/film".into(),
+                match self.film {
+                    FilmMode::Linear => "linear (scene-referred)".into(),
+                    FilmMode::Curve(_) => "characteristic curve".into(),
+                },
+            ),
+        ]
+    }
+}

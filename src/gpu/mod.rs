@@ -1,0 +1,60 @@
+//! The thin Vulkan runtime: instance and device, memory through gpu-allocator, compute pipelines
+//! with a persistent pipeline cache, a command recorder with debug labels and per-pass timestamp
+//! queries. It knows nothing about optics; `src/passes/` builds on it.
+
+mod context;
+mod pipeline;
+mod profiler;
+mod recorder;
+mod resources;
+pub mod shaders;
+
+pub use context::{DeviceInfo, Gpu, GpuOptions};
+pub use pipeline::ComputePipeline;
+pub use profiler::{PassTiming, Profile};
+pub use recorder::{Bind, Download, Recorder};
+pub use resources::{color_range, GpuBuffer, GpuImage};
+
+use ash::vk;
+
+/// Errors of the Vulkan runtime.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("cannot load the Vulkan loader (libvulkan.so.1): {0}; install libvulkan1 and a driver such as mesa-vulkan-drivers")]
+    Loader(String),
+    #[error("no Vulkan device found; install a driver (lavapipe: mesa-vulkan-drivers)")]
+    NoDevice,
+    #[error("no Vulkan device matches --device {wanted:?}; devices found: {found}")]
+    DeviceNotFound { wanted: String, found: String },
+    #[error("device {name:?} is unsuitable: {why}")]
+    Unsuitable { name: String, why: String },
+    #[error("the Khronos validation layer was requested but is not installed (Debian: vulkan-validationlayers)")]
+    NoValidationLayer,
+    #[error("Vulkan call {call} failed: {result}")]
+    Vk { call: &'static str, result: vk::Result },
+    #[error("GPU memory allocation for {name:?} failed: {source}")]
+    Alloc {
+        name: String,
+        #[source]
+        source: gpu_allocator::AllocationError,
+    },
+    #[error("invalid SPIR-V for shader {0}")]
+    Spirv(&'static str),
+    #[error("the GPU memory allocator was already shut down")]
+    AllocatorGone,
+    #[error("the shader {0} is not in this build")]
+    NoShader(String),
+}
+
+pub type GpuResult<T> = Result<T, GpuError>;
+
+/// Attach the name of the failing call to a raw Vulkan result.
+pub(crate) trait VkContext<T> {
+    fn vk(self, call: &'static str) -> GpuResult<T>;
+}
+
+impl<T> VkContext<T> for Result<T, vk::Result> {
+    fn vk(self, call: &'static str) -> GpuResult<T> {
+        self.map_err(|result| GpuError::Vk { call, result })
+    }
+}

@@ -1,0 +1,455 @@
+//! One command buffer, recorded pass by pass and submitted once. Each pass is bracketed by a
+//! debug label and two timestamps; descriptor sets come from a pool owned by the recording.
+//! Barriers are not inferred here: every pass writes its own (see `src/passes/`).
+
+use super::profiler::{PassTiming, Profile};
+use super::resources::color_range;
+use super::{ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, VkContext};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use std::ffi::CString;
+
+const MAX_TIMED_SPANS: u32 = 128;
+
+/// A resource bound to one binding of a pass's descriptor set.
+pub enum Bind<'a> {
+    /// A storage image in layout GENERAL.
+    Image(&'a GpuImage),
+    /// A storage or uniform buffer, whole.
+    Buffer(&'a GpuBuffer),
+}
+
+/// Recording of one frame's work.
+pub struct Recorder {
+    gpu: Gpu,
+    command_pool: vk::CommandPool,
+    cb: vk::CommandBuffer,
+    descriptor_pool: vk::DescriptorPool,
+    query_pool: Option<vk::QueryPool>,
+    spans: Vec<String>,
+    open_span: Option<usize>,
+    staging: Vec<GpuBuffer>,
+    downloads: Vec<(GpuBuffer, usize)>,
+}
+
+/// Handle to an image read back by [`Recorder::download_image`].
+#[derive(Clone, Copy, Debug)]
+pub struct Download(usize);
+
+impl Recorder {
+    pub fn new(gpu: &Gpu, label: &str) -> GpuResult<Recorder> {
+        let device = gpu.device();
+        unsafe {
+            let command_pool = device
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default()
+                        .queue_family_index(gpu.shared.queue_family)
+                        .flags(vk::CommandPoolCreateFlags::TRANSIENT),
+                    None,
+                )
+                .vk("vkCreateCommandPool")?;
+            let cb = device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(command_pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .vk("vkAllocateCommandBuffers")?[0];
+            gpu.set_name(cb, label);
+            let sizes = [
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: 512 },
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 512 },
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 64 },
+            ];
+            let descriptor_pool = device
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default().max_sets(128).pool_sizes(&sizes),
+                    None,
+                )
+                .vk("vkCreateDescriptorPool")?;
+            let query_pool = if gpu.shared.timestamps {
+                let pool = device
+                    .create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(MAX_TIMED_SPANS * 2),
+                        None,
+                    )
+                    .vk("vkCreateQueryPool")?;
+                Some(pool)
+            } else {
+                None
+            };
+            device
+                .begin_command_buffer(
+                    cb,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .vk("vkBeginCommandBuffer")?;
+            if let Some(pool) = query_pool {
+                device.cmd_reset_query_pool(cb, pool, 0, MAX_TIMED_SPANS * 2);
+            }
+            Ok(Recorder {
+                gpu: gpu.clone(),
+                command_pool,
+                cb,
+                descriptor_pool,
+                query_pool,
+                spans: Vec::new(),
+                open_span: None,
+                staging: Vec::new(),
+                downloads: Vec::new(),
+            })
+        }
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        self.cb
+    }
+
+    /// Open a named span: a debug label for profilers and a timestamp for `--profile`.
+    pub fn begin_pass(&mut self, name: &str) {
+        self.end_pass();
+        let index = self.spans.len();
+        self.spans.push(name.to_string());
+        if let Some(d) = &self.gpu.shared.debug_device {
+            if let Ok(label) = CString::new(name) {
+                let info = vk::DebugUtilsLabelEXT::default().label_name(&label).color([0.2, 0.6, 0.9, 1.0]);
+                unsafe { d.cmd_begin_debug_utils_label(self.cb, &info) };
+            }
+        }
+        if let (Some(pool), true) = (self.query_pool, (index as u32) < MAX_TIMED_SPANS) {
+            unsafe { self.gpu.cmd_timestamp(self.cb, pool, index as u32 * 2) };
+        }
+        self.open_span = Some(index);
+    }
+
+    /// Close the open span, if any.
+    pub fn end_pass(&mut self) {
+        let Some(index) = self.open_span.take() else { return };
+        if let (Some(pool), true) = (self.query_pool, (index as u32) < MAX_TIMED_SPANS) {
+            unsafe { self.gpu.cmd_timestamp(self.cb, pool, index as u32 * 2 + 1) };
+        }
+        if let Some(d) = &self.gpu.shared.debug_device {
+            unsafe { d.cmd_end_debug_utils_label(self.cb) };
+        }
+    }
+
+    /// Record a pipeline barrier made of image barriers (each pass writes its own).
+    pub fn image_barriers(&mut self, barriers: &[vk::ImageMemoryBarrier2<'_>]) {
+        let info = vk::DependencyInfo::default().image_memory_barriers(barriers);
+        unsafe { self.gpu.cmd_barrier(self.cb, &info) };
+    }
+
+    /// Record a pipeline barrier made of buffer barriers.
+    pub fn buffer_barriers(&mut self, barriers: &[vk::BufferMemoryBarrier2<'_>]) {
+        let info = vk::DependencyInfo::default().buffer_memory_barriers(barriers);
+        unsafe { self.gpu.cmd_barrier(self.cb, &info) };
+    }
+
+    /// Record a global memory barrier.
+    pub fn memory_barrier(&mut self, barrier: vk::MemoryBarrier2<'_>) {
+        let barriers = [barrier];
+        let info = vk::DependencyInfo::default().memory_barriers(&barriers);
+        unsafe { self.gpu.cmd_barrier(self.cb, &info) };
+    }
+
+    /// Bind `pipeline` with a fresh descriptor set holding `binds`, push the constants, dispatch.
+    pub fn dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        binds: &[Bind<'_>],
+        push_constants: &[u8],
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        self.bind(pipeline, binds, push_constants)?;
+        unsafe { self.gpu.device().cmd_dispatch(self.cb, groups[0].max(1), groups[1].max(1), groups[2].max(1)) };
+        Ok(())
+    }
+
+    /// Like [`Recorder::dispatch`], with the group counts read from `args` at `offset_bytes`
+    /// (written by an earlier pass).
+    pub fn dispatch_indirect(
+        &mut self,
+        pipeline: &ComputePipeline,
+        binds: &[Bind<'_>],
+        push_constants: &[u8],
+        args: &GpuBuffer,
+        offset_bytes: u64,
+    ) -> GpuResult<()> {
+        self.bind(pipeline, binds, push_constants)?;
+        unsafe { self.gpu.device().cmd_dispatch_indirect(self.cb, args.buffer, offset_bytes) };
+        Ok(())
+    }
+
+    fn bind(&mut self, pipeline: &ComputePipeline, binds: &[Bind<'_>], push_constants: &[u8]) -> GpuResult<()> {
+        let device = self.gpu.device();
+        unsafe {
+            let layouts = [pipeline.set_layout];
+            let set = device
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(self.descriptor_pool)
+                        .set_layouts(&layouts),
+                )
+                .vk("vkAllocateDescriptorSets")?[0];
+            for (i, b) in binds.iter().enumerate() {
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(pipeline.bindings[i]);
+                match b {
+                    Bind::Image(img) => {
+                        let info = [vk::DescriptorImageInfo {
+                            sampler: vk::Sampler::null(),
+                            image_view: img.view,
+                            image_layout: vk::ImageLayout::GENERAL,
+                        }];
+                        device.update_descriptor_sets(&[write.image_info(&info)], &[]);
+                    }
+                    Bind::Buffer(buf) => {
+                        let info = [vk::DescriptorBufferInfo { buffer: buf.buffer, offset: 0, range: vk::WHOLE_SIZE }];
+                        device.update_descriptor_sets(&[write.buffer_info(&info)], &[]);
+                    }
+                }
+            }
+            device.cmd_bind_pipeline(self.cb, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
+            device.cmd_bind_descriptor_sets(self.cb, vk::PipelineBindPoint::COMPUTE, pipeline.layout, 0, &[set], &[]);
+            if !push_constants.is_empty() {
+                device.cmd_push_constants(self.cb, pipeline.layout, vk::ShaderStageFlags::COMPUTE, 0, push_constants);
+            }
+        }
+        Ok(())
+    }
+
+    /// Upload f32 pixels into images. Afterwards each image is in layout GENERAL and its
+    /// contents are visible to compute-shader reads: the barrier below is the hand-off from the
+    /// copy to whichever pass reads the image first.
+    pub fn upload_images(&mut self, uploads: &[(&GpuImage, &[f32])]) -> GpuResult<()> {
+        let mut staged = Vec::new();
+        for (image, data) in uploads {
+            let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            let mut buffer = self.gpu.create_buffer(
+                &format!("{} upload", image.name),
+                bytes.len() as u64,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
+            buffer.write_bytes(&bytes);
+            staged.push(buffer);
+        }
+        // UNDEFINED -> TRANSFER_DST: the old contents are discarded; nothing earlier touched
+        // these images, so no source stage is needed.
+        let to_transfer: Vec<_> = uploads
+            .iter()
+            .map(|(image, _)| {
+                vk::ImageMemoryBarrier2::default()
+                    .src_stage_mask(vk::PipelineStageFlags2::NONE)
+                    .src_access_mask(vk::AccessFlags2::NONE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+                    .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                    .old_layout(vk::ImageLayout::UNDEFINED)
+                    .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                    .image(image.image)
+                    .subresource_range(color_range())
+            })
+            .collect();
+        self.image_barriers(&to_transfer);
+        for ((image, _), buffer) in uploads.iter().zip(&staged) {
+            let region = buffer_image_region(image);
+            unsafe {
+                self.gpu.device().cmd_copy_buffer_to_image(
+                    self.cb,
+                    buffer.buffer,
+                    image.image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
+        }
+        // Copy writes -> compute reads (and writes, for passes that update in place), with the
+        // move to GENERAL, the one layout every pass uses for storage images.
+        let to_general: Vec<_> = uploads
+            .iter()
+            .map(|(image, _)| {
+                vk::ImageMemoryBarrier2::default()
+                    .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                    .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                    .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                    .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                    .new_layout(vk::ImageLayout::GENERAL)
+                    .image(image.image)
+                    .subresource_range(color_range())
+            })
+            .collect();
+        self.image_barriers(&to_general);
+        self.staging.extend(staged);
+        Ok(())
+    }
+
+    /// Read an image back after the submission. The image must have been last written by a
+    /// compute shader (every pass's output is).
+    pub fn download_image(&mut self, image: &GpuImage, channels: u32) -> GpuResult<Download> {
+        let size = image.width as u64 * image.height as u64 * channels as u64 * 4;
+        let buffer = self.gpu.create_buffer(
+            &format!("{} readback", image.name),
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        // Compute writes -> copy reads, moving to the copy's optimal layout. Read-back is the
+        // last use of an image in a recording, so nothing moves it back to GENERAL.
+        self.image_barriers(&[vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+            .old_layout(vk::ImageLayout::GENERAL)
+            .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+            .image(image.image)
+            .subresource_range(color_range())]);
+        let region = buffer_image_region(image);
+        unsafe {
+            self.gpu.device().cmd_copy_image_to_buffer(
+                self.cb,
+                image.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.buffer,
+                &[region],
+            )
+        };
+        // Copy writes -> host reads after the fence.
+        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)
+            .buffer(buffer.buffer)
+            .offset(0)
+            .size(vk::WHOLE_SIZE)]);
+        let id = self.downloads.len();
+        self.downloads.push((buffer, id));
+        Ok(Download(id))
+    }
+
+    /// Read a small device buffer back (e.g. tile statistics) after the submission.
+    pub fn download_buffer(&mut self, source: &GpuBuffer) -> GpuResult<Download> {
+        let buffer = self.gpu.create_buffer(
+            &format!("{} readback", source.name),
+            source.size_bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        // Compute writes -> copy reads.
+        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+            .buffer(source.buffer)
+            .offset(0)
+            .size(vk::WHOLE_SIZE)]);
+        unsafe {
+            self.gpu.device().cmd_copy_buffer(
+                self.cb,
+                source.buffer,
+                buffer.buffer,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: source.size_bytes }],
+            )
+        };
+        // Copy writes -> host reads after the fence.
+        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)
+            .buffer(buffer.buffer)
+            .offset(0)
+            .size(vk::WHOLE_SIZE)]);
+        let id = self.downloads.len();
+        self.downloads.push((buffer, id));
+        Ok(Download(id))
+    }
+
+    /// Submit, wait, and return the per-pass GPU times and the read-back data (indexed by the
+    /// [`Download`] handles, in order).
+    pub fn submit(mut self) -> GpuResult<(Profile, Vec<Vec<f32>>)> {
+        self.end_pass();
+        let device = self.gpu.device().clone();
+        unsafe {
+            device.end_command_buffer(self.cb).vk("vkEndCommandBuffer")?;
+            let started = std::time::Instant::now();
+            self.gpu.submit_and_wait(self.cb)?;
+            let wall_ms = started.elapsed().as_secs_f64() * 1e3;
+            let mut passes = Vec::new();
+            if let Some(pool) = self.query_pool {
+                let n = (self.spans.len() as u32).min(MAX_TIMED_SPANS);
+                let mut stamps = vec![0u64; (n * 2) as usize];
+                if n > 0 {
+                    device
+                        .get_query_pool_results(pool, 0, &mut stamps, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                        .vk("vkGetQueryPoolResults")?;
+                }
+                let period_ms = self.gpu.shared.timestamp_period_ns * 1e-6;
+                let origin = stamps.first().copied().unwrap_or(0);
+                for (i, name) in self.spans.iter().take(n as usize).enumerate() {
+                    let (a, b) = (stamps[2 * i], stamps[2 * i + 1]);
+                    passes.push(PassTiming {
+                        name: name.clone(),
+                        start_ms: a.saturating_sub(origin) as f64 * period_ms,
+                        gpu_ms: b.saturating_sub(a) as f64 * period_ms,
+                    });
+                }
+            }
+            let data = self.downloads.iter().map(|(buffer, _)| buffer.read_f32()).collect();
+            Ok((
+                Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms },
+                data,
+            ))
+        }
+    }
+}
+
+impl Download {
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+fn buffer_image_region(image: &GpuImage) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D { x: 0, y: 0, z: 0 },
+        image_extent: vk::Extent3D { width: image.width, height: image.height, depth: 1 },
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        let device = self.gpu.device();
+        unsafe {
+            // The recording may be dropped unsubmitted after an error: wait so nothing in flight
+            // still uses the staging buffers.
+            let _ = device.device_wait_idle();
+            if let Some(pool) = self.query_pool {
+                device.destroy_query_pool(pool, None);
+            }
+            device.destroy_descriptor_pool(self.descriptor_pool, None);
+            device.destroy_command_pool(self.command_pool, None);
+        }
+    }
+}

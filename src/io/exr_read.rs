@@ -1,0 +1,1016 @@
+//! Loading the color, depth and velocity passes of a rendered frame from OpenEXR files.
+//!
+//! Channel names are case-sensitive and tried in this order; the first complete match wins.
+//! In a multi-part file each channel is known by `<part name>.<channel>` (unless the channel
+//! name already starts with the part name) and also by its bare name when that is unique.
+//!
+//! | pass     | channels                                  | convention / conversion to (dx, dy), px per frame toward the NEXT frame, x right, y DOWN |
+//! |----------|-------------------------------------------|------------------------------------------------------------------------|
+//! | color    | `<Layer>.Combined.R,G,B[,A]`              | Blender multilayer (any layer name, e.g. `ViewLayer`)                   |
+//! | color    | `R,G,B[,A]`                               | Nuke / common                                                           |
+//! | color    | `rgba.red,green,blue[,alpha]`             |                                                                         |
+//! | color    | `<prefix>.R,G,B[,A]`                      | only when exactly one such prefix exists (e.g. `beauty.R`)              |
+//! | depth    | `<Layer>.Depth.Z`                         | Blender                                                                 |
+//! | depth    | `Z`, `depth.Z`, `depth.R`, `depth`        | common, Nuke                                                            |
+//! | depth    | the only channel of a one-channel file    | whatever its name (`Y`, `R`, ...)                                       |
+//! | velocity | `<Layer>.Vector.X,Y,Z,W`                  | Blender raster space (x right, y UP); Z,W = p[f]-p[f+1]: (dx, dy) = (-Z, +W) |
+//! | velocity | `<Layer>.Vector.X,Y` (no Z,W)             | Blender; X,Y = p[f-1]-p[f], constant velocity assumed: (dx, dy) = (-X, +Y) |
+//! | velocity | `X,Y,Z,W`, the file's only channels       | Blender Vector pass file, as above: (dx, dy) = (-Z, +W)                 |
+//! | velocity | `forward.u,forward.v`                     | Nuke: px toward the next frame, y UP: (dx, dy) = (u, -v)                |
+//! | velocity | `motion.u,motion.v` / `motion.x,motion.y` | as `forward`: (dx, dy) = (u, -v)                                        |
+//! | velocity | `velocity.X,Y` / `vel.X,Y`                | px toward the next frame, y UP: (dx, dy) = (X, -Y)                      |
+//!
+//! Overrides ([`PassSources`]): color takes a layer prefix `P` (reads `P.R,P.G,P.B[,P.A]`) or an
+//! explicit list `R,G,B[,A]`; depth takes one exact channel name; velocity takes 4 names
+//! (Blender `X,Y,Z,W`: (-Z, +W)) or 2 names `x,y`, read as Blender previous-frame vectors
+//! (-x, +y) when the first contains `.Vector.`, else as px toward the next frame with y UP
+//! (x, -y). The conventions used are written to [`ScenePasses::channel_report`].
+
+use super::{Image, IoError, PassSources, ScenePasses};
+use exr::image::FlatSamples;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// One channel of a decoded file.
+struct Chan {
+    /// Qualified name (`part.channel` in multi-part files).
+    name: String,
+    /// Name as stored in its part.
+    bare: String,
+    /// Data window size (px) and position (px) of its part.
+    size: (usize, usize),
+    origin: (i32, i32),
+    samples: FlatSamples,
+}
+
+impl Chan {
+    fn to_f32(&self) -> Vec<f32> {
+        match &self.samples {
+            FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
+            FlatSamples::F32(v) => v.clone(),
+            FlatSamples::U32(v) => v.iter().map(|&u| u as f32).collect(),
+        }
+    }
+
+    fn type_name(&self) -> &'static str {
+        match self.samples {
+            FlatSamples::F16(_) => "half",
+            FlatSamples::F32(_) => "float",
+            FlatSamples::U32(_) => "uint",
+        }
+    }
+}
+
+/// A decoded EXR file: every channel of every part.
+struct ExrFile {
+    path: PathBuf,
+    display_window: (i32, i32, u32, u32),
+    chans: Vec<Chan>,
+}
+
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+impl ExrFile {
+    fn open(path: &Path, what: &str) -> Result<ExrFile, IoError> {
+        let read_err = |source: std::io::Error| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                IoError::NotFound {
+                    what: what.into(),
+                    path: path.into(),
+                }
+            } else {
+                IoError::Read {
+                    what: what.into(),
+                    path: path.into(),
+                    source,
+                }
+            }
+        };
+        let mut magic = [0u8; 4];
+        let mut file = std::fs::File::open(path).map_err(read_err)?;
+        if file.metadata().map_err(read_err)?.is_dir() {
+            return Err(read_err(std::io::Error::other("it is a directory")));
+        }
+        if file.read_exact(&mut magic).is_err() || magic != EXR_MAGIC {
+            return Err(IoError::NotExr {
+                what: what.into(),
+                path: path.into(),
+            });
+        }
+        drop(file);
+        let image =
+            exr::prelude::read_all_flat_layers_from_file(path).map_err(|source| IoError::Exr {
+                what: what.into(),
+                path: path.into(),
+                source,
+            })?;
+        let dw = image.attributes.display_window;
+        let multi_part = image.layer_data.len() > 1;
+        let mut chans = Vec::new();
+        for layer in image.layer_data {
+            let part = layer.attributes.layer_name.as_ref().map(|t| t.to_string());
+            let pos = layer.attributes.layer_position;
+            for ch in layer.channel_data.list {
+                let bare = ch.name.to_string();
+                let name = match &part {
+                    Some(p) if multi_part && !bare.starts_with(&format!("{p}.")) => {
+                        format!("{p}.{bare}")
+                    }
+                    _ => bare.clone(),
+                };
+                if ch.sampling != exr::math::Vec2(1, 1) {
+                    return Err(IoError::Unsupported {
+                        what: what.into(),
+                        path: path.into(),
+                        channel: name,
+                        reason: format!(
+                            "it is subsampled ({}x{} px per sample)",
+                            ch.sampling.0, ch.sampling.1
+                        ),
+                    });
+                }
+                chans.push(Chan {
+                    name,
+                    bare,
+                    size: (layer.size.0, layer.size.1),
+                    origin: (pos.0, pos.1),
+                    samples: ch.sample_data,
+                });
+            }
+        }
+        Ok(ExrFile {
+            path: path.into(),
+            display_window: (
+                dw.position.0,
+                dw.position.1,
+                dw.size.0 as u32,
+                dw.size.1 as u32,
+            ),
+            chans,
+        })
+    }
+
+    /// A channel by qualified name, else by bare name when that is unique.
+    fn find(&self, name: &str) -> Option<&Chan> {
+        if let Some(c) = self.chans.iter().find(|c| c.name == name) {
+            return Some(c);
+        }
+        let mut it = self.chans.iter().filter(|c| c.bare == name);
+        match (it.next(), it.next()) {
+            (Some(c), None) => Some(c),
+            _ => None,
+        }
+    }
+
+    fn find_all(&self, names: &[&str]) -> Option<Vec<&Chan>> {
+        names.iter().map(|n| self.find(n)).collect()
+    }
+
+    /// The channel names, for error messages.
+    fn found(&self) -> String {
+        const MAX: usize = 64;
+        let mut s = self
+            .chans
+            .iter()
+            .take(MAX)
+            .map(|c| c.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ");
+        if self.chans.is_empty() {
+            s.push_str("(none)");
+        } else if self.chans.len() > MAX {
+            s.push_str(&format!(", ... ({} more)", self.chans.len() - MAX));
+        }
+        s
+    }
+
+    fn missing(&self, what: &str, looked_for: &str) -> IoError {
+        IoError::MissingChannel {
+            what: what.into(),
+            path: self.path.clone(),
+            looked_for: looked_for.into(),
+            found: self.found(),
+        }
+    }
+
+    /// All of `names`, or an error naming the first missing one.
+    fn require(&self, what: &str, requested: &str, names: &[&str]) -> Result<Vec<&Chan>, IoError> {
+        names
+            .iter()
+            .map(|n| {
+                self.find(n).ok_or_else(|| IoError::OverrideNotFound {
+                    what: what.into(),
+                    path: self.path.clone(),
+                    requested: requested.into(),
+                    missing: (*n).into(),
+                    found: self.found(),
+                })
+            })
+            .collect()
+    }
+}
+
+/// Channels of one pass, with how they were chosen.
+struct Found<'a> {
+    chans: Vec<&'a Chan>,
+    rule: String,
+}
+
+fn split_list(s: &str) -> Vec<&str> {
+    s.split(',').map(str::trim).collect()
+}
+
+/// `P.R, P.G, P.B` and `P.A` when present.
+fn rgba_with_prefix<'a>(f: &'a ExrFile, p: &str) -> Option<Vec<&'a Chan>> {
+    let names = ["R", "G", "B"].map(|c| format!("{p}.{c}"));
+    let mut v = f.find_all(&names.each_ref().map(String::as_str))?;
+    v.extend(f.find(&format!("{p}.A")));
+    Some(v)
+}
+
+fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+    const WHAT: &str = "color";
+    if let Some(o) = ovr {
+        let rule = format!("override \"{o}\"");
+        if o.contains(',') {
+            let names = split_list(o);
+            if !(3..=4).contains(&names.len()) {
+                return Err(IoError::BadOverride {
+                    what: WHAT.into(),
+                    requested: o.into(),
+                    reason: format!("expected 3 or 4 channel names, got {}", names.len()),
+                });
+            }
+            let chans = f.require(WHAT, o, &names)?;
+            return Ok(Found { chans, rule });
+        }
+        let mut chans = f.require(
+            WHAT,
+            o,
+            &["R", "G", "B"]
+                .map(|c| format!("{o}.{c}"))
+                .each_ref()
+                .map(String::as_str),
+        )?;
+        chans.extend(f.find(&format!("{o}.A")));
+        return Ok(Found { chans, rule });
+    }
+    for c in &f.chans {
+        if let Some(layer) = c.name.strip_suffix(".Combined.R") {
+            if let Some(chans) = rgba_with_prefix(f, &format!("{layer}.Combined")) {
+                let rule = format!("Blender multilayer {layer}.Combined");
+                return Ok(Found { chans, rule });
+            }
+        }
+    }
+    if let Some(mut chans) = f.find_all(&["R", "G", "B"]) {
+        chans.extend(f.find("A"));
+        return Ok(Found {
+            chans,
+            rule: "R,G,B[,A]".into(),
+        });
+    }
+    if let Some(mut chans) = f.find_all(&["rgba.red", "rgba.green", "rgba.blue"]) {
+        chans.extend(f.find("rgba.alpha"));
+        return Ok(Found {
+            chans,
+            rule: "rgba.red/green/blue[/alpha]".into(),
+        });
+    }
+    let mut prefixes: Vec<&str> = f
+        .chans
+        .iter()
+        .filter_map(|c| c.name.strip_suffix(".R"))
+        .filter(|p| rgba_with_prefix(f, p).is_some())
+        .collect();
+    prefixes.dedup();
+    match prefixes[..] {
+        [p] => Ok(Found {
+            chans: rgba_with_prefix(f, p).unwrap_or_default(),
+            rule: format!("single layer {p}.R,G,B[,A]"),
+        }),
+        [] => Err(f.missing(
+            WHAT,
+            "<layer>.Combined.R/G/B[/A], R,G,B[,A], rgba.red/green/blue[/alpha], <layer>.R/G/B[/A]",
+        )),
+        _ => Err(IoError::AmbiguousChannels {
+            what: WHAT.into(),
+            path: f.path.clone(),
+            candidates: prefixes.join(", "),
+        }),
+    }
+}
+
+fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+    if let Some(o) = ovr {
+        let chans = f.require("depth", o, &[o])?;
+        let rule = format!("override \"{o}\"");
+        return Ok(Found { chans, rule });
+    }
+    let found = |c: &'a Chan, rule: &str| {
+        Ok(Found {
+            chans: vec![c],
+            rule: rule.into(),
+        })
+    };
+    if let Some(c) = f.chans.iter().find(|c| c.name.ends_with(".Depth.Z")) {
+        return found(c, "Blender <layer>.Depth.Z");
+    }
+    for n in ["Z", "depth.Z", "depth.R", "depth"] {
+        if let Some(c) = f.find(n) {
+            return found(c, n);
+        }
+    }
+    if let [c] = &f.chans[..] {
+        return found(c, "the only channel of a one-channel file");
+    }
+    Err(f.missing(
+        "depth",
+        "<layer>.Depth.Z, Z, depth.Z, depth.R, depth, or the only channel of a one-channel file",
+    ))
+}
+
+/// Velocity channels: (dx, dy) = (sx * x, sy * y) in px per frame, x right, y down.
+struct Velocity<'a> {
+    x: &'a Chan,
+    y: &'a Chan,
+    sx: f32,
+    sy: f32,
+    rule: String,
+}
+
+const BLENDER_ZW: &str =
+    "Blender Vector Z,W = p[f]-p[f+1], x right/y up: dx = -Z, dy = +W px/frame";
+const BLENDER_XY: &str =
+    "Blender Vector X,Y = p[f-1]-p[f], x right/y up, constant velocity assumed: dx = -X, dy = +Y px/frame";
+const NEXT_Y_UP: &str = "px toward the next frame, x right/y up: dx = +x, dy = -y px/frame";
+const VELOCITY_LOOKED_FOR: &str = "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v, motion.u/v, motion.x/y, velocity.X/Y, vel.X/Y";
+
+fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocity<'a>>, IoError> {
+    let vel = |x, y, sx, sy, rule: String| Ok(Some(Velocity { x, y, sx, sy, rule }));
+    if let Some(o) = ovr {
+        let names = split_list(o);
+        let c = match names.len() {
+            2 | 4 => f.require("velocity", o, &names)?,
+            n => {
+                return Err(IoError::BadOverride {
+                    what: "velocity".into(),
+                    requested: o.into(),
+                    reason: format!("expected 2 or 4 channel names, got {n}"),
+                })
+            }
+        };
+        return if c.len() == 4 {
+            vel(
+                c[2],
+                c[3],
+                -1.0,
+                1.0,
+                format!("override \"{o}\" as {BLENDER_ZW}"),
+            )
+        } else if names[0].contains(".Vector.") {
+            vel(
+                c[0],
+                c[1],
+                -1.0,
+                1.0,
+                format!("override \"{o}\" as {BLENDER_XY}"),
+            )
+        } else {
+            vel(
+                c[0],
+                c[1],
+                1.0,
+                -1.0,
+                format!("override \"{o}\" as {NEXT_Y_UP}"),
+            )
+        };
+    }
+    for c in &f.chans {
+        if let Some(layer) = c.name.strip_suffix(".Vector.X") {
+            let n = |s: &str| f.find(&format!("{layer}.Vector.{s}"));
+            match (n("Y"), n("Z"), n("W")) {
+                (Some(_), Some(z), Some(w)) => return vel(z, w, -1.0, 1.0, BLENDER_ZW.into()),
+                (Some(y), _, _) => return vel(c, y, -1.0, 1.0, BLENDER_XY.into()),
+                _ => {}
+            }
+        }
+    }
+    if f.chans.len() == 4 {
+        if let Some(c) = f.find_all(&["X", "Y", "Z", "W"]) {
+            return vel(c[2], c[3], -1.0, 1.0, BLENDER_ZW.into());
+        }
+    }
+    for (x, y) in [
+        ("forward.u", "forward.v"),
+        ("motion.u", "motion.v"),
+        ("motion.x", "motion.y"),
+        ("velocity.X", "velocity.Y"),
+        ("vel.X", "vel.Y"),
+    ] {
+        if let (Some(cx), Some(cy)) = (f.find(x), f.find(y)) {
+            return vel(cx, cy, 1.0, -1.0, NEXT_Y_UP.into());
+        }
+    }
+    Ok(None)
+}
+
+/// Errors unless `b` has the size of `a`.
+fn same_size(
+    a: &str,
+    fa: &ExrFile,
+    ca: &Chan,
+    b: &str,
+    fb: &ExrFile,
+    cb: &Chan,
+) -> Result<(), IoError> {
+    if ca.size == cb.size {
+        return Ok(());
+    }
+    Err(IoError::SizeMismatch {
+        a: format!("{a} (channel {})", ca.name),
+        a_path: fa.path.clone(),
+        a_size: (ca.size.0 as u32, ca.size.1 as u32),
+        b: format!("{b} (channel {})", cb.name),
+        b_path: fb.path.clone(),
+        b_size: (cb.size.0 as u32, cb.size.1 as u32),
+    })
+}
+
+/// Interleaves `chans` (all of one size) into an image with `channels` values per pixel;
+/// channels beyond `chans.len()` are filled with `fill`.
+fn interleave(chans: &[&Chan], channels: u32, fill: f32) -> Image {
+    let (w, h) = chans[0].size;
+    let mut im = Image::new(w as u32, h as u32, channels);
+    im.data.fill(fill);
+    let n = channels as usize;
+    for (c, ch) in chans.iter().enumerate() {
+        for (px, v) in im.data.chunks_exact_mut(n).zip(ch.to_f32()) {
+            px[c] = v;
+        }
+    }
+    im
+}
+
+fn names(chans: &[&Chan]) -> String {
+    chans
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
+    let found = find_color(f, ovr)?;
+    for c in &found.chans[1..] {
+        same_size("color", f, found.chans[0], "color", f, c)?;
+    }
+    Ok((interleave(&found.chans, 4, 1.0), found))
+}
+
+/// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
+/// discovery as [`load_passes`]. Values are returned as stored (NaN/Inf kept).
+pub fn read_exr_rgba(path: &Path) -> Result<Image, IoError> {
+    let f = ExrFile::open(path, "color")?;
+    Ok(color_image(&f, None)?.0)
+}
+
+/// Reads one channel, by exact (qualified) name, as a 1-channel image, values as stored.
+pub fn read_exr_channel(path: &Path, channel: &str) -> Result<Image, IoError> {
+    let f = ExrFile::open(path, "channel")?;
+    let c = f.require("channel", channel, &[channel])?;
+    Ok(interleave(&c, 1, 0.0))
+}
+
+/// Opens `path` unless it is `None` or `same`: then the caller reuses its open file.
+fn open_other(path: &Option<PathBuf>, same: &Path, what: &str) -> Result<Option<ExrFile>, IoError> {
+    match path {
+        Some(p) if p != same => ExrFile::open(p, what).map(Some),
+        _ => Ok(None),
+    }
+}
+
+/// Loads color, depth and (when present or required) velocity; see the module docs for
+/// the channel names and conventions.
+pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
+    let unit_m = if src.depth_unit_m == 0.0 {
+        1.0
+    } else {
+        src.depth_unit_m
+    };
+    if !(unit_m.is_finite() && unit_m > 0.0) {
+        return Err(IoError::InvalidArgument {
+            what: "depth_unit_m".into(),
+            reason: format!(
+                "{} m per depth unit; it must be a positive, finite number of metres",
+                src.depth_unit_m
+            ),
+        });
+    }
+    let cf = ExrFile::open(&src.color_path, "color")?;
+    let df_own = open_other(&src.depth_path, &src.color_path, "depth")?;
+    let vf_own = open_other(&src.velocity_path, &src.color_path, "velocity")?;
+    let df = df_own.as_ref().unwrap_or(&cf);
+    let vf = vf_own.as_ref().unwrap_or(&cf);
+    let mut report = Vec::new();
+
+    // Color.
+    let (mut color, cfound) = color_image(&cf, src.color_channels.as_deref())?;
+    let c0 = cfound.chans[0];
+    let mut color_nan_count = 0u64;
+    for v in color.data.iter_mut().filter(|v| !v.is_finite()) {
+        *v = 0.0;
+        color_nan_count += 1;
+    }
+    if color_nan_count > 0 {
+        log::warn!(
+            "color: {color_nan_count} NaN/Inf value(s) in \"{}\" replaced by 0",
+            cf.path.display()
+        );
+    }
+    report.push(format!(
+        "color: \"{}\" channels {} ({}), {}{}{}",
+        cf.path.display(),
+        names(&cfound.chans),
+        cfound.rule,
+        c0.type_name(),
+        if cfound.chans.len() == 3 {
+            ", alpha = 1 (none in file)"
+        } else {
+            ""
+        },
+        if color_nan_count > 0 {
+            format!(", {color_nan_count} NaN/Inf value(s) replaced by 0")
+        } else {
+            String::new()
+        }
+    ));
+
+    // Depth.
+    let dfound = find_depth(df, src.depth_channel.as_deref())?;
+    let dc = dfound.chans[0];
+    same_size("color", &cf, c0, "depth", df, dc)?;
+    let mut depth_m = interleave(&dfound.chans, 1, 0.0);
+    let mut bad: Option<(usize, f32)> = None;
+    let mut bad_count = 0u64;
+    for (i, v) in depth_m.data.iter_mut().enumerate() {
+        *v = (*v as f64 * unit_m) as f32;
+        if v.is_nan() || *v < 0.0 {
+            bad_count += 1;
+            bad.get_or_insert((i, *v));
+        }
+    }
+    if let Some((i, value_m)) = bad {
+        return Err(IoError::InvalidDepth {
+            path: df.path.clone(),
+            channel: dc.name.clone(),
+            x: i % dc.size.0,
+            y: i / dc.size.0,
+            value_m,
+            count: bad_count,
+        });
+    }
+    report.push(format!(
+        "depth: \"{}\" channel {} ({}), {}, {unit_m} m per unit, used as stored (no planar/ray conversion)",
+        df.path.display(),
+        dc.name,
+        dfound.rule,
+        dc.type_name()
+    ));
+
+    // Velocity.
+    let explicit = src.velocity_path.is_some() || src.velocity_channels.is_some();
+    let mut origins = vec![("depth", dc.origin)];
+    let velocity_px = match find_velocity(vf, src.velocity_channels.as_deref())? {
+        Some(v) => {
+            same_size("color", &cf, c0, "velocity", vf, v.x)?;
+            same_size("velocity", vf, v.x, "velocity", vf, v.y)?;
+            origins.push(("velocity", v.x.origin));
+            let mut im = interleave(&[v.x, v.y], 2, 0.0);
+            let mut nonfinite = 0u64;
+            for (px, s) in im.data.iter_mut().zip([v.sx, v.sy].iter().cycle()) {
+                *px = if px.is_finite() {
+                    // `+ 0.0` turns -0 into +0.
+                    *px * s + 0.0
+                } else {
+                    nonfinite += 1;
+                    0.0
+                };
+            }
+            if nonfinite > 0 {
+                log::warn!(
+                    "velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0",
+                    vf.path.display()
+                );
+            }
+            report.push(format!(
+                "velocity: \"{}\" channels {} ({}), {}{}",
+                vf.path.display(),
+                names(&[v.x, v.y]),
+                v.rule,
+                v.x.type_name(),
+                if nonfinite > 0 {
+                    format!(", {nonfinite} NaN/Inf value(s) replaced by 0")
+                } else {
+                    String::new()
+                }
+            ));
+            Some(im)
+        }
+        None if explicit || src.require_velocity => {
+            return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR))
+        }
+        None => {
+            report.push(format!(
+                "velocity: none (no velocity channels in \"{}\")",
+                vf.path.display()
+            ));
+            None
+        }
+    };
+
+    for (what, o) in origins.into_iter().filter(|(_, o)| *o != c0.origin) {
+        let msg = format!(
+            "{what}: data window origin ({}, {}) px differs from color's ({}, {}) px; pixels are paired by index",
+            o.0, o.1, c0.origin.0, c0.origin.1
+        );
+        log::warn!("{msg}");
+        report.push(msg);
+    }
+    let dw = cf.display_window;
+    report.push(format!(
+        "data window: origin ({}, {}) px, {}x{} px; display window: origin ({}, {}) px, {}x{} px",
+        c0.origin.0, c0.origin.1, c0.size.0, c0.size.1, dw.0, dw.1, dw.2, dw.3
+    ));
+
+    Ok(ScenePasses {
+        color,
+        depth_m,
+        velocity_px,
+        display_window: dw,
+        data_origin: c0.origin,
+        channel_report: report.join("\n"),
+        color_nan_count,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{test_dir, write_exr_channels, ExrWriteOptions};
+
+    const W: u32 = 4;
+    const H: u32 = 3;
+
+    /// Writes `W`x`H` channels, each filled with a constant.
+    fn write(path: &Path, chans: &[(&str, f32)], float32: bool) {
+        let planes: Vec<Vec<f32>> = chans
+            .iter()
+            .map(|&(_, v)| vec![v; (W * H) as usize])
+            .collect();
+        let list: Vec<(&str, &[f32])> = chans
+            .iter()
+            .zip(&planes)
+            .map(|(c, p)| (c.0, p.as_slice()))
+            .collect();
+        let opts = ExrWriteOptions {
+            float32,
+            ..Default::default()
+        };
+        write_exr_channels(path, W, H, &list, &opts).unwrap();
+    }
+
+    fn sources(color: &Path) -> PassSources {
+        PassSources {
+            color_path: color.into(),
+            ..Default::default()
+        }
+    }
+
+    fn assert_const(im: &Image, expected: &[f32]) {
+        assert_eq!(
+            (im.width, im.height, im.channels as usize),
+            (W, H, expected.len())
+        );
+        for px in im.data.chunks_exact(expected.len()) {
+            assert_eq!(px, expected);
+        }
+    }
+
+    #[test]
+    fn blender_multilayer() {
+        let dir = test_dir("read-blender");
+        let path = dir.join("passes.exr");
+        // Constant motion v = (3, 2) px/frame, x right / y up: X,Y = Z,W = -v.
+        let (vx, vy) = (3.0, 2.0);
+        let mut chans = vec![
+            ("ViewLayer.Combined.R", 0.5),
+            ("ViewLayer.Combined.G", 0.25),
+            ("ViewLayer.Combined.B", 2.0),
+            ("ViewLayer.Combined.A", 1.0),
+            ("ViewLayer.Depth.Z", 1.0e10),
+            ("ViewLayer.Vector.X", -vx),
+            ("ViewLayer.Vector.Y", -vy),
+        ];
+        write(&path, &chans, true);
+        // Two-channel vectors (previous frame only), constant velocity assumed.
+        let p = load_passes(&sources(&path)).unwrap();
+        assert_const(p.velocity_px.as_ref().unwrap(), &[vx, -vy]);
+        assert!(
+            p.channel_report
+                .contains("ViewLayer.Vector.X, ViewLayer.Vector.Y"),
+            "{}",
+            p.channel_report
+        );
+        chans.extend([("ViewLayer.Vector.Z", -vx), ("ViewLayer.Vector.W", -vy)]);
+        write(&path, &chans, true);
+        let p = load_passes(&sources(&path)).unwrap();
+        assert_const(&p.color, &[0.5, 0.25, 2.0, 1.0]);
+        assert_const(&p.depth_m, &[1.0e10]);
+        assert_const(p.velocity_px.as_ref().unwrap(), &[vx, -vy]);
+        assert_eq!(
+            (p.display_window, p.data_origin, p.color_nan_count),
+            ((0, 0, W, H), (0, 0), 0)
+        );
+        let r = &p.channel_report;
+        assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
+        assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
+        assert!(
+            r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"),
+            "{r}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn nuke_naming_and_nan_color() {
+        let dir = test_dir("read-nuke");
+        let path = dir.join("nuke.exr");
+        let chans = [
+            ("R", f32::NAN),
+            ("G", 0.5),
+            ("B", f32::INFINITY),
+            ("A", 0.5),
+            ("Z", 0.0),
+        ];
+        write(&path, &chans, true);
+        let no_velocity = load_passes(&sources(&path)).unwrap();
+        assert!(no_velocity.velocity_px.is_none());
+        assert_eq!(no_velocity.color_nan_count, 2 * (W * H) as u64);
+        assert_const(&no_velocity.color, &[0.0, 0.5, 0.0, 0.5]);
+        assert_const(&no_velocity.depth_m, &[0.0]);
+        write(
+            &path,
+            &[&chans[..], &[("forward.u", 3.0), ("forward.v", 2.0)]].concat(),
+            true,
+        );
+        let p = load_passes(&sources(&path)).unwrap();
+        assert_const(p.velocity_px.as_ref().unwrap(), &[3.0, -2.0]);
+        assert!(p
+            .channel_report
+            .contains("channels forward.u, forward.v (px toward the next frame"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn separate_files_units_and_half() {
+        let dir = test_dir("read-separate");
+        let (c, d, v) = (dir.join("c.exr"), dir.join("d.exr"), dir.join("v.exr"));
+        write(
+            &c,
+            &[("beauty.R", 1.0), ("beauty.G", 2.0), ("beauty.B", 3.0)],
+            false,
+        );
+        write(&d, &[("Y", 250.0)], false);
+        write(
+            &v,
+            &[("X", -1.0), ("Y", -1.0), ("Z", -4.0), ("W", 5.0)],
+            true,
+        );
+        let src = PassSources {
+            depth_path: Some(d.clone()),
+            velocity_path: Some(v.clone()),
+            depth_unit_m: 0.01,
+            ..sources(&c)
+        };
+        let p = load_passes(&src).unwrap();
+        assert_const(&p.color, &[1.0, 2.0, 3.0, 1.0]);
+        assert_const(&p.depth_m, &[2.5]);
+        assert_const(p.velocity_px.as_ref().unwrap(), &[4.0, 5.0]);
+        assert!(p
+            .channel_report
+            .contains("the only channel of a one-channel file"));
+        // Overrides.
+        write(
+            &c,
+            &[
+                ("a", 1.0),
+                ("b", 2.0),
+                ("c", 3.0),
+                ("d", 4.0),
+                ("mv.x", 1.0),
+                ("mv.y", 2.0),
+            ],
+            false,
+        );
+        let src = PassSources {
+            color_channels: Some("c, b, a".into()),
+            depth_channel: Some("d".into()),
+            velocity_channels: Some("mv.x,mv.y".into()),
+            ..sources(&c)
+        };
+        let p = load_passes(&src).unwrap();
+        assert_const(&p.color, &[3.0, 2.0, 1.0, 1.0]);
+        assert_const(&p.depth_m, &[4.0]);
+        assert_const(p.velocity_px.as_ref().unwrap(), &[1.0, -2.0]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn multi_part_file_with_offset_data_window() {
+        use exr::prelude::*;
+        let dir = test_dir("read-multipart");
+        let path = dir.join("parts.exr");
+        let part = |name: &str, chans: &[&str], v: f32| {
+            let list = chans
+                .iter()
+                .map(|c| AnyChannel::new(*c, FlatSamples::F32(vec![v; 12])))
+                .collect();
+            let mut attrs = LayerAttributes::named(name);
+            attrs.layer_position = Vec2(10, -2);
+            Layer::new(
+                (4, 3),
+                attrs,
+                Encoding::UNCOMPRESSED,
+                AnyChannels::sort(list),
+            )
+        };
+        let layers = vec![
+            part("ViewLayer.Combined", &["R", "G", "B", "A"], 0.5),
+            part("ViewLayer.Depth", &["Z"], 7.0),
+        ];
+        let bounds = IntegerBounds::new(Vec2(0, 0), Vec2(20, 10));
+        Image::from_layers(ImageAttributes::new(bounds), layers)
+            .write()
+            .to_file(&path)
+            .unwrap();
+        let p = load_passes(&sources(&path)).unwrap();
+        assert_const(&p.color, &[0.5; 4]);
+        assert_const(&p.depth_m, &[7.0]);
+        assert_eq!(
+            (p.display_window, p.data_origin),
+            ((0, 0, 20, 10), (10, -2))
+        );
+        assert!(
+            p.channel_report.contains("ViewLayer.Depth.Z"),
+            "{}",
+            p.channel_report
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn error_messages() {
+        let dir = test_dir("read-errors");
+        let (c, d) = (dir.join("c.exr"), dir.join("d.exr"));
+        let err = |src: &PassSources| load_passes(src).unwrap_err().to_string();
+
+        let missing = dir.join("nope.exr");
+        assert_eq!(
+            err(&sources(&missing)),
+            format!("color: file \"{}\" does not exist", missing.display())
+        );
+        std::fs::write(&d, "not an image").unwrap();
+        let msg = err(&sources(&d));
+        assert!(
+            msg.contains(&format!("\"{}\" is not an OpenEXR file", d.display())),
+            "{msg}"
+        );
+
+        write(&c, &[("R", 1.0), ("G", 1.0), ("B", 1.0)], false);
+        let msg = err(&sources(&c));
+        assert!(
+            msg.starts_with(&format!(
+                "depth: no depth channel in \"{}\" (looked for <layer>.Depth.Z, Z,",
+                c.display()
+            )),
+            "{msg}"
+        );
+        assert!(msg.ends_with("; channels found: B, G, R"), "{msg}");
+
+        let src = PassSources {
+            color_channels: Some("beauty".into()),
+            ..sources(&c)
+        };
+        let msg = err(&src);
+        assert!(
+            msg.contains("channel \"beauty.R\" (from the override \"beauty\") not found"),
+            "{msg}"
+        );
+        assert!(msg.ends_with("channels found: B, G, R"), "{msg}");
+
+        // Size mismatch: color 4x3 px, depth 2x2 px.
+        write_exr_channels(&d, 2, 2, &[("Z", &[1.0; 4])], &ExrWriteOptions::default()).unwrap();
+        let src = PassSources {
+            depth_path: Some(d.clone()),
+            ..sources(&c)
+        };
+        let msg = err(&src);
+        assert!(
+            msg.contains(&format!(
+                "color (channel R) \"{}\" is 4x3 px but depth (channel Z) \"{}\" is 2x2 px",
+                c.display(),
+                d.display()
+            )),
+            "{msg}"
+        );
+
+        // NaN and negative depth.
+        let mut z = vec![1.0; 12];
+        z[4 + 2] = f32::NAN; // (x=2, y=1)
+        z[2 * 4 + 3] = -1.0; // (x=3, y=2)
+        write_exr_channels(&d, 4, 3, &[("Z", &z)], &ExrWriteOptions::default()).unwrap();
+        let msg = err(&src);
+        assert!(
+            msg.contains(&format!(
+                "channel Z in \"{}\" has 2 invalid pixel(s)",
+                d.display()
+            )),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("the first is pixel (x=2, y=1) of the data window with NaN m"),
+            "{msg}"
+        );
+        z[4 + 2] = 1.0;
+        write_exr_channels(&d, 4, 3, &[("Z", &z)], &ExrWriteOptions::default()).unwrap();
+        assert!(err(&src).contains("(x=3, y=2) of the data window with -1 m"));
+
+        // Required velocity that is absent.
+        let src = PassSources {
+            require_velocity: true,
+            depth_channel: Some("R".into()),
+            ..sources(&c)
+        };
+        let msg = err(&src);
+        assert!(
+            msg.starts_with(&format!(
+                "velocity: no velocity channel in \"{}\"",
+                c.display()
+            )),
+            "{msg}"
+        );
+        assert!(msg.ends_with("channels found: B, G, R"), "{msg}");
+        let src = PassSources {
+            depth_unit_m: -1.0,
+            ..sources(&c)
+        };
+        assert!(err(&src).contains("depth_unit_m"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The real Blender scene, when this machine has it: multilayer and separate files
+    /// must load identically, and the Mover cube (centre at 3.5 m, expected centre motion
+    /// (+76.19, -10.16) px/frame) moves at that motion scaled by 3.5 m / depth of the visible
+    /// front face.
+    #[test]
+    fn blender_scene_a_if_present() {
+        let dir = Path::new("/work/shared/data/sceneA");
+        if !dir.join("passes.exr").exists() {
+            eprintln!(
+                "note: {} not present; skipping the Blender scene A check",
+                dir.display()
+            );
+            return;
+        }
+        let multi = load_passes(&PassSources {
+            require_velocity: true,
+            ..sources(&dir.join("passes.exr"))
+        })
+        .unwrap();
+        let separate = load_passes(&PassSources {
+            depth_path: Some(dir.join("depth.exr")),
+            velocity_path: Some(dir.join("velocity.exr")),
+            ..sources(&dir.join("color.exr"))
+        })
+        .unwrap();
+        eprintln!("{}\n{}", multi.channel_report, separate.channel_report);
+        assert_eq!(multi.color, separate.color);
+        assert_eq!(multi.depth_m, separate.depth_m);
+        assert_eq!(multi.velocity_px, separate.velocity_px);
+        let v = multi.velocity_px.unwrap();
+        let (dx, dy, z) = (
+            v.get(360, 604, 0),
+            v.get(360, 604, 1),
+            multi.depth_m.get(360, 604, 0),
+        );
+        eprintln!("Mover at (360, 604): velocity ({dx}, {dy}) px/frame, depth {z} m");
+        let scale = 3.5 / z;
+        assert!(
+            (dx - 76.19 * scale).abs() < 0.5 && (dy + 10.16 * scale).abs() < 0.5,
+            "({dx}, {dy})"
+        );
+        assert_eq!(v.get(5, 5, 0), 0.0);
+        assert_eq!(multi.depth_m.get(5, 5, 0), 1.0e10);
+    }
+}

@@ -1,0 +1,288 @@
+//! OpenEXR and PNG input/output.
+//!
+//! - [`exr_read`]: loads the color, depth and velocity passes of a rendered frame
+//!   ([`load_passes`]), discovering the channel names that Blender, Nuke and other
+//!   renderers write; see the table at the top of that file.
+//! - [`exr_write`]: writes RGBA or arbitrary channels as half or float32 EXR.
+//! - [`png`]: writes an 8-bit sRGB preview.
+//!
+//! Both writers write a temporary file next to the target and rename it onto the target
+//! only after a complete, successful write, so a failed write never touches an existing
+//! target.
+
+pub mod exr_read;
+pub mod exr_write;
+pub mod png;
+
+pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba};
+pub use exr_write::{write_exr_channels, write_exr_rgba, ExrWriteOptions};
+pub use png::write_png_srgb;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Every failure of this module. Each names the file involved and, where relevant, the
+/// channel.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    #[error("{what}: file \"{}\" does not exist", .path.display())]
+    NotFound { what: String, path: PathBuf },
+    #[error("{what}: cannot read \"{}\": {source}", .path.display())]
+    Read {
+        what: String,
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{what}: \"{}\" is not an OpenEXR file (it does not start with the EXR magic number)", .path.display())]
+    NotExr { what: String, path: PathBuf },
+    #[error("{what}: cannot decode OpenEXR file \"{}\": {source}", .path.display())]
+    Exr {
+        what: String,
+        path: PathBuf,
+        source: exr::error::Error,
+    },
+    #[error("{what}: channel {channel} in \"{}\" is not supported: {reason}", .path.display())]
+    Unsupported {
+        what: String,
+        path: PathBuf,
+        channel: String,
+        reason: String,
+    },
+    #[error("{what}: no {what} channel in \"{}\" (looked for {looked_for}); channels found: {found}", .path.display())]
+    MissingChannel {
+        what: String,
+        path: PathBuf,
+        looked_for: String,
+        found: String,
+    },
+    #[error("{what}: several layers in \"{}\" could be the {what} ({candidates}); choose one with an explicit channel override", .path.display())]
+    AmbiguousChannels {
+        what: String,
+        path: PathBuf,
+        candidates: String,
+    },
+    #[error("{what}: channel \"{missing}\" (from the override \"{requested}\") not found in \"{}\"; channels found: {found}", .path.display())]
+    OverrideNotFound {
+        what: String,
+        path: PathBuf,
+        requested: String,
+        missing: String,
+        found: String,
+    },
+    #[error("{what}: invalid channel override \"{requested}\": {reason}")]
+    BadOverride {
+        what: String,
+        requested: String,
+        reason: String,
+    },
+    #[error("size mismatch: {a} \"{}\" is {}x{} px but {b} \"{}\" is {}x{} px (the data windows must have the same size)",
+        .a_path.display(), .a_size.0, .a_size.1, .b_path.display(), .b_size.0, .b_size.1)]
+    SizeMismatch {
+        a: String,
+        a_path: PathBuf,
+        a_size: (u32, u32),
+        b: String,
+        b_path: PathBuf,
+        b_size: (u32, u32),
+    },
+    #[error("depth: channel {channel} in \"{}\" has {count} invalid pixel(s) (NaN or negative depth); the first is pixel (x={x}, y={y}) of the data window with {value_m} m", .path.display())]
+    InvalidDepth {
+        path: PathBuf,
+        channel: String,
+        x: usize,
+        y: usize,
+        value_m: f32,
+        count: u64,
+    },
+    #[error("invalid argument {what}: {reason}")]
+    InvalidArgument { what: String, reason: String },
+    #[error("cannot write \"{}\": the image has {got} channel(s) per pixel, expected {expected}", .path.display())]
+    WrongChannelCount {
+        path: PathBuf,
+        expected: String,
+        got: u32,
+    },
+    #[error("cannot write \"{}\": channel {channel} holds {got} values, expected {expected} (width x height x channels)", .path.display())]
+    DataLength {
+        path: PathBuf,
+        channel: String,
+        expected: usize,
+        got: usize,
+    },
+    #[error("cannot write \"{}\": {reason}", .path.display())]
+    InvalidImage { path: PathBuf, reason: String },
+    #[error("cannot encode OpenEXR file \"{}\": {source}", .path.display())]
+    ExrEncode {
+        path: PathBuf,
+        source: exr::error::Error,
+    },
+    #[error("cannot encode PNG file \"{}\": {source}", .path.display())]
+    PngEncode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("cannot write \"{}\": {source}", .path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Interleaved f32 image, row-major, top row first (y down), `channels` values per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub channels: u32,
+    pub data: Vec<f32>,
+}
+
+impl Image {
+    /// An image of zeros.
+    pub fn new(width: u32, height: u32, channels: u32) -> Image {
+        let len = width as usize * height as usize * channels as usize;
+        Image {
+            width,
+            height,
+            channels,
+            data: vec![0.0; len],
+        }
+    }
+
+    fn index(&self, x: u32, y: u32, c: u32) -> usize {
+        debug_assert!(x < self.width && y < self.height && c < self.channels);
+        (y as usize * self.width as usize + x as usize) * self.channels as usize + c as usize
+    }
+
+    /// Value of channel `c` at pixel (x, y). Panics when out of bounds (a programming error).
+    pub fn get(&self, x: u32, y: u32, c: u32) -> f32 {
+        self.data[self.index(x, y, c)]
+    }
+
+    /// Sets channel `c` at pixel (x, y). Panics when out of bounds (a programming error).
+    pub fn set(&mut self, x: u32, y: u32, c: u32, v: f32) {
+        let i = self.index(x, y, c);
+        self.data[i] = v;
+    }
+}
+
+/// What a depth value measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DepthKind {
+    /// Distance along the view axis (Blender/Cycles Z).
+    #[default]
+    Planar,
+    /// Euclidean distance from the camera along the pixel's ray.
+    Ray,
+}
+
+/// Where the passes of a frame are, and how to read them.
+#[derive(Clone, Debug, Default)]
+pub struct PassSources {
+    pub color_path: PathBuf,
+    /// None: look in `color_path` (multilayer file).
+    pub depth_path: Option<PathBuf>,
+    /// None: look in `color_path` if present there, else no velocity.
+    pub velocity_path: Option<PathBuf>,
+    /// Override: a layer prefix ("ViewLayer.Combined") or an explicit comma list "R,G,B[,A]".
+    pub color_channels: Option<String>,
+    /// Override: exact channel name.
+    pub depth_channel: Option<String>,
+    /// Override: comma list of 2 channel names (x, y) or 4 (Blender X,Y,Z,W).
+    pub velocity_channels: Option<String>,
+    /// Metres per depth unit in the file (1.0 = metres, 0.01 = centimetres); 0.0 is treated as 1.0.
+    pub depth_unit_m: f64,
+    /// The user asked for velocity: missing velocity is an error.
+    pub require_velocity: bool,
+}
+
+/// The passes of one frame, as loaded by [`load_passes`].
+#[derive(Clone, Debug)]
+pub struct ScenePasses {
+    /// 4 channels RGBA (alpha = 1 when the file has none), scene-linear.
+    pub color: Image,
+    /// 1 channel, metres, exactly as stored times `depth_unit_m` (no ray/planar conversion).
+    pub depth_m: Image,
+    /// 2 channels: motion in pixels per frame toward the NEXT frame, x right, y DOWN.
+    pub velocity_px: Option<Image>,
+    /// x, y, width, height (px) of the display window.
+    pub display_window: (i32, i32, u32, u32),
+    /// Position (px) of pixel (0,0) of these images in the same absolute coordinates as
+    /// `display_window`'s x, y (the EXR data window's minimum corner).
+    pub data_origin: (i32, i32),
+    /// Which file/channel each pass came from, and the conventions applied (multi-line).
+    pub channel_report: String,
+    /// Number of NaN/Inf color values replaced by 0.
+    pub color_nan_count: u64,
+}
+
+/// Writes `bytes` to a temporary file beside `path`, then renames it onto `path`. On any
+/// failure the temporary file is removed and an existing `path` is left untouched.
+pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name().ok_or_else(|| IoError::InvalidImage {
+        path: path.to_path_buf(),
+        reason: "the path does not name a file".into(),
+    })?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}-{}",
+        name.to_string_lossy(),
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        IoError::Write {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
+/// A fresh, empty directory under the system temp dir for one test.
+#[cfg(test)]
+pub(crate) fn test_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("realcam-test-{}-{}", name, std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create test dir");
+    dir
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_get_set_layout() {
+        let mut im = Image::new(3, 2, 4);
+        assert_eq!(im.data.len(), 24);
+        im.set(2, 1, 3, 7.0);
+        assert_eq!(im.get(2, 1, 3), 7.0);
+        assert_eq!(im.data[(3 + 2) * 4 + 3], 7.0);
+    }
+
+    #[test]
+    fn atomic_write_replaces_and_cleans_up() {
+        let dir = test_dir("atomic");
+        let target = dir.join("a.bin");
+        write_file_atomically(&target, b"one").unwrap();
+        write_file_atomically(&target, b"two").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"two");
+        let err = write_file_atomically(&dir.join("missing/a.bin"), b"x").unwrap_err();
+        assert!(err.to_string().contains("missing/a.bin"), "{err}");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,104 @@
+//! Writing 8-bit sRGB PNG previews.
+
+use super::{write_file_atomically, Image, IoError};
+use image::ImageEncoder;
+use std::path::Path;
+
+/// The sRGB OETF (IEC 61966-2-1) of a linear value in [0, 1].
+fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Encodes linear `v` as an 8-bit sRGB code value; NaN -> 0, clamped to [0, 1].
+fn to_srgb8(v: f32) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (srgb_oetf(v) * 255.0 + 0.5) as u8
+}
+
+/// Writes a linear image (3 or 4 channels; alpha ignored) as an 8-bit RGB sRGB PNG.
+pub fn write_png_srgb(path: &Path, image: &Image) -> Result<(), IoError> {
+    let n = image.channels as usize;
+    if n != 3 && n != 4 {
+        return Err(IoError::WrongChannelCount {
+            path: path.into(),
+            expected: "3 (RGB) or 4 (RGBA)".into(),
+            got: image.channels,
+        });
+    }
+    let expected = image.width as usize * image.height as usize * n;
+    if image.data.len() != expected || expected == 0 {
+        return Err(IoError::DataLength {
+            path: path.into(),
+            channel: "RGB[A] (interleaved)".into(),
+            expected,
+            got: image.data.len(),
+        });
+    }
+    let rgb: Vec<u8> = image
+        .data
+        .chunks_exact(n)
+        .flat_map(|px| [px[0], px[1], px[2]].map(to_srgb8))
+        .collect();
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(
+            &rgb,
+            image.width,
+            image.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|source| IoError::PngEncode {
+            path: path.into(),
+            source,
+        })?;
+    write_file_atomically(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::test_dir;
+
+    #[test]
+    fn srgb_encoding_clamps_and_zeroes_nan() {
+        let dir = test_dir("png");
+        let path = dir.join("a.png");
+        let mut im = Image::new(2, 2, 4);
+        im.data = vec![
+            0.0,
+            0.5,
+            1.0,
+            1.0,
+            f32::NAN,
+            2.0,
+            -1.0,
+            0.0,
+            0.001,
+            0.18,
+            0.214,
+            1.0,
+            1e9,
+            0.0,
+            0.0,
+            1.0,
+        ];
+        write_png_srgb(&path, &im).unwrap();
+        let back = image::open(&path).unwrap();
+        assert_eq!(back.color(), image::ColorType::Rgb8);
+        let expected = [0, 188, 255, 0, 255, 0, 3, 118, 127, 255, 0, 0];
+        assert_eq!(back.to_rgb8().into_raw(), expected);
+        // A failed write keeps the existing file.
+        let before = std::fs::read(&path).unwrap();
+        let err = write_png_srgb(&path, &Image::new(2, 2, 2)).unwrap_err();
+        assert!(
+            err.to_string().contains("expected 3 (RGB) or 4 (RGBA)"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&path).unwrap(), before);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,142 @@
+//! Lens files (TOML, in lenses/): what a lens is and what it allows. Errors name the file and
+//! the line. The full format (aberration tables, prescriptions) grows with the lens model; the
+//! fields here are what the camera pipeline uses today.
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum LensFileError {
+    #[error("lens file {path}: cannot read it: {source}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("lens file {path}, line {line}: {message}")]
+    Parse { path: PathBuf, line: usize, message: String },
+    #[error("lens file {path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+}
+
+/// The iris of a lens.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ApertureSpec {
+    /// Number of blades; 0 for a circular aperture.
+    pub blades: u32,
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// 0 straight blades .. 1 circular.
+    #[serde(default)]
+    pub curvature: f64,
+}
+
+/// A lens as a lens file describes it.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LensFile {
+    pub name: String,
+    /// Where the numbers come from.
+    pub source: String,
+    pub focal_length_mm: f64,
+    pub f_number_min: f64,
+    pub f_number_max: f64,
+    /// Closest focus distance, metres from the entrance pupil.
+    pub focus_min_m: f64,
+    #[serde(default = "one")]
+    pub transmittance: f64,
+    #[serde(default = "one")]
+    pub pupil_magnification: f64,
+    pub aperture: ApertureSpec,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The lens used when no --lens is given (lenses/default.toml, embedded).
+pub const DEFAULT_LENS_TOML: &str = include_str!("../lenses/default.toml");
+
+impl LensFile {
+    pub fn load(path: &Path) -> Result<LensFile, LensFileError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
+        Self::parse(&text, path)
+    }
+
+    pub fn default_lens() -> LensFile {
+        // The embedded default is checked by a unit test, so this cannot fail at run time.
+        Self::parse(DEFAULT_LENS_TOML, Path::new("lenses/default.toml")).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    pub fn parse(text: &str, path: &Path) -> Result<LensFile, LensFileError> {
+        let lens: LensFile = toml::from_str(text).map_err(|e| {
+            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1));
+            LensFileError::Parse { path: path.to_path_buf(), line, message: e.message().to_string() }
+        })?;
+        lens.validate(path)?;
+        Ok(lens)
+    }
+
+    fn validate(&self, path: &Path) -> Result<(), LensFileError> {
+        let bad = |message: String| Err(LensFileError::Invalid { path: path.to_path_buf(), message });
+        let positive = [
+            ("focal_length_mm", self.focal_length_mm),
+            ("f_number_min", self.f_number_min),
+            ("f_number_max", self.f_number_max),
+            ("focus_min_m", self.focus_min_m),
+            ("pupil_magnification", self.pupil_magnification),
+        ];
+        for (key, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return bad(format!("{key} = {value} must be a positive number"));
+            }
+        }
+        if self.f_number_max < self.f_number_min {
+            return bad(format!("f_number_max = {} is below f_number_min = {}", self.f_number_max, self.f_number_min));
+        }
+        if !(self.transmittance > 0.0 && self.transmittance <= 1.0) {
+            return bad(format!("transmittance = {} must be in (0, 1]", self.transmittance));
+        }
+        if self.aperture.blades > 32 || self.aperture.blades == 1 || self.aperture.blades == 2 {
+            return bad(format!("aperture.blades = {} must be 0 (circular) or 3..32", self.aperture.blades));
+        }
+        if !(0.0..=1.0).contains(&self.aperture.curvature) {
+            return bad(format!("aperture.curvature = {} must be in [0, 1]", self.aperture.curvature));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_lens_parses() {
+        let lens = LensFile::default_lens();
+        assert!(lens.focal_length_mm > 0.0);
+    }
+
+    #[test]
+    fn syntax_error_names_file_and_line() {
+        let text = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = = 50\n";
+        let err = LensFile::parse(text, Path::new("bad.toml")).unwrap_err().to_string();
+        assert!(err.starts_with("lens file bad.toml, line 3:"), "{err}");
+    }
+
+    #[test]
+    fn unknown_key_names_the_key_and_line() {
+        let text = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\nfocal_lenght = 3\n[aperture]\nblades = 9\n";
+        let err = LensFile::parse(text, Path::new("l.toml")).unwrap_err().to_string();
+        assert!(err.contains("line 7") && err.contains("focal_lenght"), "{err}");
+    }
+
+    #[test]
+    fn out_of_range_values_are_rejected() {
+        let text = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 4\nf_number_max = 2\nfocus_min_m = 0.45\n[aperture]\nblades = 9\n";
+        let err = LensFile::parse(text, Path::new("l.toml")).unwrap_err().to_string();
+        assert_eq!(err, "lens file l.toml: f_number_max = 2 is below f_number_min = 4");
+    }
+}

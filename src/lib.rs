@@ -1,0 +1,19 @@
+//! realcam: a realistic camera for rendered images.
+//!
+//! Layers (see README.md, "Architecture"):
+//! - [`optics`]: plain f64 camera math on the CPU (no Vulkan), tested against the source documents.
+//! - [`io`]: OpenEXR and PNG input/output.
+//! - [`gpu`]: the thin Vulkan runtime; knows no optics.
+//! - [`passes`]: one module per compute pass, joining optics and the runtime.
+//! - [`planner`]: decides which passes a scene and camera call for.
+
+pub mod io;
+pub mod optics;
+pub mod synth;
+pub mod camera;
+pub mod gpu;
+pub mod lens_file;
+pub mod passes;
+pub mod planner;
+pub mod render;
+pub mod scene;

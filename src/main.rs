@@ -1,0 +1,354 @@
+//! The realcam command line. Only argument handling lives here; the work is in the library.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use realcam::camera::{Camera, CameraRequest, FilmMode};
+use realcam::gpu::{Gpu, GpuOptions};
+use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
+use realcam::lens_file::LensFile;
+use realcam::optics::dof::{dof_report, CocCriterion};
+use realcam::optics::film::FilmCurve;
+use realcam::optics::sensor::SensorFit;
+use realcam::optics::{Sensor, ThinLens};
+use realcam::render::Renderer;
+use realcam::scene::Frame;
+use std::path::{Path, PathBuf};
+
+#[derive(Parser)]
+#[command(name = "realcam", version, about = "A realistic camera for rendered images (Vulkan compute)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render color + depth (+ velocity) EXR passes through a camera.
+    Render(RenderArgs),
+    /// Print focusing, field of view, exposure and depth-of-field numbers for a lens setting.
+    Dof(DofArgs),
+    /// List the Vulkan devices.
+    Devices,
+    /// Write the deterministic synthetic test scenes (testdata/ is made with this).
+    Synth {
+        /// Output directory.
+        #[arg(long, default_value = "testdata")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum FilmArg {
+    /// The characteristic curve (toe, straight part, shoulder): display-referred.
+    Filmic,
+    /// Scene-referred linear sensor values, for compositing.
+    Linear,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DepthKindArg {
+    /// Distance along the view axis (Blender/Cycles Z).
+    Planar,
+    /// Distance from the camera along each pixel's ray.
+    Ray,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum FitArg {
+    Horizontal,
+    Vertical,
+    Auto,
+}
+
+#[derive(Args)]
+struct LensArgs {
+    /// Lens file (TOML, see lenses/); the built-in default lens when absent.
+    #[arg(long)]
+    lens: Option<PathBuf>,
+    /// Focal length in mm (must match a prime lens file unless --force).
+    #[arg(long = "focal-length")]
+    focal_length_mm: Option<f64>,
+    /// f-number N.
+    #[arg(long = "fstop")]
+    f_number: Option<f64>,
+    /// Focus distance in metres (planar, from the lens).
+    #[arg(long = "focus", default_value_t = 2.0)]
+    focus_m: f64,
+    /// Sensor: full-frame (36x24), super35, aps-c, aps-c-canon, m43, 1in, apsh, medium-format, or WxH in mm.
+    #[arg(long, default_value = "full-frame")]
+    sensor: String,
+    /// Which image dimension the sensor width maps to (Blender's sensor fit).
+    #[arg(long = "sensor-fit", value_enum, default_value = "horizontal")]
+    sensor_fit: FitArg,
+    /// Allow settings outside the lens file's range.
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
+    #[arg(long)]
+    color: PathBuf,
+    /// Depth pass EXR (a Z channel); default: look in the color file.
+    #[arg(long)]
+    depth: Option<PathBuf>,
+    /// Velocity pass EXR; default: use one in the color file if present.
+    #[arg(long)]
+    velocity: Option<PathBuf>,
+    #[command(flatten)]
+    lens: LensArgs,
+    /// Shutter time in seconds, e.g. 0.02 or 1/50.
+    #[arg(long, default_value = "1/50")]
+    shutter: String,
+    #[arg(long, default_value_t = 100.0)]
+    iso: f64,
+    /// Luminance in cd/m^2 of a scene value of 1.0. The default exposes a scene value of 0.18 as
+    /// ISO 12232 middle grey at 1/50 s, ISO 100, f/2.
+    #[arg(long = "nits-per-unit", default_value_t = 160.0)]
+    nits_per_unit: f64,
+    /// Aperture blades (0 = circular); default from the lens file.
+    #[arg(long)]
+    blades: Option<u32>,
+    /// Aperture rotation in degrees; default from the lens file.
+    #[arg(long = "blade-rotation")]
+    blade_rotation_deg: Option<f64>,
+    /// Film response.
+    #[arg(long, value_enum, default_value = "filmic")]
+    film: FilmArg,
+    /// Do not apply the exposure gain (ISO, shutter, f-number): sensor value = scene value.
+    #[arg(long = "no-exposure")]
+    no_exposure: bool,
+    /// Do not apply natural (cos^4) vignetting.
+    #[arg(long = "no-vignetting")]
+    no_vignetting: bool,
+    /// Clamp on the CoC diameter in pixels.
+    #[arg(long = "max-coc", default_value_t = 64.0)]
+    max_coc_px: f64,
+    /// What the depth values measure.
+    #[arg(long = "depth-kind", value_enum, default_value = "planar")]
+    depth_kind: DepthKindArg,
+    /// Metres per depth unit in the file (0.01 for centimetres).
+    #[arg(long = "depth-unit", default_value_t = 1.0)]
+    depth_unit_m: f64,
+    /// Color channel override: a layer prefix (ViewLayer.Combined) or a list "R,G,B[,A]".
+    #[arg(long = "color-channels")]
+    color_channels: Option<String>,
+    /// Depth channel override (exact name).
+    #[arg(long = "depth-channel")]
+    depth_channel: Option<String>,
+    /// Velocity channel override: "x,y" or Blender "X,Y,Z,W".
+    #[arg(long = "velocity-channels")]
+    velocity_channels: Option<String>,
+    /// Output EXR.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write 32-bit float EXR instead of half.
+    #[arg(long)]
+    float: bool,
+    /// Also write an sRGB 8-bit PNG preview here.
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// Print the planned passes and why each runs or is skipped.
+    #[arg(long)]
+    explain: bool,
+    /// Print GPU time per pass (timestamp queries).
+    #[arg(long)]
+    profile: bool,
+    /// Write the per-pass GPU times as a Chrome trace JSON (opens in Perfetto).
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args)]
+struct GpuArgs {
+    /// Enable the Khronos validation layer with synchronization validation (also REALCAM_VALIDATE=1).
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: index from `realcam devices` or part of its name (also REALCAM_DEVICE).
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Args)]
+struct DofArgs {
+    #[command(flatten)]
+    lens: LensArgs,
+    /// CoC criterion: an image CoC in mm (e.g. 0.03) or an angular ratio like 1/1000 (Potmesil & Chakravarty).
+    #[arg(long, default_value = "0.03")]
+    coc: String,
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+        Command::Dof(args) => dof(args),
+        Command::Devices => devices(),
+        Command::Synth { out } => synth(&out),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn parse_shutter(text: &str) -> Result<f64> {
+    let value = match text.split_once('/') {
+        Some((a, b)) => {
+            let (a, b): (f64, f64) = (a.trim().parse()?, b.trim().parse()?);
+            a / b
+        }
+        None => text.trim().parse()?,
+    };
+    if !(value.is_finite() && value > 0.0) {
+        bail!("must be a positive time in seconds");
+    }
+    Ok(value)
+}
+
+fn load_lens(path: Option<&Path>) -> Result<LensFile> {
+    Ok(match path {
+        Some(p) => LensFile::load(p)?,
+        None => LensFile::default_lens(),
+    })
+}
+
+fn fit(arg: FitArg) -> SensorFit {
+    match arg {
+        FitArg::Horizontal => SensorFit::Horizontal,
+        FitArg::Vertical => SensorFit::Vertical,
+        FitArg::Auto => SensorFit::Auto,
+    }
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    let shutter_s = parse_shutter(&args.shutter).with_context(|| format!("--shutter {:?}", args.shutter))?;
+    let request = CameraRequest {
+        focal_length_mm: args.lens.focal_length_mm,
+        f_number: args.lens.f_number,
+        focus_distance_m: args.lens.focus_m,
+        sensor: Some(args.lens.sensor.clone()),
+        sensor_fit: Some(fit(args.lens.sensor_fit)),
+        shutter_s,
+        iso: args.iso,
+        nits_per_unit: args.nits_per_unit,
+        blades: args.blades,
+        blade_rotation_deg: args.blade_rotation_deg,
+        exposure: !args.no_exposure,
+        vignetting: !args.no_vignetting,
+        film: Some(match args.film {
+            FilmArg::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
+            FilmArg::Linear => FilmMode::Linear,
+        }),
+        max_coc_px: args.max_coc_px,
+        force: args.lens.force,
+    };
+    let camera = Camera::new(&lens_file, &request)?;
+    if !(args.depth_unit_m.is_finite() && args.depth_unit_m > 0.0) {
+        bail!("--depth-unit must be a positive number of metres, got {}", args.depth_unit_m);
+    }
+
+    let sources = PassSources {
+        color_path: args.color.clone(),
+        depth_path: args.depth.clone(),
+        velocity_path: args.velocity.clone(),
+        color_channels: args.color_channels.clone(),
+        depth_channel: args.depth_channel.clone(),
+        velocity_channels: args.velocity_channels.clone(),
+        depth_unit_m: args.depth_unit_m,
+        require_velocity: args.velocity.is_some(),
+    };
+    let passes = io::load_passes(&sources)?;
+    let depth_kind = match args.depth_kind {
+        DepthKindArg::Planar => DepthKind::Planar,
+        DepthKindArg::Ray => DepthKind::Ray,
+    };
+    let channel_report = passes.channel_report.clone();
+    let frame = Frame::from_passes(passes, &camera, depth_kind);
+    let plan = realcam::planner::plan(&frame, &camera);
+    if args.explain {
+        eprintln!("inputs:\n{}", indent(&channel_report));
+        eprintln!("{}", plan.explain());
+    }
+
+    let mut options = GpuOptions::from_env();
+    options.validation |= args.gpu.validate;
+    if args.gpu.device.is_some() {
+        options.device = args.gpu.device.clone();
+    }
+    let gpu = Gpu::new(&options)?;
+    eprintln!("device: {}", gpu.info());
+    let renderer = Renderer::new(&gpu, &plan)?;
+    let rendered = renderer.render(&frame, &plan, false)?;
+    if args.profile {
+        eprint!("{}", rendered.profile.table());
+    }
+    if let Some(trace) = &args.trace {
+        write_text_atomically(trace, &rendered.profile.chrome_trace_json())
+            .with_context(|| format!("writing the trace {}", trace.display()))?;
+    }
+    if gpu.validation_message_count() > 0 {
+        bail!("{} Vulkan validation messages (see above)", gpu.validation_message_count());
+    }
+
+    let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
+    let exr_options = ExrWriteOptions {
+        float32: args.float,
+        display_window: Some(frame.display_window),
+        data_origin: frame.data_origin,
+        attributes: camera.attributes(),
+    };
+    io::write_exr_rgba(&args.output, &image, &exr_options)?;
+    eprintln!("wrote {}", args.output.display());
+    if let Some(png) = &args.png {
+        io::write_png_srgb(png, &image)?;
+        eprintln!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+fn indent(text: &str) -> String {
+    text.lines().map(|l| format!("  {l}\n")).collect()
+}
+
+fn write_text_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let tmp = dir.join(format!(".realcam-{}.tmp", std::process::id()));
+    std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+fn dof(args: DofArgs) -> Result<()> {
+    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    let f_number = args.lens.f_number.unwrap_or(lens_file.f_number_min);
+    let focal_length_mm = args.lens.focal_length_mm.unwrap_or(lens_file.focal_length_mm);
+    let lens = ThinLens::new(focal_length_mm, f_number, args.lens.focus_m * 1000.0)?
+        .with_pupil_magnification(lens_file.pupil_magnification)?
+        .with_transmittance(lens_file.transmittance)?;
+    let sensor = Sensor::parse(&args.lens.sensor)?;
+    let criterion = CocCriterion::parse(&args.coc)?;
+    println!("lens: {}", lens_file.name);
+    print!("{}", dof_report(&lens, &sensor, criterion));
+    Ok(())
+}
+
+fn devices() -> Result<()> {
+    for d in Gpu::list_devices()? {
+        println!("[{}] {}", d.index, d);
+    }
+    Ok(())
+}
+
+fn synth(out: &Path) -> Result<()> {
+    use realcam::synth::{write_scene, SynthScene};
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    write_scene(out, "demo", &SynthScene::demo())?;
+    println!("wrote {}/demo_color.exr and {}/demo_depth.exr", out.display(), out.display());
+    Ok(())
+}

@@ -1,0 +1,158 @@
+//! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
+//! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
+
+use super::{after_compute_write, groups_for, overwrite, push_bytes};
+use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuImage, GpuResult, Recorder};
+use ash::vk;
+
+pub const NAME: &str = "bokeh_gather";
+
+/// The iris: n blades (< 3 means circular), rotation, blade curvature 0 (straight) .. 1 (round).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ApertureShape {
+    pub blades: u32,
+    pub rotation_deg: f64,
+    pub curvature: f64,
+}
+
+impl ApertureShape {
+    pub const CIRCLE: ApertureShape = ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0 };
+}
+
+/// Push constants of glsl/bokeh_gather.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GatherParams {
+    pub size: [i32; 2],
+    pub radius_px: i32,
+    pub blades: i32,
+    pub rotation_rad: f32,
+    pub curvature: f32,
+    pub layer_transition_px: f32,
+}
+
+impl GatherParams {
+    pub fn new(width: u32, height: u32, max_abs_coc_px: f64, aperture: &ApertureShape) -> GatherParams {
+        GatherParams {
+            size: [width as i32, height as i32],
+            radius_px: (0.5 * max_abs_coc_px).ceil() as i32 + 1,
+            blades: aperture.blades as i32,
+            rotation_rad: aperture.rotation_deg.to_radians() as f32,
+            curvature: if aperture.blades < 3 { 1.0 } else { aperture.curvature.clamp(0.0, 1.0) as f32 },
+            layer_transition_px: 1.0,
+        }
+    }
+}
+
+/// Signed distance to the aperture image of circumradius r (glsl/include/aperture.glsl).
+pub fn aperture_sdf(o: [f32; 2], r: f32, p: &GatherParams) -> f32 {
+    let len = (o[0] * o[0] + o[1] * o[1]).sqrt();
+    let d_circle = len - r;
+    if p.blades < 3 || p.curvature >= 1.0 {
+        return d_circle;
+    }
+    let sector = 2.0 * std::f32::consts::PI / p.blades as f32;
+    let mut phi = (-o[1]).atan2(o[0]) - (0.5 * std::f32::consts::PI + p.rotation_rad + 0.5 * sector);
+    phi -= sector * (phi / sector + 0.5).floor();
+    let d_poly = len * phi.cos() - r * (0.5 * sector).cos();
+    d_poly + (d_circle - d_poly) * p.curvature
+}
+
+pub fn aperture_area(r: f32, p: &GatherParams) -> f32 {
+    let circle = std::f32::consts::PI * r * r;
+    if p.blades < 3 {
+        return circle;
+    }
+    let n = p.blades as f32;
+    let polygon = 0.5 * n * r * r * (2.0 * std::f32::consts::PI / n).sin();
+    polygon + (circle - polygon) * p.curvature
+}
+
+/// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
+pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
+    let (w, h) = (p.size[0], p.size[1]);
+    let mut out = vec![0.0f32; rgba.len()];
+    let finite = |v: f32| if v.is_finite() { v.clamp(-3.0e38, 3.0e38) } else { 0.0 };
+    for y in 0..h {
+        for x in 0..w {
+            let coc_p = coc_px[(y * w + x) as usize];
+            let radius_p = (0.5 * coc_p.abs()).max(0.5);
+            let (mut bg, mut fg) = ([0.0f32; 4], [0.0f32; 4]);
+            let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
+            for dy in -p.radius_px..=p.radius_px {
+                for dx in -p.radius_px..=p.radius_px {
+                    let (qx, qy) = (x + dx, y + dy);
+                    if qx < 0 || qy < 0 || qx >= w || qy >= h {
+                        continue;
+                    }
+                    let qi = (qy * w + qx) as usize;
+                    let coc_q = coc_px[qi];
+                    let radius_q = (0.5 * coc_q.abs()).max(0.5);
+                    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+                    if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
+                        continue;
+                    }
+                    let s = if coc_q < 0.0 { -1.0 } else { 1.0 };
+                    let o = [-dx as f32 * s, -dy as f32 * s];
+                    let cov = (0.5 - aperture_sdf(o, reach, p)).clamp(0.0, 1.0);
+                    let wgt = cov / aperture_area(reach, p);
+                    if wgt <= 0.0 {
+                        continue;
+                    }
+                    let f = ((coc_p - coc_q) / p.layer_transition_px).clamp(0.0, 1.0);
+                    for c in 0..4 {
+                        let v = finite(rgba[qi * 4 + c]);
+                        fg[c] += f * wgt * v;
+                        bg[c] += (1.0 - f) * wgt * v;
+                    }
+                    fg_w += f * wgt;
+                    bg_w += (1.0 - f) * wgt;
+                }
+            }
+            let alpha = fg_w.clamp(0.0, 1.0);
+            let o = (y * w + x) as usize * 4;
+            for c in 0..4 {
+                let b = if bg_w > 0.0 { bg[c] / bg_w } else { 0.0 };
+                let f = if fg_w > 0.0 { fg[c] / fg_w } else { 0.0 };
+                out[o + c] = b + (f - b) * alpha;
+            }
+        }
+    }
+    out
+}
+
+pub struct BokehGatherPass {
+    pipeline: ComputePipeline,
+}
+
+impl BokehGatherPass {
+    pub fn new(gpu: &Gpu) -> GpuResult<BokehGatherPass> {
+        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 3];
+        let size = std::mem::size_of::<GatherParams>() as u32;
+        Ok(BokehGatherPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+    }
+
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        color: &GpuImage,
+        coc: &GpuImage,
+        output: &GpuImage,
+        params: &GatherParams,
+    ) -> GpuResult<()> {
+        rec.begin_pass(NAME);
+        // coc: written by the CoC pass just before: wait for it (read-after-write).
+        // color: the upload's barrier already made it visible to compute reads; waiting on
+        //   compute writes as well keeps this pass correct if a compute pass ever precedes it.
+        // output: written from scratch.
+        rec.image_barriers(&[after_compute_write(coc), after_compute_write(color), overwrite(output)]);
+        rec.dispatch(
+            &self.pipeline,
+            &[Bind::Image(color), Bind::Image(coc), Bind::Image(output)],
+            push_bytes(params),
+            groups_for(color.width, color.height),
+        )?;
+        rec.end_pass();
+        Ok(())
+    }
+}

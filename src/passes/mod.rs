@@ -1,0 +1,54 @@
+//! One module per compute pass. Each owns its pipeline, descriptor layout and push constants,
+//! records its dispatch with the barriers it needs (written out by hand, with the reason), and
+//! has a CPU twin used as its test oracle on small images.
+
+pub mod bokeh_gather;
+pub mod coc;
+pub mod film;
+pub mod vignette;
+
+use crate::gpu::GpuImage;
+use ash::vk;
+
+/// Workgroup edge of every 2D pass (TILE_SIZE in glsl/include/common.glsl).
+pub const TILE_SIZE: u32 = 16;
+
+/// Workgroups covering a width x height image.
+pub fn groups_for(width: u32, height: u32) -> [u32; 3] {
+    [width.div_ceil(TILE_SIZE), height.div_ceil(TILE_SIZE), 1]
+}
+
+/// The bytes of a `#[repr(C)]` push-constant block made only of 4-byte fields.
+pub(crate) fn push_bytes<T: Copy>(value: &T) -> &[u8] {
+    // SAFETY: callers pass #[repr(C)] structs of i32/f32 fields, which have no padding bytes.
+    unsafe { std::slice::from_raw_parts((value as *const T).cast::<u8>(), std::mem::size_of::<T>()) }
+}
+
+/// Barrier for an image a pass is about to overwrite completely: its old contents are discarded
+/// (UNDEFINED -> GENERAL). The execution dependency on earlier compute and copy work orders this
+/// write after any earlier reads of the same image (write-after-read).
+pub(crate) fn overwrite(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::NONE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .old_layout(vk::ImageLayout::UNDEFINED)
+        .new_layout(vk::ImageLayout::GENERAL)
+        .image(image.image)
+        .subresource_range(crate::gpu::color_range())
+}
+
+/// Barrier for an image an earlier compute pass wrote and this pass reads (read-after-write):
+/// the writes must be finished and visible to this pass's storage reads.
+pub(crate) fn after_compute_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+        .old_layout(vk::ImageLayout::GENERAL)
+        .new_layout(vk::ImageLayout::GENERAL)
+        .image(image.image)
+        .subresource_range(crate::gpu::color_range())
+}

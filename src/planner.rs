@@ -1,0 +1,172 @@
+//! Decides which passes a frame and camera call for, and says why (`--explain`). A pass whose
+//! effect would be invisible is not recorded and its pipeline is never created.
+
+use crate::camera::{Camera, FilmMode};
+use crate::passes::bokeh_gather::GatherParams;
+use crate::passes::coc::CocParams;
+use crate::passes::film::FilmParams;
+use crate::passes::vignette::VignetteParams;
+use crate::scene::Frame;
+
+/// A CoC whose diameter is at most this many pixels is invisible.
+pub const VISIBLE_COC_PX: f64 = 1.0;
+/// Vignetting weaker than this relative falloff at the corners is invisible.
+pub const VISIBLE_FALLOFF: f64 = 1.0e-4;
+
+/// One line of the plan.
+#[derive(Clone, Debug)]
+pub struct Step {
+    pub pass: &'static str,
+    pub run: bool,
+    pub why: String,
+}
+
+/// The planned pipeline with the parameters of every pass that runs.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub steps: Vec<Step>,
+    pub coc: Option<CocParams>,
+    pub gather: Option<GatherParams>,
+    pub vignette: Option<VignetteParams>,
+    pub film: Option<FilmParams>,
+    /// Signed CoC range over the frame in pixels (after the user clamp).
+    pub coc_range_px: (f64, f64),
+}
+
+impl Plan {
+    pub fn runs(&self, pass: &str) -> bool {
+        self.steps.iter().any(|s| s.pass == pass && s.run)
+    }
+
+    /// The plan as text: one line per pass, run or skipped, and why.
+    pub fn explain(&self) -> String {
+        let mut out = String::from("pass plan:\n");
+        for s in &self.steps {
+            out += &format!("  [{}] {:<13} {}\n", if s.run { "run " } else { "skip" }, s.pass, s.why);
+        }
+        out
+    }
+}
+
+pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
+    let (w, h) = (frame.width, frame.height);
+    let (dw, dh) = frame.display_size();
+    let pitch_mm = camera.pixel_pitch_mm(dw, dh);
+    let mut steps = Vec::new();
+
+    // Depth of field: the CoC is monotonic in depth, so the nearest and farthest depths bound it.
+    let (near_m, far_m) = frame
+        .depth_m
+        .iter()
+        .fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+    let coc_px = |d_m: f32| {
+        let c = camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
+        c.clamp(-camera.max_coc_px, camera.max_coc_px)
+    };
+    let coc_range_px = if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(near_m), coc_px(far_m)) };
+    let max_abs_coc_px = coc_range_px.0.abs().max(coc_range_px.1.abs());
+    let dof = max_abs_coc_px > VISIBLE_COC_PX;
+    let coc_why = format!(
+        "CoC from {:.2} px (nearest, {:.3} m) to {:.2} px (farthest, {:.3e} m) at f/{} focused at {} m",
+        coc_range_px.0,
+        near_m,
+        coc_range_px.1,
+        far_m,
+        camera.lens.f_number,
+        camera.lens.focus_distance_mm / 1000.0
+    );
+    let (coc, gather) = if dof {
+        steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
+        steps.push(Step {
+            pass: crate::passes::bokeh_gather::NAME,
+            run: true,
+            why: format!(
+                "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: gather radius {} px, {}",
+                GatherParams::new(w, h, max_abs_coc_px, &camera.aperture).radius_px,
+                if camera.aperture.blades >= 3 {
+                    format!("{}-bladed aperture", camera.aperture.blades)
+                } else {
+                    "circular aperture".into()
+                }
+            ),
+        });
+        (
+            Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h)),
+            Some(GatherParams::new(w, h, max_abs_coc_px, &camera.aperture)),
+        )
+    } else {
+        let why = format!("{coc_why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible");
+        steps.push(Step { pass: crate::passes::coc::NAME, run: false, why: why.clone() });
+        steps.push(Step { pass: crate::passes::bokeh_gather::NAME, run: false, why: "no pixel is defocused by more than a pixel".into() });
+        (None, None)
+    };
+
+    steps.push(match &frame.velocity_px {
+        None => Step { pass: "motion_blur", run: false, why: "no velocity pass".into() },
+        Some(v) => {
+            let max_px = v.chunks_exact(2).map(|m| (m[0] * m[0] + m[1] * m[1]).sqrt()).fold(0.0f32, f32::max);
+            Step {
+                pass: "motion_blur",
+                run: false,
+                why: format!("velocity up to {max_px:.1} px/frame is read, but this version has no motion-blur pass"),
+            }
+        }
+    });
+
+    let vignette_params = VignetteParams {
+        size: [w as i32, h as i32],
+        centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+        pixel_pitch_mm: pitch_mm as f32,
+        image_distance_mm: camera.lens.image_distance_mm() as f32,
+    };
+    let corner = vignette_params.corner_falloff() as f64;
+    let vignette = if !camera.vignetting {
+        steps.push(Step { pass: crate::passes::vignette::NAME, run: false, why: "turned off (--no-vignetting)".into() });
+        None
+    } else if 1.0 - corner <= VISIBLE_FALLOFF {
+        steps.push(Step {
+            pass: crate::passes::vignette::NAME,
+            run: false,
+            why: format!("cos^4 falloff at the corners is {corner:.6}: invisible"),
+        });
+        None
+    } else {
+        steps.push(Step {
+            pass: crate::passes::vignette::NAME,
+            run: true,
+            why: format!("cos^4 natural vignetting: {:.1}% of the centre's light at the farthest corner", corner * 100.0),
+        });
+        Some(vignette_params)
+    };
+
+    let gain = camera.exposure_gain();
+    let curve = match camera.film {
+        FilmMode::Curve(c) => Some(c),
+        FilmMode::Linear => None,
+    };
+    let film = if curve.is_none() && gain == 1.0 {
+        steps.push(Step {
+            pass: crate::passes::film::NAME,
+            run: false,
+            why: "linear film with exposure off: the sensor value is the scene value".into(),
+        });
+        None
+    } else {
+        let exposure = if camera.exposure {
+            format!(
+                "exposure gain {gain:.4} (ISO {}, {} s, f/{}, N' {:.2})",
+                camera.iso,
+                camera.shutter_s,
+                camera.lens.f_number,
+                camera.lens.effective_f_number()
+            )
+        } else {
+            "exposure off".into()
+        };
+        let response = if curve.is_some() { "characteristic curve" } else { "linear (scene-referred)" };
+        steps.push(Step { pass: crate::passes::film::NAME, run: true, why: format!("{exposure}, {response}") });
+        Some(FilmParams::new(w, h, gain, curve.as_ref()))
+    };
+
+    Plan { steps, coc, gather, vignette, film, coc_range_px }
+}

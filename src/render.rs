@@ -1,0 +1,100 @@
+//! Runs a plan on the GPU: creates only the pipelines the plan needs, uploads the frame,
+//! records the passes in order, reads the result back.
+
+use crate::gpu::{Gpu, GpuResult, Profile, Recorder};
+use crate::passes::{bokeh_gather::BokehGatherPass, coc::CocPass, film::FilmPass, vignette::VignettePass};
+use crate::planner::Plan;
+use crate::scene::Frame;
+use ash::vk;
+
+/// The pipelines of one plan.
+pub struct Renderer {
+    gpu: Gpu,
+    coc: Option<CocPass>,
+    gather: Option<BokehGatherPass>,
+    vignette: Option<VignettePass>,
+    film: Option<FilmPass>,
+}
+
+/// What a render returns.
+pub struct Rendered {
+    /// RGBA, row-major.
+    pub rgba: Vec<f32>,
+    /// Signed CoC per pixel when the CoC pass ran and `keep_coc` was asked.
+    pub coc_px: Option<Vec<f32>>,
+    pub profile: Profile,
+}
+
+impl Renderer {
+    pub fn new(gpu: &Gpu, plan: &Plan) -> GpuResult<Renderer> {
+        Ok(Renderer {
+            gpu: gpu.clone(),
+            coc: plan.coc.as_ref().map(|_| CocPass::new(gpu)).transpose()?,
+            gather: plan.gather.as_ref().map(|_| BokehGatherPass::new(gpu)).transpose()?,
+            vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
+            film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
+        })
+    }
+
+    pub fn render(&self, frame: &Frame, plan: &Plan, keep_coc: bool) -> GpuResult<Rendered> {
+        let (w, h) = (frame.width, frame.height);
+        let gpu = &self.gpu;
+        let mut rec = Recorder::new(gpu, "realcam frame")?;
+        let rgba = vk::Format::R32G32B32A32_SFLOAT;
+        let color_in = gpu.create_image("color (input)", w, h, rgba)?;
+        rec.begin_pass("upload");
+        let depth = match &plan.coc {
+            Some(_) => {
+                let depth = gpu.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?;
+                rec.upload_images(&[(&color_in, &frame.color), (&depth, &frame.depth_m)])?;
+                Some(depth)
+            }
+            None => {
+                rec.upload_images(&[(&color_in, &frame.color)])?;
+                None
+            }
+        };
+        rec.end_pass();
+
+        // Every pass writes its own image (no aliasing, so no write-after-read hazards between
+        // passes); `current` is the latest color.
+        let image = |name: &str, format, needed: bool| needed.then(|| gpu.create_image(name, w, h, format)).transpose();
+        let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
+        let dof_out = image("color (depth of field)", rgba, self.gather.is_some())?;
+        let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
+        let film_out = image("color (film)", rgba, self.film.is_some())?;
+        let mut current = &color_in;
+
+        if let (Some(pass), Some(params), Some(depth), Some(coc)) = (&self.coc, &plan.coc, &depth, &coc_image) {
+            pass.record(&mut rec, depth, coc, params)?;
+        }
+        if let (Some(pass), Some(params), Some(coc), Some(out)) = (&self.gather, &plan.gather, &coc_image, &dof_out) {
+            pass.record(&mut rec, current, coc, out, params)?;
+            current = out;
+        }
+        if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {
+            pass.record(&mut rec, current, out, params)?;
+            current = out;
+        }
+        if let (Some(pass), Some(params), Some(out)) = (&self.film, &plan.film, &film_out) {
+            pass.record(&mut rec, current, out, params)?;
+            current = out;
+        }
+
+        if std::ptr::eq(current, &color_in) {
+            // Nothing to simulate: the pinhole image is the camera image.
+            return Ok(Rendered { rgba: frame.color.clone(), coc_px: None, profile: rec.submit()?.0 });
+        }
+        rec.begin_pass("download");
+        let out_id = rec.download_image(current, 4)?;
+        let coc_id = match (&coc_image, keep_coc) {
+            (Some(coc), true) => Some(rec.download_image(coc, 1)?),
+            _ => None,
+        };
+        rec.end_pass();
+        let (profile, mut data) = rec.submit()?;
+        let coc_px = coc_id.map(|id| std::mem::take(&mut data[id.index()]));
+        let rgba = std::mem::take(&mut data[out_id.index()]);
+        Ok(Rendered { rgba, coc_px, profile })
+    }
+}

@@ -1,0 +1,73 @@
+//! A frame ready for the GPU: RGBA color, planar depth in metres, optional velocity, and where
+//! the optical centre is.
+
+use crate::camera::Camera;
+use crate::io::{DepthKind, ScenePasses};
+
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA, row-major, top row first.
+    pub color: Vec<f32>,
+    /// Planar depth (distance along the view axis) in metres.
+    pub depth_m: Vec<f32>,
+    /// Motion toward the next frame in pixels (x right, y down), 2 values per pixel.
+    pub velocity_px: Option<Vec<f32>>,
+    /// Optical centre (the display window's centre) in this frame's pixel coordinates.
+    pub centre_px: [f64; 2],
+    pub display_window: (i32, i32, u32, u32),
+    pub data_origin: (i32, i32),
+}
+
+impl Frame {
+    /// From loaded passes. Ray-length depth becomes planar depth using the camera's focal length
+    /// and pixel pitch (the renderer's pinhole): z = d / sqrt(1 + (r_px * pitch / f)^2).
+    pub fn from_passes(passes: ScenePasses, camera: &Camera, depth_kind: DepthKind) -> Frame {
+        let (w, h) = (passes.color.width, passes.color.height);
+        let (dx, dy, dw, dh) = passes.display_window;
+        let centre_px = [
+            dx as f64 + dw as f64 / 2.0 - passes.data_origin.0 as f64,
+            dy as f64 + dh as f64 / 2.0 - passes.data_origin.1 as f64,
+        ];
+        let mut depth_m = passes.depth_m.data;
+        if depth_kind == DepthKind::Ray {
+            let pitch_over_f = camera.pixel_pitch_mm(dw, dh) / camera.lens.focal_length_mm;
+            for (i, d) in depth_m.iter_mut().enumerate() {
+                let x = (i as u32 % w) as f64 + 0.5 - centre_px[0];
+                let y = (i as u32 / w) as f64 + 0.5 - centre_px[1];
+                let t2 = (x * x + y * y) * pitch_over_f * pitch_over_f;
+                *d = (*d as f64 / (1.0 + t2).sqrt()) as f32;
+            }
+        }
+        Frame {
+            width: w,
+            height: h,
+            color: passes.color.data,
+            depth_m,
+            velocity_px: passes.velocity_px.map(|v| v.data),
+            centre_px,
+            display_window: passes.display_window,
+            data_origin: passes.data_origin,
+        }
+    }
+
+    /// A frame whose display window is the image itself (synthetic scenes, tests).
+    pub fn new(width: u32, height: u32, color: Vec<f32>, depth_m: Vec<f32>) -> Frame {
+        Frame {
+            width,
+            height,
+            color,
+            depth_m,
+            velocity_px: None,
+            centre_px: [width as f64 / 2.0, height as f64 / 2.0],
+            display_window: (0, 0, width, height),
+            data_origin: (0, 0),
+        }
+    }
+
+    /// Width and height of the display window (what the sensor maps to).
+    pub fn display_size(&self) -> (u32, u32) {
+        (self.display_window.2, self.display_window.3)
+    }
+}
