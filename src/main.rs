@@ -346,9 +346,10 @@ fn devices() -> Result<()> {
 }
 
 fn synth(out: &Path) -> Result<()> {
-    use realcam::synth::{write_scene, SynthScene};
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    write_scene(out, "demo", &SynthScene::demo())?;
-    println!("wrote {}/demo_color.exr and {}/demo_depth.exr", out.display(), out.display());
+    for (name, scene) in realcam::synth::testdata_scenes() {
+        realcam::synth::write_scene(out, name, &scene)?;
+        println!("wrote {0}/{name}_color.exr and {0}/{name}_depth.exr", out.display());
+    }
     Ok(())
 }

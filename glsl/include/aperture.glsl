@@ -39,6 +39,9 @@ float aperture_area(float r, Aperture ap) {
 // Fraction of the pixel at offset o covered by the aperture image (a one-pixel linear ramp
 // across the edge: antialiased, and exactly 1 for the centre pixel of a point-sized image).
 float aperture_coverage(vec2 o, float r, Aperture ap) {
+    // Nothing beyond the circumscribed circle's ramp: the polygon's edge-line distance
+    // underestimates the true distance near corners, which would leak light past them.
+    if (dot(o, o) >= (r + 0.5) * (r + 0.5)) return 0.0;
     return clamp(0.5 - aperture_sdf(o, r, ap), 0.0, 1.0);
 }
 

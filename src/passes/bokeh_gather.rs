@@ -94,7 +94,11 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
                     }
                     let s = if coc_q < 0.0 { -1.0 } else { 1.0 };
                     let o = [-dx as f32 * s, -dy as f32 * s];
-                    let cov = (0.5 - aperture_sdf(o, reach, p)).clamp(0.0, 1.0);
+                    let cov = if o[0] * o[0] + o[1] * o[1] >= (reach + 0.5) * (reach + 0.5) {
+                        0.0
+                    } else {
+                        (0.5 - aperture_sdf(o, reach, p)).clamp(0.0, 1.0)
+                    };
                     let wgt = cov / aperture_area(reach, p);
                     if wgt <= 0.0 {
                         continue;

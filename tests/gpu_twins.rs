@@ -1,0 +1,90 @@
+//! Every GPU pass against its CPU twin on tiny images (the twins are the test oracles).
+
+mod support;
+
+use realcam::camera::FilmMode;
+use realcam::optics::film::FilmCurve;
+use realcam::passes::{bokeh_gather, coc, film, vignette};
+use realcam::planner;
+use realcam::render::Renderer;
+use realcam::scene::Frame;
+use support::*;
+
+/// A small deterministic frame with varied depths (0.6 m .. 20 m and sky), colors and a few
+/// strong highlights.
+fn busy_frame(w: u32, h: u32) -> Frame {
+    let hash = |i: u32| {
+        let mut x = i.wrapping_mul(0x9E37_79B9) ^ 0x85EB_CA6B;
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x2C1B_3C6D);
+        x ^= x >> 12;
+        (x & 0xFFFF) as f32 / 65535.0
+    };
+    let mut color = Vec::new();
+    let mut depth = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let band = (x * 5 / w) as usize;
+            depth.push([0.6, 1.4, 2.0, 5.0, 1.0e10][band] * (1.0 + 0.05 * hash(i + 7)));
+            let boost = if hash(i + 99) > 0.98 { 200.0 } else { 1.0 };
+            color.extend([hash(i) * boost, hash(i + 1) * boost, hash(i + 2) * boost, 1.0]);
+        }
+    }
+    Frame::new(w, h, color, depth)
+}
+
+fn assert_close(gpu: &[f32], cpu: &[f32], what: &str, relative: f32) {
+    assert_eq!(gpu.len(), cpu.len());
+    for (i, (g, c)) in gpu.iter().zip(cpu).enumerate() {
+        let tolerance = relative * c.abs().max(1.0);
+        assert!((g - c).abs() <= tolerance, "{what}[{i}]: gpu {g} cpu {c}");
+    }
+}
+
+#[test]
+fn whole_pipeline_matches_the_cpu_twins() {
+    let gpu = gpu();
+    for blades in [0, 5] {
+        let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
+        camera.vignetting = true;
+        camera.exposure = true;
+        camera.film = FilmMode::Curve(FilmCurve::default_filmic());
+        let frame = busy_frame(40, 28);
+        let plan = planner::plan(&frame, &camera);
+        for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+            assert!(plan.runs(pass), "{pass} should run:\n{}", plan.explain());
+        }
+        let renderer = Renderer::new(&gpu, &plan).expect("pipelines");
+        let out = renderer.render(&frame, &plan, true).expect("render");
+        assert_validation_clean(&gpu);
+
+        let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap());
+        assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
+        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap());
+        let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap());
+        let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap());
+        assert_close(&out.rgba, &cpu, &format!("pipeline with {blades} blades"), 1e-4);
+    }
+}
+
+#[test]
+fn film_pass_matches_the_f64_characteristic_curve() {
+    // The f32 shader against the f64 reference curve in src/optics/film.rs over 14 decades.
+    let gpu = gpu();
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    camera.film = FilmMode::Curve(FilmCurve::default_filmic());
+    let (w, h) = (64u32, 2u32);
+    let values: Vec<f32> = (0..w * h).map(|i| 10f32.powf(-8.0 + 14.0 * i as f32 / (w * h) as f32)).collect();
+    let color: Vec<f32> = values.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
+    let frame = Frame::new(w, h, color, vec![2.0; (w * h) as usize]);
+    let plan = planner::plan(&frame, &camera);
+    assert!(plan.runs("film") && !plan.runs("bokeh_gather"));
+    let (rgba, _) = render_plan(&gpu, &frame, &plan);
+    let curve = FilmCurve::default_filmic();
+    for (i, &v) in values.iter().enumerate() {
+        let reference = curve.apply(v as f64);
+        let got = rgba[i * 4] as f64;
+        assert!((got - reference).abs() <= 1e-4 * reference.max(1e-3), "H = {v}: gpu {got}, f64 {reference}");
+    }
+}

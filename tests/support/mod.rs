@@ -1,0 +1,88 @@
+//! Shared helpers for the GPU tests: a validated device, test cameras, measurements.
+#![allow(dead_code)]
+
+use realcam::camera::{Camera, CameraRequest, FilmMode};
+use realcam::gpu::{Gpu, GpuOptions, Profile};
+use realcam::lens_file::LensFile;
+use realcam::planner::{plan, Plan};
+use realcam::render::Renderer;
+use realcam::scene::Frame;
+use std::path::PathBuf;
+
+/// The GPU with the Khronos validation layer and synchronization validation on. Tests fail if
+/// the layer is missing: CI installs it (vulkan-validationlayers).
+pub fn gpu() -> Gpu {
+    let options = GpuOptions {
+        validation: true,
+        device: std::env::var("REALCAM_DEVICE").ok(),
+        pipeline_cache_dir: Some(std::env::temp_dir().join("realcam-test-pipeline-cache")),
+    };
+    Gpu::new(&options).unwrap_or_else(|e| panic!("opening the GPU with validation: {e}"))
+}
+
+/// No validation message of warning severity or above.
+pub fn assert_validation_clean(gpu: &Gpu) {
+    assert!(gpu.validation_enabled());
+    let messages = gpu.validation_messages();
+    assert!(messages.is_empty(), "{} validation messages:\n{}", messages.len(), messages.join("\n"));
+}
+
+/// A camera with only depth of field: exposure, vignetting and the film curve off, so pixel
+/// values stay scene values. 9.6 mm wide sensor (pitch 0.0375 mm at 256 px).
+pub fn dof_camera(focal_length_mm: f64, f_number: f64, focus_m: f64, blades: u32) -> Camera {
+    let request = CameraRequest {
+        focal_length_mm: Some(focal_length_mm),
+        f_number: Some(f_number),
+        focus_distance_m: focus_m,
+        sensor: Some("9.6x5.4".into()),
+        sensor_fit: None,
+        shutter_s: 1.0 / 50.0,
+        iso: 100.0,
+        nits_per_unit: 160.0,
+        blades: Some(blades),
+        blade_rotation_deg: Some(0.0),
+        exposure: false,
+        vignetting: false,
+        film: Some(FilmMode::Linear),
+        max_coc_px: 64.0,
+        force: true,
+    };
+    Camera::new(&LensFile::default_lens(), &request).expect("valid test camera")
+}
+
+/// Plan and render a frame; returns RGBA, the plan and the GPU profile. Checks validation.
+pub fn render(gpu: &Gpu, frame: &Frame, camera: &Camera) -> (Vec<f32>, Plan, Profile) {
+    let plan = plan(frame, camera);
+    let (rgba, profile) = render_plan(gpu, frame, &plan);
+    (rgba, plan, profile)
+}
+
+pub fn render_plan(gpu: &Gpu, frame: &Frame, plan: &Plan) -> (Vec<f32>, Profile) {
+    let renderer = Renderer::new(gpu, plan).expect("pipelines");
+    let out = renderer.render(frame, plan, false).expect("render");
+    assert_validation_clean(gpu);
+    (out.rgba, out.profile)
+}
+
+/// A committed test scene from testdata/ (made by `realcam synth`), loaded through the EXR reader.
+pub fn testdata_frame(name: &str, camera: &Camera) -> Frame {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("testdata");
+    let sources = realcam::io::PassSources {
+        color_path: dir.join(format!("{name}_color.exr")),
+        depth_path: Some(dir.join(format!("{name}_depth.exr"))),
+        depth_unit_m: 1.0,
+        ..Default::default()
+    };
+    let passes = realcam::io::load_passes(&sources).unwrap_or_else(|e| panic!("{e}"));
+    Frame::from_passes(passes, camera, realcam::io::DepthKind::Planar)
+}
+
+/// Sum of R+G+B over an RGBA image, in f64.
+pub fn energy(rgba: &[f32]) -> f64 {
+    rgba.chunks_exact(4).map(|p| p[0] as f64 + p[1] as f64 + p[2] as f64).sum()
+}
+
+/// Pixel (x, y) channel c of an RGBA image of width w.
+pub fn at(rgba: &[f32], w: u32, x: u32, y: u32, c: usize) -> f32 {
+    rgba[(y * w + x) as usize * 4 + c]
+}
