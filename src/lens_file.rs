@@ -72,7 +72,7 @@ impl LensFile {
 
     pub fn parse(text: &str, path: &Path) -> Result<LensFile, LensFileError> {
         let lens: LensFile = toml::from_str(text).map_err(|e| {
-            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1));
+            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].matches('\n').count() + 1);
             LensFileError::Parse { path: path.to_path_buf(), line, message: e.message().to_string() }
         })?;
         lens.validate(path)?;

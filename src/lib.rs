@@ -13,6 +13,7 @@ pub mod synth;
 pub mod camera;
 pub mod gpu;
 pub mod lens_file;
+pub mod metrics;
 pub mod passes;
 pub mod planner;
 pub mod render;

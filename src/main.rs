@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(name = "realcam", version, about = "A realistic camera for rendered images (Vulkan compute)")]
+#[command(args_override_self = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -29,6 +30,14 @@ enum Command {
     Dof(DofArgs),
     /// List the Vulkan devices.
     Devices,
+    /// Error of an image against a reference (RMSE, PSNR, energy), e.g. against a ray-traced
+    /// ground truth.
+    Compare {
+        /// The image to judge (EXR).
+        test: PathBuf,
+        /// The reference (EXR).
+        reference: PathBuf,
+    },
     /// Write the deterministic synthetic test scenes (testdata/ is made with this).
     Synth {
         /// Output directory.
@@ -86,6 +95,7 @@ struct LensArgs {
 }
 
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 struct RenderArgs {
     /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
     #[arg(long)]
@@ -173,6 +183,7 @@ struct GpuArgs {
 }
 
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
 struct DofArgs {
     #[command(flatten)]
     lens: LensArgs,
@@ -188,6 +199,7 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
+        Command::Compare { test, reference } => compare(&test, &reference),
         Command::Synth { out } => synth(&out),
     };
     if let Err(e) = result {
@@ -351,5 +363,31 @@ fn synth(out: &Path) -> Result<()> {
         realcam::synth::write_scene(out, name, &scene)?;
         println!("wrote {0}/{name}_color.exr and {0}/{name}_depth.exr", out.display());
     }
+    Ok(())
+}
+
+fn compare(test: &Path, reference: &Path) -> Result<()> {
+    let a = io::read_exr_rgba(test)?;
+    let b = io::read_exr_rgba(reference)?;
+    if (a.width, a.height) != (b.width, b.height) {
+        bail!(
+            "size mismatch: {} is {}x{} px but {} is {}x{} px",
+            test.display(),
+            a.width,
+            a.height,
+            reference.display(),
+            b.width,
+            b.height
+        );
+    }
+    let e = realcam::metrics::compare_rgba(&a.data, &b.data);
+    println!(
+        "rmse {:.6}  rmse_display {:.6}  mean_abs {:.6}  psnr {:.2} dB  energy {:+.3}%",
+        e.rmse,
+        e.rmse_display,
+        e.mean_abs,
+        e.psnr_db,
+        e.relative_energy_error * 100.0
+    );
     Ok(())
 }

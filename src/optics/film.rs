@@ -66,7 +66,7 @@ pub fn soft_min_decades(a: f64, b: f64, softness_decades: f64) -> f64 {
 }
 
 impl FilmCurve {
-    /// A neutral filmic look: 0.18 -> 0.18, contrast 1.2, 1000:1 output range, a shoulder that
+    /// A neutral filmic look: ISO middle grey (0.128) -> 0.18, contrast 1.2, 1000:1 output range, a shoulder that
     /// reaches about 0.95 at sensor saturation.
     pub fn default_filmic() -> Self {
         FilmCurve {
@@ -317,7 +317,7 @@ mod tests {
             ..FilmCurve::default()
         };
         for h in [1e-6, 1e-3, 0.01, 0.18, 0.5, 2.0, 100.0] {
-            let straight = 0.18 * (h / 0.18f64).powf(curve.contrast);
+            let straight = curve.middle_grey_out * (h / curve.middle_grey_in).powf(curve.contrast);
             let expected = straight.clamp(curve.black_out, curve.white_out);
             assert!((curve.apply(h) / expected - 1.0).abs() < 1e-12, "{h}");
         }

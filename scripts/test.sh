@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Quick start 2: every test, on whatever Vulkan device is present (lavapipe on CI), with the
+# Khronos validation layer and synchronization validation on in every GPU test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+cargo test --locked "$@"

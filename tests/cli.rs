@@ -1,0 +1,831 @@
+//! End-to-end tests of the `realcam` command line: error messages, exit codes, that failed
+//! runs never clobber existing outputs, and the files a successful render writes.
+//!
+//! Every test works in its own temporary directory and runs the real binary. Runs that reach
+//! the GPU use `--validate` (Khronos validation with synchronization validation): the binary
+//! exits non-zero when the layer reports anything.
+
+use realcam::io::{read_exr_channel, read_exr_rgba, write_exr_channels, write_exr_rgba};
+use realcam::io::{ExrWriteOptions, Image};
+use realcam::synth::{write_scene, SynthScene};
+use std::collections::BTreeSet;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A fresh directory for one test (and a separate pipeline-cache directory), removed on drop.
+struct TestDir {
+    path: PathBuf,
+    cache: PathBuf,
+}
+
+impl TestDir {
+    fn new(test: &str) -> TestDir {
+        let base = std::env::temp_dir();
+        let pid = std::process::id();
+        let path = base.join(format!("realcam-cli-{test}-{pid}"));
+        let cache = base.join(format!("realcam-cli-cache-{test}-{pid}"));
+        for d in [&path, &cache] {
+            let _ = std::fs::remove_dir_all(d);
+            std::fs::create_dir_all(d).unwrap_or_else(|e| panic!("creating {}: {e}", d.display()));
+        }
+        TestDir { path, cache }
+    }
+
+    fn join(&self, name: &str) -> PathBuf {
+        self.path.join(name)
+    }
+
+    /// Absolute path of `name` in this directory, as a string for the command line.
+    fn arg(&self, name: &str) -> String {
+        self.join(name)
+            .to_str()
+            .expect("UTF-8 temp path")
+            .to_string()
+    }
+
+    /// The names of the entries of this directory.
+    fn listing(&self) -> BTreeSet<String> {
+        std::fs::read_dir(&self.path)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    }
+
+    /// Writes the synthetic scene as `<name>_color.exr` and `<name>_depth.exr`.
+    fn scene(&self, name: &str, scene: &SynthScene) {
+        write_scene(&self.path, name, scene).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.path);
+        let _ = std::fs::remove_dir_all(&self.cache);
+    }
+}
+
+/// The result of one run of the binary.
+struct Run {
+    args: Vec<OsString>,
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+impl Run {
+    fn describe(&self) -> String {
+        format!(
+            "realcam {:?}\nexit code: {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
+            self.args, self.code, self.stdout, self.stderr
+        )
+    }
+
+    /// Asserts exit code 0; returns self.
+    fn success(self) -> Run {
+        assert_eq!(self.code, Some(0), "expected success:\n{}", self.describe());
+        self
+    }
+
+    /// Asserts an ordinary failure (exit code 1, an `error:` line, no panic); returns stderr.
+    fn failure(self) -> String {
+        assert_eq!(
+            self.code,
+            Some(1),
+            "expected exit code 1:\n{}",
+            self.describe()
+        );
+        assert!(
+            self.stderr.contains("error: "),
+            "no error line:\n{}",
+            self.describe()
+        );
+        assert!(
+            !self.stderr.contains("panicked"),
+            "the binary panicked:\n{}",
+            self.describe()
+        );
+        self.stderr
+    }
+}
+
+/// Runs `realcam <args>` in `dir` with the pipeline cache in the test's cache directory.
+fn realcam<I, S>(dir: &TestDir, args: I) -> Run
+where
+    I: IntoIterator<Item = S>,
+    S: Into<OsString>,
+{
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let out = Command::new(env!("CARGO_BIN_EXE_realcam"))
+        .args(&args)
+        .current_dir(&dir.path)
+        .env("REALCAM_CACHE_DIR", &dir.cache)
+        .env_remove("REALCAM_VALIDATE")
+        .output()
+        .expect("running the realcam binary");
+    Run {
+        args,
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// Runs `realcam render --validate <args>`.
+fn render(dir: &TestDir, args: &[String]) -> Run {
+    let mut all = vec!["render".to_string(), "--validate".to_string()];
+    all.extend(args.iter().cloned());
+    realcam(dir, all)
+}
+
+/// `["a", "b"]` as owned strings.
+fn s(args: &[&str]) -> Vec<String> {
+    args.iter().map(|a| a.to_string()).collect()
+}
+
+fn assert_contains(haystack: &str, needle: &str) {
+    assert!(
+        haystack.contains(needle),
+        "expected to find\n  {needle}\nin\n{haystack}"
+    );
+}
+
+fn float_opts() -> ExrWriteOptions {
+    ExrWriteOptions {
+        float32: true,
+        ..ExrWriteOptions::default()
+    }
+}
+
+/// A `w`x`h` RGBA image filled with a constant color (alpha 1).
+fn rgba(w: u32, h: u32, rgb: [f32; 3]) -> Image {
+    let mut im = Image::new(w, h, 4);
+    for px in im.data.chunks_exact_mut(4) {
+        px.copy_from_slice(&[rgb[0], rgb[1], rgb[2], 1.0]);
+    }
+    im
+}
+
+/// Writes a color-only EXR (channels R, G, B, A; no depth).
+fn write_color_only(path: &Path, w: u32, h: u32) {
+    write_exr_rgba(path, &rgba(w, h, [0.2, 0.3, 0.4]), &float_opts()).unwrap();
+}
+
+/// Writes a one-channel depth EXR (channel Z).
+fn write_depth(path: &Path, w: u32, h: u32, z: &[f32]) {
+    assert_eq!(z.len(), (w * h) as usize);
+    write_exr_channels(path, w, h, &[("Z", z)], &float_opts()).unwrap();
+}
+
+/// A small valid scene (`scene_color.exr`, `scene_depth.exr`) and the render arguments that
+/// read it; the camera settings under test are appended by the caller.
+fn small_scene(dir: &TestDir) -> Vec<String> {
+    dir.scene("scene", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]));
+    vec![
+        "--color".into(),
+        dir.arg("scene_color.exr"),
+        "--depth".into(),
+        dir.arg("scene_depth.exr"),
+        "-o".into(),
+        dir.arg("out.exr"),
+    ]
+}
+
+/// The text attributes of the first header of an EXR file.
+fn exr_text_attributes(path: &Path) -> Vec<(String, String)> {
+    use exr::meta::attribute::AttributeValue;
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .unwrap_or_else(|e| panic!("reading the header of {}: {e}", path.display()));
+    let mut out: Vec<(String, String)> = meta.headers[0]
+        .own_attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+fn attribute<'a>(attrs: &'a [(String, String)], key: &str) -> &'a str {
+    attrs
+        .iter()
+        .find(|(k, _)| k == key)
+        .map(|(_, v)| v.as_str())
+        .unwrap_or_else(|| panic!("no attribute {key:?} in {attrs:?}"))
+}
+
+/// No temporary or partial files: every entry of the directory is one of `expected`.
+fn assert_listing(dir: &TestDir, expected: &[&str]) {
+    let expected: BTreeSet<String> = expected.iter().map(|e| e.to_string()).collect();
+    assert_eq!(dir.listing(), expected, "unexpected directory contents");
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1-5: input files
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn missing_color_file_names_the_path() {
+    let dir = TestDir::new("missing_color");
+    let color = dir.arg("no_such_color.exr");
+    let err = render(&dir, &s(&["--color", &color, "-o", &dir.arg("out.exr")])).failure();
+    assert_contains(
+        &err,
+        &format!("error: color: file \"{color}\" does not exist"),
+    );
+    assert_listing(&dir, &[]);
+}
+
+#[test]
+fn missing_depth_channel_lists_the_channels_found() {
+    let dir = TestDir::new("missing_depth");
+    let color = dir.join("color.exr");
+    write_color_only(&color, 8, 6);
+    let err = render(
+        &dir,
+        &s(&["--color", &dir.arg("color.exr"), "-o", &dir.arg("out.exr")]),
+    )
+    .failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: depth: no depth channel in \"{}\" (looked for <layer>.Depth.Z, Z, depth.Z, depth.R, depth",
+            color.display()
+        ),
+    );
+    assert_contains(&err, "; channels found: A, B, G, R");
+    assert_listing(&dir, &["color.exr"]);
+}
+
+#[test]
+fn depth_channel_override_not_found_lists_the_channels_found() {
+    let dir = TestDir::new("depth_override");
+    let path = dir.join("passes.exr");
+    let n = 8 * 6;
+    let (r, g, b, a, z) = (
+        vec![0.5; n],
+        vec![0.4; n],
+        vec![0.3; n],
+        vec![1.0; n],
+        vec![2.0; n],
+    );
+    let chans: [(&str, &[f32]); 5] = [("R", &r), ("G", &g), ("B", &b), ("A", &a), ("Z", &z)];
+    write_exr_channels(&path, 8, 6, &chans, &float_opts()).unwrap();
+    let err = render(
+        &dir,
+        &s(&[
+            "--color",
+            &dir.arg("passes.exr"),
+            "--depth-channel",
+            "Depth.Z",
+            "-o",
+            &dir.arg("out.exr"),
+        ]),
+    )
+    .failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: depth: channel \"Depth.Z\" (from the override \"Depth.Z\") not found in \"{}\"; channels found: A, B, G, R, Z",
+            path.display()
+        ),
+    );
+    assert_listing(&dir, &["passes.exr"]);
+}
+
+#[test]
+fn size_mismatch_names_both_files_and_sizes() {
+    let dir = TestDir::new("size_mismatch");
+    let (color, depth) = (dir.join("color.exr"), dir.join("depth.exr"));
+    write_color_only(&color, 8, 6);
+    write_depth(&depth, 4, 3, &[1.0; 12]);
+    let err = render(
+        &dir,
+        &s(&[
+            "--color",
+            &dir.arg("color.exr"),
+            "--depth",
+            &dir.arg("depth.exr"),
+            "-o",
+            &dir.arg("out.exr"),
+        ]),
+    )
+    .failure();
+    assert_contains(
+        &err,
+        &format!(
+            "size mismatch: color (channel R) \"{}\" is 8x6 px but depth (channel Z) \"{}\" is 4x3 px",
+            color.display(),
+            depth.display()
+        ),
+    );
+    assert_listing(&dir, &["color.exr", "depth.exr"]);
+}
+
+#[test]
+fn nan_and_negative_depth_give_the_pixel_and_value() {
+    let dir = TestDir::new("bad_depth");
+    let (color, depth) = (dir.join("color.exr"), dir.join("depth.exr"));
+    let (w, h) = (8u32, 6u32);
+    write_color_only(&color, w, h);
+    let args = s(&[
+        "--color",
+        &dir.arg("color.exr"),
+        "--depth",
+        &dir.arg("depth.exr"),
+        "-o",
+        &dir.arg("out.exr"),
+    ]);
+    let at = |x: u32, y: u32| (y * w + x) as usize;
+
+    // NaN at (x=5, y=2), alone.
+    let mut z = vec![3.0f32; (w * h) as usize];
+    z[at(5, 2)] = f32::NAN;
+    write_depth(&depth, w, h, &z);
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "depth: channel Z in \"{}\" has 1 invalid pixel(s) (NaN or negative depth); \
+             the first is pixel (x=5, y=2) of the data window with NaN m",
+            depth.display()
+        ),
+    );
+
+    // Negative at (x=1, y=4), alone.
+    let mut z = vec![3.0f32; (w * h) as usize];
+    z[at(1, 4)] = -2.5;
+    write_depth(&depth, w, h, &z);
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        "has 1 invalid pixel(s) (NaN or negative depth); the first is pixel (x=1, y=4) of the data window with -2.5 m",
+    );
+
+    // Both: the count is 2 and the first in row-major order is reported.
+    z[at(6, 0)] = f32::NAN;
+    write_depth(&depth, w, h, &z);
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        "has 2 invalid pixel(s) (NaN or negative depth); the first is pixel (x=6, y=0) of the data window with NaN m",
+    );
+    assert_listing(&dir, &["color.exr", "depth.exr"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 6: lens files and the lens's range
+// ---------------------------------------------------------------------------------------------
+
+const VALID_LENS: &str = "name = \"test lens\"\nsource = \"test\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n";
+
+#[test]
+fn lens_file_that_does_not_exist_is_named() {
+    let dir = TestDir::new("lens_missing");
+    let mut args = small_scene(&dir);
+    let lens = dir.arg("no_such_lens.toml");
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, &format!("error: lens file {lens}: cannot read it"));
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
+}
+
+#[test]
+fn lens_file_syntax_error_gives_the_line() {
+    let dir = TestDir::new("lens_syntax");
+    let mut args = small_scene(&dir);
+    let lens = dir.arg("bad.toml");
+    std::fs::write(
+        &lens,
+        "name = \"x\"\nsource = \"y\"\nfocal_length_mm = = 50\nf_number_min = 1.4\n",
+    )
+    .unwrap();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, &format!("error: lens file {lens}, line 3: "));
+}
+
+#[test]
+fn lens_file_unknown_key_is_named() {
+    let dir = TestDir::new("lens_unknown_key");
+    let mut args = small_scene(&dir);
+    let lens = dir.arg("typo.toml");
+    std::fs::write(
+        &lens,
+        format!("{VALID_LENS}focal_lenght = 3\n[aperture]\nblades = 9\n"),
+    )
+    .unwrap();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, &format!("error: lens file {lens}, line 7: "));
+    assert_contains(&err, "focal_lenght");
+}
+
+#[test]
+fn request_outside_the_lens_range_needs_force() {
+    let dir = TestDir::new("lens_range");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "1.0"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        "error: f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/16); \
+         pass --force to use it anyway",
+    );
+    assert!(!dir.join("out.exr").exists(), "out.exr written on failure");
+
+    // With --force the same request renders, at the requested f-number.
+    args.push("--force".into());
+    render(&dir, &args).success();
+    let attrs = exr_text_attributes(&dir.join("out.exr"));
+    assert_eq!(attribute(&attrs, "realcam/f_number"), "1");
+    assert_eq!(read_exr_rgba(&dir.join("out.exr")).unwrap().width, 16);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 7: numeric settings
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn bad_numeric_settings_are_rejected_with_the_value() {
+    let dir = TestDir::new("bad_numbers");
+    let base = small_scene(&dir);
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args)
+    };
+
+    let err = run(&["--shutter", "0"]).failure();
+    assert_contains(
+        &err,
+        "error: --shutter \"0\": must be a positive time in seconds",
+    );
+    let err = run(&["--shutter", "1/0"]).failure();
+    assert_contains(
+        &err,
+        "error: --shutter \"1/0\": must be a positive time in seconds",
+    );
+    let err = run(&["--shutter", "abc"]).failure();
+    assert_contains(&err, "error: --shutter \"abc\": invalid float literal");
+
+    let err = run(&["--iso=-5"]).failure();
+    assert_contains(&err, "error: ISO must be a positive number, got -5");
+    // Written with a space, clap rejects "-5" before the camera sees it; it must still fail
+    // and say what it did not accept.
+    let spaced = run(&["--iso", "-5"]);
+    assert_ne!(spaced.code, Some(0), "{}", spaced.describe());
+    assert_contains(&spaced.stderr, "-5");
+
+    let err = run(&["--sensor", "nonsense"]).failure();
+    assert_contains(
+        &err,
+        "error: unknown sensor format \"nonsense\"; give WIDTHxHEIGHT in mm",
+    );
+    for name in [
+        "full-frame",
+        "super35",
+        "aps-c",
+        "aps-c-canon",
+        "m43",
+        "1in",
+        "apsh",
+        "medium-format",
+    ] {
+        assert_contains(&err, &format!(" {name}"));
+    }
+
+    // 30 mm is inside the 50 mm focal length: even --force cannot make a thin lens focus there.
+    let err = run(&["--focus", "0.03", "--force"]).failure();
+    assert_contains(
+        &err,
+        "error: focus distance 30 mm is not beyond the focal length 50 mm",
+    );
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8: failed runs never clobber outputs
+// ---------------------------------------------------------------------------------------------
+
+/// A failing render (missing depth channel) aimed at existing `out.exr`, `out.png` and
+/// `trace.json` leaves all three byte-identical and leaves no temporary file behind.
+fn assert_failed_render_does_not_clobber(test: &str, with_png: bool) {
+    let dir = TestDir::new(test);
+    write_color_only(&dir.join("color.exr"), 8, 6);
+    let old_exr: Vec<u8> = b"old out.exr: not an image, must survive".to_vec();
+    let old_png: Vec<u8> = b"\x89PNG\r\n\x1a\nold out.png, must survive".to_vec();
+    let old_trace: Vec<u8> = b"{\"old\": true}".to_vec();
+    std::fs::write(dir.join("out.exr"), &old_exr).unwrap();
+    std::fs::write(dir.join("out.png"), &old_png).unwrap();
+    std::fs::write(dir.join("trace.json"), &old_trace).unwrap();
+    let mut args = s(&[
+        "--color",
+        &dir.arg("color.exr"),
+        "-o",
+        &dir.arg("out.exr"),
+        "--trace",
+        &dir.arg("trace.json"),
+        "--profile",
+    ]);
+    if with_png {
+        args.extend(s(&["--png", &dir.arg("out.png")]));
+    }
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "no depth channel");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), old_exr);
+    assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), old_png);
+    assert_eq!(std::fs::read(dir.join("trace.json")).unwrap(), old_trace);
+    assert_listing(&dir, &["color.exr", "out.exr", "out.png", "trace.json"]);
+}
+
+#[test]
+fn failed_render_does_not_clobber_the_exr() {
+    assert_failed_render_does_not_clobber("no_clobber_exr", false);
+}
+
+#[test]
+fn failed_render_does_not_clobber_the_png() {
+    assert_failed_render_does_not_clobber("no_clobber_png", true);
+}
+
+/// A write that fails after the render (the PNG target is a directory) reports the path and
+/// leaves no temporary file; the existing directory is untouched.
+#[test]
+fn failed_png_write_leaves_no_temporary_file() {
+    let dir = TestDir::new("png_write_fails");
+    let mut args = small_scene(&dir);
+    std::fs::create_dir(dir.join("out.png")).unwrap();
+    std::fs::write(dir.join("out.png").join("keep.txt"), b"keep").unwrap();
+    args.extend(s(&["--png", &dir.arg("out.png")]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, &format!("cannot write \"{}\"", dir.arg("out.png")));
+    assert_eq!(
+        std::fs::read(dir.join("out.png").join("keep.txt")).unwrap(),
+        b"keep"
+    );
+    // The EXR is written before the PNG; what matters is that nothing half-written is left.
+    let listing = dir.listing();
+    assert!(
+        listing.iter().all(|n| !n.contains("tmp")),
+        "temporary files left behind: {listing:?}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// 9-10: successful renders
+// ---------------------------------------------------------------------------------------------
+
+/// The time in ms on the `--profile` table's line for `pass` ("  <pass>   <time> ms ...").
+fn profile_ms(stderr: &str, pass: &str) -> f64 {
+    let value = stderr.lines().find_map(|l| {
+        let mut words = l.split_whitespace();
+        if l.starts_with("  ") && words.next() == Some(pass) {
+            let v = words.next()?.parse::<f64>().ok()?;
+            (words.next() == Some("ms")).then_some(v)
+        } else {
+            None
+        }
+    });
+    let value = value.unwrap_or_else(|| panic!("no profile line \"{pass} ... ms\" in\n{stderr}"));
+    assert!(value.is_finite() && value >= 0.0, "{pass}: {value} ms");
+    value
+}
+
+#[test]
+fn render_writes_exr_png_trace_with_explain_and_profile() {
+    let dir = TestDir::new("success");
+    let (w, h) = (64u32, 48u32);
+    dir.scene("p", &SynthScene::point_on_plane(w, h, 4.0, [50.0; 3]));
+    let args = s(&[
+        "--color",
+        &dir.arg("p_color.exr"),
+        "--depth",
+        &dir.arg("p_depth.exr"),
+        "--fstop",
+        "2",
+        "--focus",
+        "2",
+        "--sensor",
+        "9.6x7.2",
+        "--explain",
+        "--profile",
+        "--trace",
+        &dir.arg("trace.json"),
+        "--png",
+        &dir.arg("out.png"),
+        "-o",
+        &dir.arg("out.exr"),
+        "--float",
+    ]);
+    let run = render(&dir, &args).success();
+    let err = &run.stderr;
+
+    // The plan: the plane at 4 m is ~2.1 px out of focus (f/2, 50 mm, focus 2 m, 0.15 mm px).
+    assert_contains(err, "pass plan:");
+    assert_contains(err, "[run ] coc");
+    assert_contains(err, "[run ] bokeh_gather");
+    assert_contains(err, "[run ] vignette");
+    assert_contains(err, "[run ] film");
+    assert_contains(err, "[skip] motion_blur");
+    // The profile table.
+    assert_contains(err, "GPU time per pass");
+    let passes_ms = profile_ms(err, "coc") + profile_ms(err, "bokeh_gather");
+    assert!(
+        profile_ms(err, "total") >= passes_ms * 0.999,
+        "the total is less than the sum of coc and bokeh_gather:\n{err}"
+    );
+    assert_contains(err, &format!("wrote {}", dir.arg("out.exr")));
+    assert_contains(err, &format!("wrote {}", dir.arg("out.png")));
+
+    // Chrome trace.
+    let trace = std::fs::read_to_string(dir.join("trace.json")).unwrap();
+    assert!(trace.trim_start().starts_with('{') && trace.trim_end().ends_with('}'));
+    assert_contains(&trace, "\"traceEvents\"");
+    assert_contains(&trace, "\"ph\":\"X\"");
+    for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+        assert_contains(&trace, &format!("\"name\":\"{pass}\""));
+    }
+
+    // The EXR: size, float samples, finite values, the highlight spread by defocus.
+    let out = read_exr_rgba(&dir.join("out.exr")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((out.width, out.height, out.channels), (w, h, 4));
+    assert!(out.data.iter().all(|v| v.is_finite()), "non-finite output");
+    let lum = |x: u32, y: u32| (0..3).map(|c| out.get(x, y, c)).sum::<f32>();
+    let (cx, cy) = (w / 2, h / 2);
+    assert!(lum(cx, cy) > lum(cx + 8, cy), "highlight lost");
+    assert!(
+        lum(cx + 1, cy) > lum(cx + 8, cy) && lum(cx, cy - 1) > lum(cx, cy + 8),
+        "highlight not spread to its neighbours by a ~2 px CoC"
+    );
+    assert!(
+        (lum(cx + 5, cy) - lum(cx + 8, cy)).abs() < 0.01,
+        "the highlight leaks beyond the 3 px gather radius"
+    );
+    assert!(
+        lum(cx + 8, cy) > lum(0, 0),
+        "vignetting should darken the corner"
+    );
+    let meta = exr::meta::MetaData::read_from_file(dir.join("out.exr"), false).unwrap();
+    for ch in &meta.headers[0].channels.list {
+        assert_eq!(
+            ch.sample_type,
+            exr::meta::attribute::SampleType::F32,
+            "{}",
+            ch.name
+        );
+    }
+    let attrs = exr_text_attributes(&dir.join("out.exr"));
+    assert_eq!(attribute(&attrs, "realcam/f_number"), "2");
+    assert_eq!(attribute(&attrs, "realcam/focus_distance_m"), "2");
+    assert_eq!(attribute(&attrs, "realcam/focal_length_mm"), "50");
+    assert_eq!(attribute(&attrs, "realcam/sensor_mm"), "9.6x7.2");
+    assert_eq!(attribute(&attrs, "realcam/shutter_s"), "0.02");
+    assert_eq!(attribute(&attrs, "realcam/iso"), "100");
+    assert_eq!(
+        attribute(&attrs, "realcam/lens"),
+        "realcam standard 50 mm f/1.4"
+    );
+    assert_eq!(attribute(&attrs, "realcam/film"), "characteristic curve");
+
+    // The PNG: signature and IHDR size.
+    let png = std::fs::read(dir.join("out.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "not a PNG");
+    assert_eq!(&png[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    assert_eq!((be(&png[16..20]), be(&png[20..24])), (w, h));
+
+    assert_listing(
+        &dir,
+        &[
+            "p_color.exr",
+            "p_depth.exr",
+            "out.exr",
+            "out.png",
+            "trace.json",
+        ],
+    );
+}
+
+#[test]
+fn planner_skips_invisible_effects_and_output_equals_input() {
+    let dir = TestDir::new("all_skipped");
+    let (w, h) = (64u32, 48u32);
+    dir.scene("p", &SynthScene::point_on_plane(w, h, 2.0, [50.0; 3]));
+    let args = s(&[
+        "--color",
+        &dir.arg("p_color.exr"),
+        "--depth",
+        &dir.arg("p_depth.exr"),
+        "--focus",
+        "2",
+        "--no-vignetting",
+        "--film",
+        "linear",
+        "--no-exposure",
+        "--explain",
+        "-o",
+        &dir.arg("out.exr"),
+        "--float",
+    ]);
+    let run = render(&dir, &args).success();
+    let err = &run.stderr;
+    for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+        assert_contains(err, &format!("[skip] {pass}"));
+        assert!(
+            !err.contains(&format!("[run ] {pass}")),
+            "{pass} runs:\n{err}"
+        );
+    }
+    assert_contains(err, "depth of field is invisible");
+    assert_contains(err, "turned off (--no-vignetting)");
+    assert_contains(
+        err,
+        "linear film with exposure off: the sensor value is the scene value",
+    );
+
+    let input = read_exr_rgba(&dir.join("p_color.exr")).unwrap();
+    let out = read_exr_rgba(&dir.join("out.exr")).unwrap();
+    assert_eq!((out.width, out.height, out.channels), (w, h, 4));
+    let worst = input
+        .data
+        .iter()
+        .zip(&out.data)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1e-6, "output differs from input by up to {worst}");
+    assert_eq!(out.get(w / 2, h / 2, 0), 50.0);
+    // The depth pass itself was not modified either.
+    let depth = read_exr_channel(&dir.join("p_depth.exr"), "Z").unwrap();
+    assert!(depth.data.iter().all(|&d| d == 2.0));
+}
+
+// ---------------------------------------------------------------------------------------------
+// 11-12: other subcommands
+// ---------------------------------------------------------------------------------------------
+
+/// The value in mm of the report row `label`.
+fn report_mm(report: &str, label: &str) -> f64 {
+    let line = report
+        .lines()
+        .find(|l| l.trim_start().starts_with(label))
+        .unwrap_or_else(|| panic!("no {label:?} row in\n{report}"));
+    let value = line.trim_start()[label.len()..].trim();
+    value
+        .strip_suffix(" mm")
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no mm value in {line:?}"))
+}
+
+#[test]
+fn dof_matches_potmesil_chakravarty_table_1() {
+    let dir = TestDir::new("dof");
+    let run = realcam(
+        &dir,
+        s(&[
+            "dof",
+            "--focal-length",
+            "55",
+            "--fstop",
+            "5.6",
+            "--focus",
+            "2",
+            "--coc",
+            "1/1000",
+            "--force",
+        ]),
+    )
+    .success();
+    let out = &run.stdout;
+    assert_contains(out, "f/5.6");
+    assert_contains(out, "patch of distance/1000 at the focus plane");
+    let near = report_mm(out, "near limit");
+    let far = report_mm(out, "far limit");
+    let depth = report_mm(out, "total depth of field");
+    // Table 1, f/5.6, U = 2000 mm: U- = 1662, U+ = 2511, depth 849.
+    assert!((near - 1662.0).abs() <= 1.0, "near limit {near} mm");
+    assert!((far - 2511.0).abs() <= 1.0, "far limit {far} mm");
+    assert!((depth - 849.0).abs() <= 1.0, "depth of field {depth} mm");
+    assert!((report_mm(out, "focal length f") - 55.0).abs() < 1e-9);
+    assert!((report_mm(out, "focus distance S") - 2000.0).abs() < 1e-9);
+}
+
+#[test]
+fn devices_lists_at_least_one_device() {
+    let dir = TestDir::new("devices");
+    let run = realcam(&dir, ["devices"]).success();
+    let lines: Vec<&str> = run.stdout.lines().collect();
+    assert!(!lines.is_empty(), "no devices listed:\n{}", run.describe());
+    assert!(lines[0].starts_with("[0] "), "{}", run.describe());
+    for (i, line) in lines.iter().enumerate() {
+        let prefix = format!("[{i}] ");
+        assert!(
+            line.starts_with(&prefix) && line.len() > prefix.len(),
+            "{line:?}"
+        );
+    }
+}
