@@ -8,7 +8,6 @@
 //    coverage it reaches (alpha), so a blurred foreground covers what is behind it softly.
 //  - A sharp subject (tiny CoC) reaches only its own pixel, so it does not bleed into the background.
 #include "common.glsl"
-#include "aperture.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
@@ -24,38 +23,11 @@ layout(push_constant) uniform Push {
     float layer_transition_px;  // CoC difference over which a sample moves from background to foreground
 } pc;
 
+#include "gather.glsl"
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
     Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
-    float coc_p = imageLoad(coc_px, p).r;
-    float radius_p = max(0.5 * abs(coc_p), 0.5);
-
-    vec4 bg = vec4(0.0), fg = vec4(0.0);
-    float bg_w = 0.0, fg_w = 0.0;
-    int r = pc.radius_px;
-    for (int dy = -r; dy <= r; ++dy) {
-        for (int dx = -r; dx <= r; ++dx) {
-            ivec2 q = p + ivec2(dx, dy);
-            if (outside(q, pc.size)) continue;
-            float coc_q = imageLoad(coc_px, q).r;
-            float radius_q = max(0.5 * abs(coc_q), 0.5);
-            float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
-            if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
-            // The image of the aperture is upright behind the focus plane and inverted in front.
-            vec2 o = vec2(-dx, -dy) * (coc_q < 0.0 ? -1.0 : 1.0);
-            float w = aperture_coverage(o, reach, ap) / aperture_area(reach, ap);
-            if (w <= 0.0) continue;
-            vec4 c = finite_or_zero(imageLoad(color_in, q));
-            float f = clamp((coc_p - coc_q) / pc.layer_transition_px, 0.0, 1.0);
-            fg += (f * w) * c;
-            fg_w += f * w;
-            bg += ((1.0 - f) * w) * c;
-            bg_w += (1.0 - f) * w;
-        }
-    }
-    vec4 background = bg_w > 0.0 ? bg / bg_w : vec4(0.0);
-    vec4 foreground = fg_w > 0.0 ? fg / fg_w : vec4(0.0);
-    float alpha = clamp(fg_w, 0.0, 1.0);
-    imageStore(color_out, p, mix(background, foreground, alpha));
+    imageStore(color_out, p, gather_exact(p, pc.size, pc.radius_px, ap, pc.layer_transition_px));
 }

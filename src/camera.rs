@@ -17,6 +17,18 @@ pub enum CameraError {
     Invalid(String),
 }
 
+/// Which depth-of-field method renders the bokeh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BokehMode {
+    /// Tiled gather-scatter: exact full-resolution gather for small CoC, fixed-cost
+    /// half-resolution gather and highlight sprites for large CoC (src/passes/tiled_dof.rs).
+    #[default]
+    Tiled,
+    /// Every pixel's exact aperture sprite evaluated at every pixel it covers (written as a
+    /// gather over the largest CoC): the accuracy reference, cost grows with the CoC squared.
+    Reference,
+}
+
 /// How sensor values become output values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FilmMode {
@@ -43,6 +55,7 @@ pub struct Camera {
     pub film: FilmMode,
     /// User clamp on |CoC| in pixels.
     pub max_coc_px: f64,
+    pub bokeh: BokehMode,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -64,6 +77,7 @@ pub struct CameraRequest {
     pub max_coc_px: f64,
     /// Allow settings outside the lens's range.
     pub force: bool,
+    pub bokeh: BokehMode,
 }
 
 impl Camera {
@@ -126,6 +140,7 @@ impl Camera {
             vignetting: req.vignetting,
             film: req.film.unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc_px: req.max_coc_px,
+            bokeh: req.bokeh,
         })
     }
 

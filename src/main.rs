@@ -55,6 +55,14 @@ enum FilmArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum BokehArg {
+    /// Tiled gather-scatter: cost nearly flat in the CoC radius.
+    Tiled,
+    /// Exact aperture sprite of every pixel (the accuracy reference; cost grows with CoC^2).
+    Reference,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum DepthKindArg {
     /// Distance along the view axis (Blender/Cycles Z).
     Planar,
@@ -123,6 +131,9 @@ struct RenderArgs {
     /// Aperture rotation in degrees; default from the lens file.
     #[arg(long = "blade-rotation")]
     blade_rotation_deg: Option<f64>,
+    /// Depth-of-field method.
+    #[arg(long, value_enum, default_value = "tiled")]
+    bokeh: BokehArg,
     /// Film response.
     #[arg(long, value_enum, default_value = "filmic")]
     film: FilmArg,
@@ -259,6 +270,10 @@ fn render(args: RenderArgs) -> Result<()> {
         }),
         max_coc_px: args.max_coc_px,
         force: args.lens.force,
+        bokeh: match args.bokeh {
+            BokehArg::Tiled => realcam::camera::BokehMode::Tiled,
+            BokehArg::Reference => realcam::camera::BokehMode::Reference,
+        },
     };
     let camera = Camera::new(&lens_file, &request)?;
     if !(args.depth_unit_m.is_finite() && args.depth_unit_m > 0.0) {

@@ -1,7 +1,8 @@
 //! Decides which passes a frame and camera call for, and says why (`--explain`). A pass whose
 //! effect would be invisible is not recorded and its pipeline is never created.
 
-use crate::camera::{Camera, FilmMode};
+use crate::camera::{BokehMode, Camera, FilmMode};
+use crate::passes::tiled_dof::TiledDofParams;
 use crate::passes::bokeh_gather::GatherParams;
 use crate::passes::coc::CocParams;
 use crate::passes::film::FilmParams;
@@ -12,6 +13,9 @@ use crate::scene::Frame;
 pub const VISIBLE_COC_PX: f64 = 1.0;
 /// Vignetting weaker than this relative falloff at the corners is invisible.
 pub const VISIBLE_FALLOFF: f64 = 1.0e-4;
+
+/// The plan's name for the tiled depth-of-field path (several passes, see `passes::tiled_dof`).
+pub const BOKEH_TILED: &str = "bokeh_tiled";
 
 /// One line of the plan.
 #[derive(Clone, Debug)]
@@ -26,7 +30,10 @@ pub struct Step {
 pub struct Plan {
     pub steps: Vec<Step>,
     pub coc: Option<CocParams>,
+    /// The reference gather (`--bokeh reference`).
     pub gather: Option<GatherParams>,
+    /// The tiled path (`--bokeh tiled`, the default).
+    pub tiled: Option<TiledDofParams>,
     pub vignette: Option<VignetteParams>,
     pub film: Option<FilmParams>,
     /// Signed CoC range over the frame in pixels (after the user clamp).
@@ -75,31 +82,51 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         camera.lens.f_number,
         camera.lens.focus_distance_mm / 1000.0
     );
-    let (coc, gather) = if dof {
+    let aperture_text = if camera.aperture.blades >= 3 {
+        format!("{}-bladed aperture", camera.aperture.blades)
+    } else {
+        "circular aperture".into()
+    };
+    let (mut coc, mut gather, mut tiled) = (None, None, None);
+    if dof {
         steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
-        steps.push(Step {
-            pass: crate::passes::bokeh_gather::NAME,
-            run: true,
-            why: format!(
-                "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: gather radius {} px, {}",
-                GatherParams::new(w, h, max_abs_coc_px, &camera.aperture).radius_px,
-                if camera.aperture.blades >= 3 {
-                    format!("{}-bladed aperture", camera.aperture.blades)
-                } else {
-                    "circular aperture".into()
-                }
-            ),
-        });
-        (
-            Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h)),
-            Some(GatherParams::new(w, h, max_abs_coc_px, &camera.aperture)),
-        )
+        coc = Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h));
+        match camera.bokeh {
+            BokehMode::Reference => {
+                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture);
+                steps.push(Step {
+                    pass: crate::passes::bokeh_gather::NAME,
+                    run: true,
+                    why: format!(
+                        "--bokeh reference: largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px, exact gather of radius {} px everywhere, {aperture_text}",
+                        g.radius_px
+                    ),
+                });
+                gather = Some(g);
+            }
+            BokehMode::Tiled => {
+                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture);
+                steps.push(Step {
+                    pass: BOKEH_TILED,
+                    run: true,
+                    why: format!(
+                        "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {} px; in-focus tiles copied, CoC radius <= {} px gathered exactly, larger at half resolution ({} rings) with highlight sprites; {aperture_text}",
+                        t.tiles()[0],
+                        t.tiles()[1],
+                        crate::passes::TILE_SIZE,
+                        t.small_radius_px,
+                        t.rings
+                    ),
+                });
+                tiled = Some(t);
+            }
+        }
     } else {
         let why = format!("{coc_why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible");
-        steps.push(Step { pass: crate::passes::coc::NAME, run: false, why: why.clone() });
-        steps.push(Step { pass: crate::passes::bokeh_gather::NAME, run: false, why: "no pixel is defocused by more than a pixel".into() });
-        (None, None)
-    };
+        steps.push(Step { pass: crate::passes::coc::NAME, run: false, why });
+        let bokeh = if camera.bokeh == BokehMode::Tiled { BOKEH_TILED } else { crate::passes::bokeh_gather::NAME };
+        steps.push(Step { pass: bokeh, run: false, why: "no pixel is defocused by more than a pixel".into() });
+    }
 
     steps.push(match &frame.velocity_px {
         None => Step { pass: "motion_blur", run: false, why: "no velocity pass".into() },
@@ -168,5 +195,5 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         Some(FilmParams::new(w, h, gain, curve.as_ref()))
     };
 
-    Plan { steps, coc, gather, vignette, film, coc_range_px }
+    Plan { steps, coc, gather, tiled, vignette, film, coc_range_px }
 }

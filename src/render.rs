@@ -2,6 +2,7 @@
 //! records the passes in order, reads the result back.
 
 use crate::gpu::{Gpu, GpuResult, Profile, Recorder};
+use crate::passes::tiled_dof::TiledDof;
 use crate::passes::{bokeh_gather::BokehGatherPass, coc::CocPass, film::FilmPass, vignette::VignettePass};
 use crate::planner::Plan;
 use crate::scene::Frame;
@@ -12,6 +13,7 @@ pub struct Renderer {
     gpu: Gpu,
     coc: Option<CocPass>,
     gather: Option<BokehGatherPass>,
+    tiled: Option<TiledDof>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -31,6 +33,7 @@ impl Renderer {
             gpu: gpu.clone(),
             coc: plan.coc.as_ref().map(|_| CocPass::new(gpu)).transpose()?,
             gather: plan.gather.as_ref().map(|_| BokehGatherPass::new(gpu)).transpose()?,
+            tiled: plan.tiled.as_ref().map(|_| TiledDof::new(gpu)).transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -60,7 +63,7 @@ impl Renderer {
         // passes); `current` is the latest color.
         let image = |name: &str, format, needed: bool| needed.then(|| gpu.create_image(name, w, h, format)).transpose();
         let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
-        let dof_out = image("color (depth of field)", rgba, self.gather.is_some())?;
+        let dof_out = image("color (depth of field)", rgba, self.gather.is_some() || self.tiled.is_some())?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -70,6 +73,11 @@ impl Renderer {
         }
         if let (Some(pass), Some(params), Some(coc), Some(out)) = (&self.gather, &plan.gather, &coc_image, &dof_out) {
             pass.record(&mut rec, current, coc, out, params)?;
+            current = out;
+        }
+        let mut _tiled_frame = None;
+        if let (Some(tiled), Some(params), Some(coc), Some(out)) = (&self.tiled, &plan.tiled, &coc_image, &dof_out) {
+            _tiled_frame = Some(tiled.record(&mut rec, current, coc, out, params)?);
             current = out;
         }
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {

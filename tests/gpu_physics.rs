@@ -3,9 +3,10 @@
 
 mod support;
 
-use realcam::camera::FilmMode;
+use realcam::camera::{BokehMode, FilmMode};
 use realcam::passes::bokeh_gather::{ApertureShape, GatherParams};
 use realcam::passes::coc::CocParams;
+use realcam::passes::tiled_dof::TiledDofParams;
 use realcam::planner;
 use realcam::scene::Frame;
 use support::*;
@@ -30,24 +31,40 @@ fn row_width_px(rgba: &[f32], w: u32, h: u32) -> usize {
     (0..w).filter(|&x| at(rgba, w, x, h / 2, 1) - PLANE > 0.5 * centre).count()
 }
 
+/// True when the plan runs depth of field with either method.
+fn runs_dof(plan: &realcam::planner::Plan) -> bool {
+    plan.runs("bokeh_gather") || plan.runs(realcam::planner::BOKEH_TILED)
+}
+
 #[test]
 fn point_highlight_becomes_a_disk_of_the_eq_5_3_diameter() {
     let gpu = gpu();
+    // f/2: CoC radius 5.7 px (the tiled path's exact small-CoC gather); f/1: 11.4 px (its
+    // half-resolution path, the highlight drawn as a sprite).
     for (scene, depth_m) in [("point_bg", 6.0), ("point_fg", 1.2)] {
-        let camera = dof_camera(50.0, 2.0, 2.0, 0);
-        let frame = testdata_frame(scene, &camera);
-        let (rgba, plan, _) = render(&gpu, &frame, &camera);
-        assert!(plan.runs("bokeh_gather"));
-        let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
-        // Kyaw 2013 eq 5.3, from the f64 optics.
-        let expected_px = camera.lens.coc_mm(depth_m * 1000.0).abs() / pitch_mm;
-        let measured_px = disk_diameter_px(&rgba, frame.width, frame.height);
-        assert!(
-            (measured_px - expected_px).abs() <= 1.0,
-            "{scene}: disk diameter {measured_px:.2} px, eq 5.3 gives {expected_px:.2} px"
-        );
-        let row = row_width_px(&rgba, frame.width, frame.height) as f64;
-        assert!((row - expected_px).abs() <= 1.5, "{scene}: centre row {row} px wide, eq 5.3 gives {expected_px:.2} px");
+        for f_number in [2.0, 1.0] {
+            for mode in [BokehMode::Tiled, BokehMode::Reference] {
+                let mut camera = dof_camera(50.0, f_number, 2.0, 0);
+                camera.bokeh = mode;
+                let frame = testdata_frame(scene, &camera);
+                let (rgba, plan, _) = render(&gpu, &frame, &camera);
+                assert!(runs_dof(&plan));
+                let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
+                // Kyaw 2013 eq 5.3, from the f64 optics.
+                let expected_px = camera.lens.coc_mm(depth_m * 1000.0).abs() / pitch_mm;
+                let measured_px = disk_diameter_px(&rgba, frame.width, frame.height);
+                println!("{scene} f/{f_number} {mode:?}: measured {measured_px:.3} px, eq 5.3 {expected_px:.3} px");
+                assert!(
+                    (measured_px - expected_px).abs() <= 1.0,
+                    "{scene} f/{f_number} {mode:?}: disk diameter {measured_px:.2} px, eq 5.3 gives {expected_px:.2} px"
+                );
+                let row = row_width_px(&rgba, frame.width, frame.height) as f64;
+                assert!(
+                    (row - expected_px).abs() <= 1.5,
+                    "{scene} f/{f_number} {mode:?}: centre row {row} px wide, eq 5.3 gives {expected_px:.2} px"
+                );
+            }
+        }
     }
 }
 
@@ -73,14 +90,22 @@ fn disk_diameter_follows_the_f_number() {
 fn defocus_preserves_energy() {
     let gpu = gpu();
     for scene in ["point_bg", "point_fg"] {
-        for blades in [0, 6] {
-            let camera = dof_camera(50.0, 2.0, 2.0, blades);
-            let frame = testdata_frame(scene, &camera);
-            let (rgba, plan, _) = render(&gpu, &frame, &camera);
-            assert!(plan.runs("bokeh_gather") && !plan.runs("vignette") && !plan.runs("film"));
-            let (before, after) = (energy(&frame.color), energy(&rgba));
-            let error = (after - before).abs() / before;
-            assert!(error < 0.005, "{scene} blades {blades}: energy {before} -> {after} ({:.3}%)", error * 100.0);
+        for (blades, f_number) in [(0, 2.0), (6, 2.0), (0, 1.0), (7, 1.0)] {
+            for mode in [BokehMode::Tiled, BokehMode::Reference] {
+                let mut camera = dof_camera(50.0, f_number, 2.0, blades);
+                camera.bokeh = mode;
+                let frame = testdata_frame(scene, &camera);
+                let (rgba, plan, _) = render(&gpu, &frame, &camera);
+                assert!(runs_dof(&plan) && !plan.runs("vignette") && !plan.runs("film"));
+                let (before, after) = (energy(&frame.color), energy(&rgba));
+                let error = (after - before).abs() / before;
+                println!("{scene} {blades} blades f/{f_number} {mode:?}: energy error {:.4}%", error * 100.0);
+                assert!(
+                    error < 0.005,
+                    "{scene} {blades} blades f/{f_number} {mode:?}: energy {before} -> {after} ({:.3}%)",
+                    error * 100.0
+                );
+            }
         }
     }
 }
@@ -93,13 +118,20 @@ fn in_focus_plane_passes_through_the_gather_unchanged() {
     // The planner would skip depth of field here (every CoC is 0); force the passes to run to
     // test them on an in-focus plane, with a gather radius as if the frame held a 20 px CoC.
     let mut plan = planner::plan(&frame, &camera);
-    assert!(!plan.runs("coc") && !plan.runs("bokeh_gather"));
+    assert!(!plan.runs("coc") && !runs_dof(&plan));
     plan.coc = Some(CocParams::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144));
     plan.gather = Some(GatherParams::new(256, 144, 20.0, &camera.aperture));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("bokeh_gather").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
-    assert!(worst <= 1e-3, "largest change {worst}");
+    assert!(worst <= 1e-3, "reference gather: largest change {worst}");
+    // The tiled path classifies every tile as a copy.
+    plan.gather = None;
+    plan.tiled = Some(TiledDofParams::new(256, 144, 20.0, &camera.aperture));
+    let (rgba, profile) = render_plan(&gpu, &frame, &plan);
+    assert!(profile.pass_ms("dof_copy_tiles").is_some());
+    let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(worst <= 1e-3, "tiled path: largest change {worst}");
 }
 
 #[test]
@@ -112,7 +144,7 @@ fn one_f_stop_halves_the_exposure() {
         camera.film = FilmMode::Linear;
         let frame = testdata_frame("point_focus", &camera);
         let (rgba, plan, _) = render(&gpu, &frame, &camera);
-        assert!(plan.runs("film") && !plan.runs("bokeh_gather"));
+        assert!(plan.runs("film") && !runs_dof(&plan));
         sums.push(energy(&rgba));
     }
     let ratio = sums[0] / sums[1];
@@ -123,29 +155,36 @@ fn one_f_stop_halves_the_exposure() {
 fn sharp_subject_and_blurred_background_keep_their_edge() {
     // edges: left half at 2 m (in focus), right half at 8 m (CoC ~14 px).
     let gpu = gpu();
-    let camera = dof_camera(50.0, 2.0, 2.0, 0);
-    let frame = testdata_frame("edges", &camera);
-    let (rgba, _, _) = render(&gpu, &frame, &camera);
-    let (w, h) = (frame.width, frame.height);
-    let mid = w / 2;
-    // The blurred background does not bleed over the sharp subject: every subject pixel is
-    // unchanged, up to the edge.
-    let mut worst_subject = 0.0f32;
-    for y in 0..h {
-        for x in 0..mid {
-            for c in 0..3 {
-                worst_subject = worst_subject.max((at(&rgba, w, x, y, c) - at(&frame.color, w, x, y, c)).abs());
+    for mode in [BokehMode::Tiled, BokehMode::Reference] {
+        let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+        camera.bokeh = mode;
+        let frame = testdata_frame("edges", &camera);
+        let (rgba, _, _) = render(&gpu, &frame, &camera);
+        let (w, h) = (frame.width, frame.height);
+        let mid = w / 2;
+        // The blurred background does not bleed over the sharp subject: every subject pixel is
+        // unchanged, up to the edge.
+        let mut worst_subject = 0.0f32;
+        for y in 0..h {
+            for x in 0..mid {
+                for c in 0..3 {
+                    worst_subject = worst_subject.max((at(&rgba, w, x, y, c) - at(&frame.color, w, x, y, c)).abs());
+                }
             }
         }
-    }
-    assert!(worst_subject <= 1e-3, "the sharp subject changed by up to {worst_subject}");
-    // The sharp subject does not bleed into the background: next to the edge the background
-    // is the average of background texture only, so it stays within the background's range.
-    let far_colours: Vec<f32> = (0..h).flat_map(|y| (mid..w).map(move |x| (x, y))).map(|(x, y)| at(&frame.color, w, x, y, 0)).collect();
-    let (lo, hi) = far_colours.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-    for y in 0..h {
-        let v = at(&rgba, w, mid, y, 0);
-        assert!(v >= lo - 1e-4 && v <= hi + 1e-4, "row {y}: background pixel at the edge is {v}, outside [{lo}, {hi}]: subject bled in");
+        assert!(worst_subject <= 1e-3, "the sharp subject changed by up to {worst_subject}");
+        // The sharp subject does not bleed into the background: next to the edge the background
+        // is the average of background texture only, so it stays within the background's range.
+        let far_colours: Vec<f32> =
+            (0..h).flat_map(|y| (mid..w).map(move |x| (x, y))).map(|(x, y)| at(&frame.color, w, x, y, 0)).collect();
+        let (lo, hi) = far_colours.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        for y in 0..h {
+            let v = at(&rgba, w, mid, y, 0);
+            assert!(
+                v >= lo - 1e-4 && v <= hi + 1e-4,
+                "{mode:?} row {y}: background pixel at the edge is {v}, outside [{lo}, {hi}]: subject bled in"
+            );
+        }
     }
 }
 
@@ -153,29 +192,35 @@ fn sharp_subject_and_blurred_background_keep_their_edge() {
 fn blurred_foreground_covers_the_background_softly() {
     // Focus on the far half (8 m): the near half (2 m) is blurred and spreads over the edge.
     let gpu = gpu();
-    let camera = dof_camera(50.0, 2.0, 8.0, 0);
-    let frame = testdata_frame("edges", &camera);
-    let (rgba, plan, _) = render(&gpu, &frame, &camera);
-    let (w, h) = (frame.width, frame.height);
-    let near_radius_px = (plan.coc_range_px.0.abs() / 2.0) as u32;
-    assert!(near_radius_px >= 4, "test needs a clearly blurred foreground, got radius {near_radius_px}");
-    let y = h / 2;
-    // Blue channel: the far plane is blue (>= 0.1), the near plane is not (<= 0.2 * ...).
-    let far_blue_row: Vec<f32> = (0..w).map(|x| at(&frame.color, w, x, y, 2)).collect();
-    let out_blue: Vec<f32> = (0..w).map(|x| at(&rgba, w, x, y, 2)).collect();
-    let mid = w / 2;
-    // Just right of the edge the far plane is partly covered: strictly between the far plane's
-    // value and the near plane's blurred value -- a soft transition, not a hard silhouette.
-    let near_level = out_blue[(mid - near_radius_px - 2) as usize];
-    let covered = out_blue[mid as usize + 1];
-    let far_value = far_blue_row[mid as usize + 1];
-    assert!(
-        covered > near_level.min(far_value) + 0.01 && covered < near_level.max(far_value) - 0.01,
-        "pixel right of the edge {covered} should lie between near {near_level} and far {far_value}"
-    );
-    // Far beyond the foreground's reach the sharp background is untouched.
-    for x in (mid + near_radius_px + 2)..w {
-        assert!((out_blue[x as usize] - far_blue_row[x as usize]).abs() <= 1e-3, "x {x}: in-focus background changed");
+    for mode in [BokehMode::Tiled, BokehMode::Reference] {
+        let mut camera = dof_camera(50.0, 2.0, 8.0, 0);
+        camera.bokeh = mode;
+        let frame = testdata_frame("edges", &camera);
+        let (rgba, plan, _) = render(&gpu, &frame, &camera);
+        let (w, h) = (frame.width, frame.height);
+        let near_radius_px = (plan.coc_range_px.0.abs() / 2.0) as u32;
+        assert!(near_radius_px >= 4, "test needs a clearly blurred foreground, got radius {near_radius_px}");
+        let y = h / 2;
+        // Blue channel: the far plane is blue (>= 0.1), the near plane is not (<= 0.2 * ...).
+        let far_blue_row: Vec<f32> = (0..w).map(|x| at(&frame.color, w, x, y, 2)).collect();
+        let out_blue: Vec<f32> = (0..w).map(|x| at(&rgba, w, x, y, 2)).collect();
+        let mid = w / 2;
+        // Just right of the edge the far plane is partly covered: strictly between the far plane's
+        // value and the near plane's blurred value -- a soft transition, not a hard silhouette.
+        let near_level = out_blue[(mid - near_radius_px - 2) as usize];
+        let covered = out_blue[mid as usize + 1];
+        let far_value = far_blue_row[mid as usize + 1];
+        assert!(
+            covered > near_level.min(far_value) + 0.01 && covered < near_level.max(far_value) - 0.01,
+            "{mode:?}: pixel right of the edge {covered} should lie between near {near_level} and far {far_value}"
+        );
+        // Far beyond the foreground's reach the sharp background is untouched.
+        for x in (mid + near_radius_px + 2)..w {
+            assert!(
+                (out_blue[x as usize] - far_blue_row[x as usize]).abs() <= 1e-3,
+                "{mode:?} x {x}: in-focus background changed"
+            );
+        }
     }
 }
 
@@ -188,12 +233,13 @@ fn profile_times_every_pass() {
     camera.film = FilmMode::Curve(realcam::optics::film::FilmCurve::default_filmic());
     let frame = testdata_frame("demo", &camera);
     let (_, plan, profile) = render(&gpu, &frame, &camera);
-    for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+    for pass in ["coc", realcam::planner::BOKEH_TILED, "vignette", "film"] {
         assert!(plan.runs(pass), "{pass} planned");
+        let pass = if pass == realcam::planner::BOKEH_TILED { "dof_half_gather" } else { pass };
         let ms = profile.pass_ms(pass).unwrap_or_else(|| panic!("{pass} timed"));
         assert!(ms.is_finite() && ms > 0.0, "{pass}: {ms} ms");
     }
-    assert!(profile.chrome_trace_json().contains("\"name\":\"bokeh_gather\""));
+    assert!(profile.chrome_trace_json().contains("\"name\":\"dof_sprites\""));
 }
 
 #[test]
@@ -205,18 +251,23 @@ fn hard_inputs_stay_finite() {
     let (w, h) = (48u32, 32u32);
     let mut color = vec![0.2f32; (w * h * 4) as usize];
     let mut depth = vec![3.0f32; (w * h) as usize];
-    let specials = [(f32::NAN, 0.0), (f32::INFINITY, f32::INFINITY), (1.0e6, 1.0e10), (1.0e6, 2.0), (5.0, 0.03), (1.0e6, 0.001)];
+    let specials =
+        [(f32::NAN, 0.0), (f32::INFINITY, f32::INFINITY), (1.0e6, 1.0e10), (1.0e6, 2.0), (5.0, 0.03), (1.0e6, 0.001)];
     for (i, (value, d)) in specials.iter().enumerate() {
         let p = (10 + 4 * i as u32 + 16 * w) as usize;
         color[p * 4..p * 4 + 3].copy_from_slice(&[*value; 3]);
         depth[p] = *d;
     }
     let frame = Frame::new(w, h, color, depth);
-    let (rgba, plan, _) = render(&gpu, &frame, &camera);
-    assert!(plan.runs("bokeh_gather"));
-    assert!(rgba.iter().all(|v| v.is_finite()), "non-finite output");
-    // The 1e6 highlights survive as bright disks rather than vanishing or overflowing.
-    assert!(rgba.iter().cloned().fold(0.0f32, f32::max) > 100.0);
+    for mode in [BokehMode::Tiled, BokehMode::Reference] {
+        let mut camera = camera.clone();
+        camera.bokeh = mode;
+        let (rgba, plan, _) = render(&gpu, &frame, &camera);
+        assert!(runs_dof(&plan));
+        assert!(rgba.iter().all(|v| v.is_finite()), "{mode:?}: non-finite output");
+        // The 1e6 highlights survive as bright disks rather than vanishing or overflowing.
+        assert!(rgba.iter().cloned().fold(0.0f32, f32::max) > 100.0);
+    }
 }
 
 #[test]

@@ -47,6 +47,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
     let gpu = gpu();
     for blades in [0, 5] {
         let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
+        camera.bokeh = realcam::camera::BokehMode::Reference;
         camera.vignetting = true;
         camera.exposure = true;
         camera.film = FilmMode::Curve(FilmCurve::default_filmic());
@@ -79,7 +80,7 @@ fn film_pass_matches_the_f64_characteristic_curve() {
     let color: Vec<f32> = values.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
     let frame = Frame::new(w, h, color, vec![2.0; (w * h) as usize]);
     let plan = planner::plan(&frame, &camera);
-    assert!(plan.runs("film") && !plan.runs("bokeh_gather"));
+    assert!(plan.runs("film") && !plan.runs("bokeh_gather") && !plan.runs(realcam::planner::BOKEH_TILED));
     let (rgba, _) = render_plan(&gpu, &frame, &plan);
     let curve = FilmCurve::default_filmic();
     for (i, &v) in values.iter().enumerate() {

@@ -159,6 +159,12 @@ impl Recorder {
         unsafe { self.gpu.cmd_barrier(self.cb, &info) };
     }
 
+    /// Fill a device buffer with a 32-bit value (a transfer write; the caller's next barrier
+    /// makes it visible).
+    pub fn fill_buffer(&mut self, buffer: &GpuBuffer, value: u32) {
+        unsafe { self.gpu.device().cmd_fill_buffer(self.cb, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
+    }
+
     /// Bind `pipeline` with a fresh descriptor set holding `binds`, push the constants, dispatch.
     pub fn dispatch(
         &mut self,

@@ -4,6 +4,14 @@
 
 pub mod bokeh_gather;
 pub mod coc;
+pub mod dof_classify;
+pub mod dof_composite;
+pub mod dof_downsample;
+pub mod dof_half_gather;
+pub mod dof_sprites;
+pub mod dof_tile_gather;
+pub mod dof_tiles;
+pub mod tiled_dof;
 pub mod film;
 pub mod vignette;
 
@@ -51,4 +59,16 @@ pub(crate) fn after_compute_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'
         .new_layout(vk::ImageLayout::GENERAL)
         .image(image.image)
         .subresource_range(crate::gpu::color_range())
+}
+
+/// Barrier for a buffer an earlier compute pass wrote and this pass reads or updates.
+pub(crate) fn buffer_after_compute_write(buffer: &crate::gpu::GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
+    vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .buffer(buffer.buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)
 }

@@ -46,6 +46,7 @@ pub fn dof_camera(focal_length_mm: f64, f_number: f64, focus_m: f64, blades: u32
         film: Some(FilmMode::Linear),
         max_coc_px: 64.0,
         force: true,
+        bokeh: Default::default(),
     };
     Camera::new(&LensFile::default_lens(), &request).expect("valid test camera")
 }

@@ -1,0 +1,70 @@
+#version 450
+// Tiled depth of field, step 3: the half-resolution colour and CoC for the large-CoC path, and
+// the highlights: a pixel with a large CoC much brighter than its neighbours gives its excess
+// energy to a sprite (scattered with the exact aperture shape by dof_sprites.comp) instead of
+// to the sparse half-resolution gather, which could not draw a crisp bokeh shape from it.
+#include "common.glsl"
+#include "dof_tiles.glsl"
+
+layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
+layout(binding = 0, rgba32f) uniform readonly image2D color_in;
+layout(binding = 1, r32f) uniform readonly image2D coc_px;
+layout(binding = 2, rgba32f) uniform writeonly image2D color_half;
+layout(binding = 3, r32f) uniform writeonly image2D coc_half;
+layout(binding = 4, std430) buffer Args { uint args[]; };
+layout(binding = 5, std430) writeonly buffer Sprites { Sprite sprites[]; };
+
+layout(push_constant) uniform Push {
+    ivec2 size;
+    ivec2 half_size;
+    float small_radius_px;
+    float highlight_min;     // a highlight is at least this bright (luminance) ...
+    float highlight_ratio;   // ... and this many times its neighbours' mean
+    int sprite_capacity;
+} pc;
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+void main() {
+    ivec2 ph = ivec2(gl_GlobalInvocationID.xy);
+    if (outside(ph, pc.half_size)) return;
+    vec4 sum = vec4(0.0);
+    float coc_sum = 0.0;
+    float n = 0.0;
+    for (int j = 0; j < 2; ++j) {
+        for (int i = 0; i < 2; ++i) {
+            ivec2 p = ph * 2 + ivec2(i, j);
+            if (outside(p, pc.size)) continue;
+            vec4 c = finite_or_zero(imageLoad(color_in, p));
+            float coc = imageLoad(coc_px, p).r;
+            float lum = luminance(c.rgb);
+            if (0.5 * abs(coc) > pc.small_radius_px && lum > pc.highlight_min) {
+                float neighbours = 0.0, count = 0.0;
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        ivec2 q = p + ivec2(dx, dy);
+                        if ((dx == 0 && dy == 0) || outside(q, pc.size)) continue;
+                        neighbours += luminance(finite_or_zero(imageLoad(color_in, q)).rgb);
+                        count += 1.0;
+                    }
+                }
+                float reference = max(pc.highlight_min, pc.highlight_ratio * neighbours / max(count, 1.0));
+                if (lum > reference) {
+                    vec3 excess = c.rgb * (1.0 - reference / lum);
+                    uint slot = atomicAdd(args[ARGS_SPRITE_COUNT], 1u);
+                    if (slot < uint(pc.sprite_capacity)) {
+                        sprites[slot] = Sprite(vec2(p) + 0.5, coc, 0.0, vec4(excess, 0.0));
+                        c.rgb -= excess;
+                    } else {
+                        atomicAdd(args[ARGS_SPRITES_DROPPED], 1u);
+                    }
+                }
+            }
+            sum += c;
+            coc_sum += coc;
+            n += 1.0;
+        }
+    }
+    imageStore(color_half, ph, sum / max(n, 1.0));
+    imageStore(coc_half, ph, vec4(coc_sum / max(n, 1.0)));
+}

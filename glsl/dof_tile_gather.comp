@@ -1,0 +1,38 @@
+#version 450
+// Tiled depth of field, full-resolution tiles: a copy for tiles nothing defocused reaches, the
+// exact gather (include/gather.glsl) with the tile's own radius for small CoC. Dispatched
+// indirectly, one workgroup per tile of the class's list.
+#include "common.glsl"
+#include "dof_tiles.glsl"
+
+layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
+layout(binding = 0, rgba32f) uniform readonly image2D color_in;
+layout(binding = 1, r32f) uniform readonly image2D coc_px;
+layout(binding = 2, rgba32f) uniform writeonly image2D color_out;
+layout(binding = 3, std430) readonly buffer TileLists { uint tile_list[]; };
+layout(binding = 4, std430) readonly buffer TileRadius { float tile_radius_px[]; };
+
+layout(push_constant) uniform Push {
+    ivec2 size;
+    ivec2 tiles;
+    int tile_class;
+    int blades;
+    float rotation_rad;
+    float curvature;
+    float layer_transition_px;
+} pc;
+
+#include "gather.glsl"
+
+void main() {
+    uint t = tile_list[pc.tile_class * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
+    ivec2 p = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * TILE_SIZE + ivec2(gl_LocalInvocationID.xy);
+    if (outside(p, pc.size)) return;
+    if (pc.tile_class == CLASS_COPY) {
+        imageStore(color_out, p, finite_or_zero(imageLoad(color_in, p)));
+        return;
+    }
+    int r = int(ceil(tile_radius_px[t])) + 1;
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
+    imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));
+}
