@@ -612,6 +612,8 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
         "2",
         "--sensor",
         "9.6x7.2",
+        "--bokeh",
+        "reference",
         "--explain",
         "--profile",
         "--trace",
@@ -734,7 +736,7 @@ fn planner_skips_invisible_effects_and_output_equals_input() {
     ]);
     let run = render(&dir, &args).success();
     let err = &run.stderr;
-    for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+    for pass in ["coc", "bokeh_tiled", "vignette", "film"] {
         assert_contains(err, &format!("[skip] {pass}"));
         assert!(
             !err.contains(&format!("[run ] {pass}")),
