@@ -10,6 +10,7 @@
 pub mod io;
 pub mod optics;
 pub mod synth;
+pub mod bench;
 pub mod camera;
 pub mod gpu;
 pub mod lens_file;

@@ -30,6 +30,9 @@ enum Command {
     Dof(DofArgs),
     /// List the Vulkan devices.
     Devices,
+    /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
+    /// defocused), with the fast path's error against the reference.
+    Bench(BenchArgs),
     /// Error of an image against a reference (RMSE, PSNR, energy), e.g. against a ray-traced
     /// ground truth.
     Compare {
@@ -194,6 +197,27 @@ struct GpuArgs {
 }
 
 #[derive(Args)]
+struct BenchArgs {
+    /// Resolutions, e.g. 1280x720,1920x1080.
+    #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',')]
+    resolutions: Vec<String>,
+    /// Largest CoC radii in pixels.
+    #[arg(long = "radii", default_value = "4,8,16,32,64", value_delimiter = ',')]
+    radii_px: Vec<f64>,
+    /// Timed runs per configuration (after one warm-up); the median is reported.
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Run the reference only up to this CoC radius (its cost grows with the radius squared).
+    #[arg(long = "reference-max-radius", default_value_t = 16.0)]
+    reference_max_radius_px: f64,
+    /// Also write the Markdown table here.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args)]
 #[command(allow_negative_numbers = true)]
 struct DofArgs {
     #[command(flatten)]
@@ -210,6 +234,7 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
+        Command::Bench(args) => bench(args),
         Command::Compare { test, reference } => compare(&test, &reference),
         Command::Synth { out } => synth(&out),
     };
@@ -404,5 +429,47 @@ fn compare(test: &Path, reference: &Path) -> Result<()> {
         e.psnr_db,
         e.relative_energy_error * 100.0
     );
+    Ok(())
+}
+
+fn bench(args: BenchArgs) -> Result<()> {
+    let mut resolutions = Vec::new();
+    for r in &args.resolutions {
+        let parsed = r.split_once('x').and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
+        match parsed {
+            Some((w, h)) if w > 0 && h > 0 => resolutions.push((w, h)),
+            _ => bail!("--resolutions: {r:?} is not WIDTHxHEIGHT"),
+        }
+    }
+    let mut options = GpuOptions::from_env();
+    options.validation |= args.gpu.validate;
+    if args.gpu.device.is_some() {
+        options.device = args.gpu.device.clone();
+    }
+    let gpu = Gpu::new(&options)?;
+    eprintln!("device: {}", gpu.info());
+    let bench_options = realcam::bench::BenchOptions {
+        resolutions,
+        radii_px: args.radii_px.clone(),
+        runs: args.runs,
+        reference_max_radius_px: args.reference_max_radius_px,
+    };
+    let total = (bench_options.resolutions.len() * bench_options.radii_px.len()) as u64;
+    let bar = indicatif::ProgressBar::new(total * 2);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let rows = realcam::bench::run(&gpu, &bench_options, |step| {
+        bar.set_message(step.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let table = realcam::bench::markdown(&gpu.info().to_string(), &command, &rows);
+    print!("{table}");
+    if let Some(out) = &args.out {
+        write_text_atomically(out, &table).with_context(|| format!("writing {}", out.display()))?;
+    }
     Ok(())
 }
