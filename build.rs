@@ -23,7 +23,8 @@ fn main() {
 
     let compiler = shaderc::Compiler::new().expect("shaderc compiler");
     let mut errors = Vec::new();
-    let mut table = String::from("/// Every embedded shader: (name, SPIR-V bytes).\npub static ALL: &[(&str, &[u8])] = &[\n");
+    let mut table =
+        String::from("/// Every embedded shader: (name, SPIR-V bytes).\npub static ALL: &[(&str, &[u8])] = &[\n");
     for name in &names {
         let path = glsl.join(name);
         println!("cargo:rerun-if-changed={}", path.display());

@@ -20,6 +20,8 @@ layout(push_constant) uniform Push {
     int blades;
     float rotation_rad;
     float curvature;
+    float sa_amount;
+    float sa_max_coc_px;
     float layer_transition_px;  // CoC difference over which a sample moves from background to foreground
 } pc;
 
@@ -28,6 +30,6 @@ layout(push_constant) uniform Push {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
     imageStore(color_out, p, gather_exact(p, pc.size, pc.radius_px, ap, pc.layer_transition_px));
 }

@@ -21,6 +21,8 @@ layout(push_constant) uniform Push {
     int blades;
     float rotation_rad;
     float curvature;
+    float sa_amount;
+    float sa_max_coc_px;
     float layer_transition_px;
 } pc;
 
@@ -45,7 +47,7 @@ void main() {
     float blurred = smoothstep(0.5 * pc.small_radius_px, pc.small_radius_px, radius_p);
     vec4 base = bg;
     if (blurred < 1.0) {
-        Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
+        Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
         vec4 exact = gather_exact(p, pc.size, int(ceil(pc.small_radius_px)) + 1, ap, pc.layer_transition_px);
         base = mix(exact, bg, blurred);
     }

@@ -22,6 +22,8 @@ layout(push_constant) uniform Push {
     int blades;
     float rotation_rad;
     float curvature;
+    float sa_amount;
+    float sa_max_coc_px;
     float layer_transition_px;
 } pc;
 
@@ -29,7 +31,7 @@ void main() {
     uint t = tile_list[CLASS_LARGE * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
     ivec2 ph = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * (TILE_SIZE / 2) + ivec2(gl_LocalInvocationID.xy);
     if (outside(ph, pc.half_size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
     // Half-resolution units: CoC diameters and distances halve.
     float coc_p = 0.5 * imageLoad(coc_half, ph).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
@@ -55,7 +57,7 @@ void main() {
             float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
             vec2 o = vec2(ph - q) * (coc_q < 0.0 ? -1.0 : 1.0);
             float cov = clamp(0.5 - aperture_sdf(o, reach, ap) / ramp, 0.0, 1.0);
-            float w = cov * tap_area / aperture_area(reach, ap);
+            float w = cov * tap_area / aperture_area(reach, ap) * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
             if (w <= 0.0) continue;
             vec4 c = imageLoad(color_half, q);
             float f = clamp((coc_p - coc_q) / pc.layer_transition_px, 0.0, 1.0);

@@ -19,6 +19,8 @@ layout(push_constant) uniform Push {
     int blades;
     float rotation_rad;
     float curvature;
+    float sa_amount;
+    float sa_max_coc_px;
     float layer_transition_px;
 } pc;
 
@@ -33,6 +35,6 @@ void main() {
         return;
     }
     int r = int(ceil(tile_radius_px[t])) + 1;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
     imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));
 }

@@ -48,6 +48,7 @@ fn bench_camera(width: u32, height: u32, bokeh: BokehMode) -> Camera {
         nits_per_unit: 160.0,
         blades: Some(7),
         blade_rotation_deg: Some(0.0),
+        spherical_aberration: Some(0.0),
         exposure: false,
         vignetting: false,
         film: Some(FilmMode::Linear),
@@ -66,7 +67,8 @@ pub fn bench_frame(width: u32, height: u32, coc_radius_px: f64, camera: &Camera)
     // Kyaw 2013 eq 5.3 solved for u: 1/u = 1/S - C N' P / v^2 (behind the focus plane).
     let v_mm = lens.image_distance_mm();
     let coc_mm = 2.0 * coc_radius_px * pitch_mm;
-    let inv_u = 1.0 / lens.focus_distance_mm - coc_mm * lens.effective_f_number() * lens.pupil_magnification / (v_mm * v_mm);
+    let inv_u =
+        1.0 / lens.focus_distance_mm - coc_mm * lens.effective_f_number() * lens.pupil_magnification / (v_mm * v_mm);
     // Radii beyond what the lens can reach (the CoC at infinity) are clamped to infinity.
     let depth_m = if inv_u > 0.0 { (1.0 / inv_u / 1000.0) as f32 } else { 1.0e10 };
     let hash = |i: u32| {

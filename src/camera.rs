@@ -71,6 +71,8 @@ pub struct CameraRequest {
     pub nits_per_unit: f64,
     pub blades: Option<u32>,
     pub blade_rotation_deg: Option<f64>,
+    /// Spherical aberration amount (-1..1); the lens file's when None.
+    pub spherical_aberration: Option<f64>,
     pub exposure: bool,
     pub vignetting: bool,
     pub film: Option<FilmMode>,
@@ -86,7 +88,8 @@ impl Camera {
         let f_number = req.f_number.unwrap_or(lens_file.f_number_min.max(2.8));
         let focus_distance_mm = req.focus_distance_m * 1000.0;
         let name = lens_file.name.clone();
-        let out_of_range = |what: String, allowed: String| CameraError::OutOfRange { what, lens: name.clone(), allowed };
+        let out_of_range =
+            |what: String, allowed: String| CameraError::OutOfRange { what, lens: name.clone(), allowed };
         if !req.force {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
                 return Err(out_of_range(
@@ -120,6 +123,13 @@ impl Camera {
             return Err(CameraError::Invalid(format!("--max-coc must be >= 0 px, got {}", req.max_coc_px)));
         }
         let blades = req.blades.unwrap_or(lens_file.aperture.blades);
+        if let Some(sa) = req.spherical_aberration {
+            if !(-1.0..=1.0).contains(&sa) {
+                return Err(CameraError::Invalid(format!(
+                    "--spherical-aberration {sa}: use a value in [-1, 1] or 'uniform'"
+                )));
+            }
+        }
         if blades == 1 || blades == 2 || blades > 32 {
             return Err(CameraError::Invalid(format!("--blades {blades}: use 0 (circular) or 3..32")));
         }
@@ -130,6 +140,7 @@ impl Camera {
                 blades,
                 rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
                 curvature: lens_file.aperture.curvature,
+                spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),

@@ -48,6 +48,10 @@ pub struct LensFile {
     pub transmittance: f64,
     #[serde(default = "one")]
     pub pupil_magnification: f64,
+    /// Spherical aberration amount in the bokeh, -1..1: > 0 under-corrected (soft background,
+    /// harsh foreground), < 0 over-corrected, 0 uniform disks.
+    #[serde(default)]
+    pub spherical_aberration: f64,
     pub aperture: ApertureSpec,
 }
 
@@ -60,8 +64,8 @@ pub const DEFAULT_LENS_TOML: &str = include_str!("../lenses/default.toml");
 
 impl LensFile {
     pub fn load(path: &Path) -> Result<LensFile, LensFileError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
         Self::parse(&text, path)
     }
 
@@ -101,6 +105,9 @@ impl LensFile {
         }
         if self.aperture.blades > 32 || self.aperture.blades == 1 || self.aperture.blades == 2 {
             return bad(format!("aperture.blades = {} must be 0 (circular) or 3..32", self.aperture.blades));
+        }
+        if !(-1.0..=1.0).contains(&self.spherical_aberration) {
+            return bad(format!("spherical_aberration = {} must be in [-1, 1]", self.spherical_aberration));
         }
         if !(0.0..=1.0).contains(&self.aperture.curvature) {
             return bad(format!("aperture.curvature = {} must be in [0, 1]", self.aperture.curvature));

@@ -7,15 +7,15 @@
 //! - [`passes`]: one module per compute pass, joining optics and the runtime.
 //! - [`planner`]: decides which passes a scene and camera call for.
 
-pub mod io;
-pub mod optics;
-pub mod synth;
 pub mod bench;
 pub mod camera;
 pub mod gpu;
+pub mod io;
 pub mod lens_file;
 pub mod metrics;
+pub mod optics;
 pub mod passes;
 pub mod planner;
 pub mod render;
 pub mod scene;
+pub mod synth;

@@ -134,6 +134,10 @@ struct RenderArgs {
     /// Aperture rotation in degrees; default from the lens file.
     #[arg(long = "blade-rotation")]
     blade_rotation_deg: Option<f64>,
+    /// Spherical aberration in the bokeh: an amount in [-1, 1] (> 0 under-corrected: soft
+    /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
+    #[arg(long = "spherical-aberration")]
+    spherical_aberration: Option<String>,
     /// Depth-of-field method.
     #[arg(long, value_enum, default_value = "tiled")]
     bokeh: BokehArg,
@@ -287,6 +291,7 @@ fn render(args: RenderArgs) -> Result<()> {
         nits_per_unit: args.nits_per_unit,
         blades: args.blades,
         blade_rotation_deg: args.blade_rotation_deg,
+        spherical_aberration: None,
         exposure: !args.no_exposure,
         vignetting: !args.no_vignetting,
         film: Some(match args.film {
@@ -299,6 +304,16 @@ fn render(args: RenderArgs) -> Result<()> {
             BokehArg::Tiled => realcam::camera::BokehMode::Tiled,
             BokehArg::Reference => realcam::camera::BokehMode::Reference,
         },
+    };
+    let mut request = request;
+    request.spherical_aberration = match args.spherical_aberration.as_deref() {
+        None => None,
+        Some("uniform") => Some(0.0),
+        Some(text) => Some(
+            text.trim()
+                .parse::<f64>()
+                .with_context(|| format!("--spherical-aberration {text:?}: a number in [-1, 1] or 'uniform'"))?,
+        ),
     };
     let camera = Camera::new(&lens_file, &request)?;
     if !(args.depth_unit_m.is_finite() && args.depth_unit_m > 0.0) {
@@ -435,7 +450,8 @@ fn compare(test: &Path, reference: &Path) -> Result<()> {
 fn bench(args: BenchArgs) -> Result<()> {
     let mut resolutions = Vec::new();
     for r in &args.resolutions {
-        let parsed = r.split_once('x').and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
+        let parsed =
+            r.split_once('x').and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
         match parsed {
             Some((w, h)) if w > 0 && h > 0 => resolutions.push((w, h)),
             _ => bail!("--resolutions: {r:?} is not WIDTHxHEIGHT"),

@@ -2,10 +2,10 @@
 //! effect would be invisible is not recorded and its pipeline is never created.
 
 use crate::camera::{BokehMode, Camera, FilmMode};
-use crate::passes::tiled_dof::TiledDofParams;
 use crate::passes::bokeh_gather::GatherParams;
 use crate::passes::coc::CocParams;
 use crate::passes::film::FilmParams;
+use crate::passes::tiled_dof::TiledDofParams;
 use crate::passes::vignette::VignetteParams;
 use crate::scene::Frame;
 
@@ -62,10 +62,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let mut steps = Vec::new();
 
     // Depth of field: the CoC is monotonic in depth, so the nearest and farthest depths bound it.
-    let (near_m, far_m) = frame
-        .depth_m
-        .iter()
-        .fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+    let (near_m, far_m) = frame.depth_m.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
     let coc_px = |d_m: f32| {
         let c = camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
         c.clamp(-camera.max_coc_px, camera.max_coc_px)
@@ -93,7 +90,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         coc = Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h));
         match camera.bokeh {
             BokehMode::Reference => {
-                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture);
+                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px);
                 steps.push(Step {
                     pass: crate::passes::bokeh_gather::NAME,
                     run: true,
@@ -105,7 +102,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                 gather = Some(g);
             }
             BokehMode::Tiled => {
-                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture);
+                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px);
                 steps.push(Step {
                     pass: BOKEH_TILED,
                     run: true,
@@ -148,7 +145,11 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
     let corner = vignette_params.corner_falloff() as f64;
     let vignette = if !camera.vignetting {
-        steps.push(Step { pass: crate::passes::vignette::NAME, run: false, why: "turned off (--no-vignetting)".into() });
+        steps.push(Step {
+            pass: crate::passes::vignette::NAME,
+            run: false,
+            why: "turned off (--no-vignetting)".into(),
+        });
         None
     } else if 1.0 - corner <= VISIBLE_FALLOFF {
         steps.push(Step {
@@ -161,7 +162,10 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         steps.push(Step {
             pass: crate::passes::vignette::NAME,
             run: true,
-            why: format!("cos^4 natural vignetting: {:.1}% of the centre's light at the farthest corner", corner * 100.0),
+            why: format!(
+                "cos^4 natural vignetting: {:.1}% of the centre's light at the farthest corner",
+                corner * 100.0
+            ),
         });
         Some(vignette_params)
     };

@@ -52,16 +52,7 @@ pub struct SynthHighlight {
 
 impl SynthPlane {
     fn flat(x0: u32, y0: u32, x1: u32, y1: u32, depth_m: f64, rgb: [f32; 3]) -> SynthPlane {
-        SynthPlane {
-            x0,
-            y0,
-            x1,
-            y1,
-            depth_m,
-            rgb,
-            checker_px: 0,
-            checker_rgb: rgb,
-        }
+        SynthPlane { x0, y0, x1, y1, depth_m, rgb, checker_px: 0, checker_rgb: rgb }
     }
 
     fn checker(mut self, checker_px: u32, checker_rgb: [f32; 3]) -> SynthPlane {
@@ -96,14 +87,7 @@ impl SynthScene {
         let mut depth = Image::new(w, h, 1);
         for y in 0..h {
             for x in 0..w {
-                paint(
-                    &mut color,
-                    &mut depth,
-                    x,
-                    y,
-                    self.background_rgb,
-                    self.background_depth_m,
-                );
+                paint(&mut color, &mut depth, x, y, self.background_rgb, self.background_depth_m);
                 color.set(x, y, 3, 1.0);
             }
         }
@@ -133,14 +117,10 @@ impl SynthScene {
             background_depth_m: 1.0e10,
             background_rgb: [0.45, 0.62, 0.9],
             planes: vec![
-                SynthPlane::flat(0, 70, 640, 290, 8.0, [0.42, 0.36, 0.3])
-                    .checker(20, [0.2, 0.24, 0.3]),
-                SynthPlane::flat(0, 290, 640, 360, 3.0, [0.25, 0.18, 0.1])
-                    .checker(32, [0.32, 0.24, 0.14]),
-                SynthPlane::flat(250, 100, 430, 260, 2.0, [0.85, 0.82, 0.75])
-                    .checker(12, [0.06, 0.08, 0.12]),
-                SynthPlane::flat(40, 0, 130, 360, 0.8, [0.6, 0.12, 0.08])
-                    .checker(30, [0.7, 0.55, 0.15]),
+                SynthPlane::flat(0, 70, 640, 290, 8.0, [0.42, 0.36, 0.3]).checker(20, [0.2, 0.24, 0.3]),
+                SynthPlane::flat(0, 290, 640, 360, 3.0, [0.25, 0.18, 0.1]).checker(32, [0.32, 0.24, 0.14]),
+                SynthPlane::flat(250, 100, 430, 260, 2.0, [0.85, 0.82, 0.75]).checker(12, [0.06, 0.08, 0.12]),
+                SynthPlane::flat(40, 0, 130, 360, 0.8, [0.6, 0.12, 0.08]).checker(30, [0.7, 0.55, 0.15]),
             ],
             highlights: vec![
                 hl(170, 95, 8.0, s(50.0, warm)),
@@ -159,12 +139,7 @@ impl SynthScene {
 
     /// A uniform grey (0.1) plane filling the frame at `plane_depth_m`, with one highlight
     /// at the centre pixel (width/2, height/2) at the same depth.
-    pub fn point_on_plane(
-        width: u32,
-        height: u32,
-        plane_depth_m: f64,
-        highlight_rgb: [f32; 3],
-    ) -> SynthScene {
+    pub fn point_on_plane(width: u32, height: u32, plane_depth_m: f64, highlight_rgb: [f32; 3]) -> SynthScene {
         let grey = [0.1; 3];
         SynthScene {
             width,
@@ -191,10 +166,8 @@ impl SynthScene {
             background_depth_m: far_depth_m,
             background_rgb: [0.5; 3],
             planes: vec![
-                SynthPlane::flat(0, 0, mid, height, near_depth_m, [0.8, 0.35, 0.2])
-                    .checker(8, [0.15, 0.08, 0.05]),
-                SynthPlane::flat(mid, 0, width, height, far_depth_m, [0.2, 0.45, 0.8])
-                    .checker(12, [0.05, 0.1, 0.2]),
+                SynthPlane::flat(0, 0, mid, height, near_depth_m, [0.8, 0.35, 0.2]).checker(8, [0.15, 0.08, 0.05]),
+                SynthPlane::flat(mid, 0, width, height, far_depth_m, [0.2, 0.45, 0.8]).checker(12, [0.05, 0.1, 0.2]),
             ],
             highlights: Vec::new(),
         }
@@ -205,19 +178,10 @@ impl SynthScene {
 /// `<dir>/<name>_depth.exr` (channel Z, float32, metres).
 pub fn write_scene(dir: &Path, name: &str, scene: &SynthScene) -> Result<(), IoError> {
     let (color, depth) = scene.render();
-    let opts = ExrWriteOptions {
-        float32: true,
-        ..ExrWriteOptions::default()
-    };
+    let opts = ExrWriteOptions { float32: true, ..ExrWriteOptions::default() };
     write_exr_rgba(&dir.join(format!("{name}_color.exr")), &color, &opts)?;
     let depth_path = dir.join(format!("{name}_depth.exr"));
-    write_exr_channels(
-        &depth_path,
-        scene.width,
-        scene.height,
-        &[("Z", &depth.data)],
-        &opts,
-    )
+    write_exr_channels(&depth_path, scene.width, scene.height, &[("Z", &depth.data)], &opts)
 }
 
 #[cfg(test)]
@@ -270,14 +234,8 @@ mod tests {
         let scene = SynthScene::two_planes(20, 10, 0.7, 6.0);
         write_scene(&dir, "tp", &scene).unwrap();
         let (color, depth) = scene.render();
-        assert_eq!(
-            crate::io::read_exr_rgba(&dir.join("tp_color.exr")).unwrap(),
-            color
-        );
-        assert_eq!(
-            crate::io::read_exr_channel(&dir.join("tp_depth.exr"), "Z").unwrap(),
-            depth
-        );
+        assert_eq!(crate::io::read_exr_rgba(&dir.join("tp_color.exr")).unwrap(), color);
+        assert_eq!(crate::io::read_exr_channel(&dir.join("tp_depth.exr"), "Z").unwrap(), depth);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -38,18 +38,12 @@ impl TestDir {
 
     /// Absolute path of `name` in this directory, as a string for the command line.
     fn arg(&self, name: &str) -> String {
-        self.join(name)
-            .to_str()
-            .expect("UTF-8 temp path")
-            .to_string()
+        self.join(name).to_str().expect("UTF-8 temp path").to_string()
     }
 
     /// The names of the entries of this directory.
     fn listing(&self) -> BTreeSet<String> {
-        std::fs::read_dir(&self.path)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect()
+        std::fs::read_dir(&self.path).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect()
     }
 
     /// Writes the synthetic scene as `<name>_color.exr` and `<name>_depth.exr`.
@@ -89,22 +83,9 @@ impl Run {
 
     /// Asserts an ordinary failure (exit code 1, an `error:` line, no panic); returns stderr.
     fn failure(self) -> String {
-        assert_eq!(
-            self.code,
-            Some(1),
-            "expected exit code 1:\n{}",
-            self.describe()
-        );
-        assert!(
-            self.stderr.contains("error: "),
-            "no error line:\n{}",
-            self.describe()
-        );
-        assert!(
-            !self.stderr.contains("panicked"),
-            "the binary panicked:\n{}",
-            self.describe()
-        );
+        assert_eq!(self.code, Some(1), "expected exit code 1:\n{}", self.describe());
+        assert!(self.stderr.contains("error: "), "no error line:\n{}", self.describe());
+        assert!(!self.stderr.contains("panicked"), "the binary panicked:\n{}", self.describe());
         self.stderr
     }
 }
@@ -144,17 +125,11 @@ fn s(args: &[&str]) -> Vec<String> {
 }
 
 fn assert_contains(haystack: &str, needle: &str) {
-    assert!(
-        haystack.contains(needle),
-        "expected to find\n  {needle}\nin\n{haystack}"
-    );
+    assert!(haystack.contains(needle), "expected to find\n  {needle}\nin\n{haystack}");
 }
 
 fn float_opts() -> ExrWriteOptions {
-    ExrWriteOptions {
-        float32: true,
-        ..ExrWriteOptions::default()
-    }
+    ExrWriteOptions { float32: true, ..ExrWriteOptions::default() }
 }
 
 /// A `w`x`h` RGBA image filled with a constant color (alpha 1).
@@ -232,10 +207,7 @@ fn missing_color_file_names_the_path() {
     let dir = TestDir::new("missing_color");
     let color = dir.arg("no_such_color.exr");
     let err = render(&dir, &s(&["--color", &color, "-o", &dir.arg("out.exr")])).failure();
-    assert_contains(
-        &err,
-        &format!("error: color: file \"{color}\" does not exist"),
-    );
+    assert_contains(&err, &format!("error: color: file \"{color}\" does not exist"));
     assert_listing(&dir, &[]);
 }
 
@@ -244,11 +216,7 @@ fn missing_depth_channel_lists_the_channels_found() {
     let dir = TestDir::new("missing_depth");
     let color = dir.join("color.exr");
     write_color_only(&color, 8, 6);
-    let err = render(
-        &dir,
-        &s(&["--color", &dir.arg("color.exr"), "-o", &dir.arg("out.exr")]),
-    )
-    .failure();
+    let err = render(&dir, &s(&["--color", &dir.arg("color.exr"), "-o", &dir.arg("out.exr")])).failure();
     assert_contains(
         &err,
         &format!(
@@ -265,27 +233,12 @@ fn depth_channel_override_not_found_lists_the_channels_found() {
     let dir = TestDir::new("depth_override");
     let path = dir.join("passes.exr");
     let n = 8 * 6;
-    let (r, g, b, a, z) = (
-        vec![0.5; n],
-        vec![0.4; n],
-        vec![0.3; n],
-        vec![1.0; n],
-        vec![2.0; n],
-    );
+    let (r, g, b, a, z) = (vec![0.5; n], vec![0.4; n], vec![0.3; n], vec![1.0; n], vec![2.0; n]);
     let chans: [(&str, &[f32]); 5] = [("R", &r), ("G", &g), ("B", &b), ("A", &a), ("Z", &z)];
     write_exr_channels(&path, 8, 6, &chans, &float_opts()).unwrap();
-    let err = render(
-        &dir,
-        &s(&[
-            "--color",
-            &dir.arg("passes.exr"),
-            "--depth-channel",
-            "Depth.Z",
-            "-o",
-            &dir.arg("out.exr"),
-        ]),
-    )
-    .failure();
+    let err =
+        render(&dir, &s(&["--color", &dir.arg("passes.exr"), "--depth-channel", "Depth.Z", "-o", &dir.arg("out.exr")]))
+            .failure();
     assert_contains(
         &err,
         &format!(
@@ -304,14 +257,7 @@ fn size_mismatch_names_both_files_and_sizes() {
     write_depth(&depth, 4, 3, &[1.0; 12]);
     let err = render(
         &dir,
-        &s(&[
-            "--color",
-            &dir.arg("color.exr"),
-            "--depth",
-            &dir.arg("depth.exr"),
-            "-o",
-            &dir.arg("out.exr"),
-        ]),
+        &s(&["--color", &dir.arg("color.exr"), "--depth", &dir.arg("depth.exr"), "-o", &dir.arg("out.exr")]),
     )
     .failure();
     assert_contains(
@@ -331,14 +277,7 @@ fn nan_and_negative_depth_give_the_pixel_and_value() {
     let (color, depth) = (dir.join("color.exr"), dir.join("depth.exr"));
     let (w, h) = (8u32, 6u32);
     write_color_only(&color, w, h);
-    let args = s(&[
-        "--color",
-        &dir.arg("color.exr"),
-        "--depth",
-        &dir.arg("depth.exr"),
-        "-o",
-        &dir.arg("out.exr"),
-    ]);
+    let args = s(&["--color", &dir.arg("color.exr"), "--depth", &dir.arg("depth.exr"), "-o", &dir.arg("out.exr")]);
     let at = |x: u32, y: u32| (y * w + x) as usize;
 
     // NaN at (x=5, y=2), alone.
@@ -398,11 +337,7 @@ fn lens_file_syntax_error_gives_the_line() {
     let dir = TestDir::new("lens_syntax");
     let mut args = small_scene(&dir);
     let lens = dir.arg("bad.toml");
-    std::fs::write(
-        &lens,
-        "name = \"x\"\nsource = \"y\"\nfocal_length_mm = = 50\nf_number_min = 1.4\n",
-    )
-    .unwrap();
+    std::fs::write(&lens, "name = \"x\"\nsource = \"y\"\nfocal_length_mm = = 50\nf_number_min = 1.4\n").unwrap();
     args.extend(s(&["--lens", &lens]));
     let err = render(&dir, &args).failure();
     assert_contains(&err, &format!("error: lens file {lens}, line 3: "));
@@ -413,11 +348,7 @@ fn lens_file_unknown_key_is_named() {
     let dir = TestDir::new("lens_unknown_key");
     let mut args = small_scene(&dir);
     let lens = dir.arg("typo.toml");
-    std::fs::write(
-        &lens,
-        format!("{VALID_LENS}focal_lenght = 3\n[aperture]\nblades = 9\n"),
-    )
-    .unwrap();
+    std::fs::write(&lens, format!("{VALID_LENS}focal_lenght = 3\n[aperture]\nblades = 9\n")).unwrap();
     args.extend(s(&["--lens", &lens]));
     let err = render(&dir, &args).failure();
     assert_contains(&err, &format!("error: lens file {lens}, line 7: "));
@@ -461,15 +392,9 @@ fn bad_numeric_settings_are_rejected_with_the_value() {
     };
 
     let err = run(&["--shutter", "0"]).failure();
-    assert_contains(
-        &err,
-        "error: --shutter \"0\": must be a positive time in seconds",
-    );
+    assert_contains(&err, "error: --shutter \"0\": must be a positive time in seconds");
     let err = run(&["--shutter", "1/0"]).failure();
-    assert_contains(
-        &err,
-        "error: --shutter \"1/0\": must be a positive time in seconds",
-    );
+    assert_contains(&err, "error: --shutter \"1/0\": must be a positive time in seconds");
     let err = run(&["--shutter", "abc"]).failure();
     assert_contains(&err, "error: --shutter \"abc\": invalid float literal");
 
@@ -482,29 +407,14 @@ fn bad_numeric_settings_are_rejected_with_the_value() {
     assert_contains(&spaced.stderr, "-5");
 
     let err = run(&["--sensor", "nonsense"]).failure();
-    assert_contains(
-        &err,
-        "error: unknown sensor format \"nonsense\"; give WIDTHxHEIGHT in mm",
-    );
-    for name in [
-        "full-frame",
-        "super35",
-        "aps-c",
-        "aps-c-canon",
-        "m43",
-        "1in",
-        "apsh",
-        "medium-format",
-    ] {
+    assert_contains(&err, "error: unknown sensor format \"nonsense\"; give WIDTHxHEIGHT in mm");
+    for name in ["full-frame", "super35", "aps-c", "aps-c-canon", "m43", "1in", "apsh", "medium-format"] {
         assert_contains(&err, &format!(" {name}"));
     }
 
     // 30 mm is inside the 50 mm focal length: even --force cannot make a thin lens focus there.
     let err = run(&["--focus", "0.03", "--force"]).failure();
-    assert_contains(
-        &err,
-        "error: focus distance 30 mm is not beyond the focal length 50 mm",
-    );
+    assert_contains(&err, "error: focus distance 30 mm is not beyond the focal length 50 mm");
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
 }
 
@@ -564,16 +474,10 @@ fn failed_png_write_leaves_no_temporary_file() {
     args.extend(s(&["--png", &dir.arg("out.png")]));
     let err = render(&dir, &args).failure();
     assert_contains(&err, &format!("cannot write \"{}\"", dir.arg("out.png")));
-    assert_eq!(
-        std::fs::read(dir.join("out.png").join("keep.txt")).unwrap(),
-        b"keep"
-    );
+    assert_eq!(std::fs::read(dir.join("out.png").join("keep.txt")).unwrap(), b"keep");
     // The EXR is written before the PNG; what matters is that nothing half-written is left.
     let listing = dir.listing();
-    assert!(
-        listing.iter().all(|n| !n.contains("tmp")),
-        "temporary files left behind: {listing:?}"
-    );
+    assert!(listing.iter().all(|n| !n.contains("tmp")), "temporary files left behind: {listing:?}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -664,22 +568,11 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
         lum(cx + 1, cy) > lum(cx + 8, cy) && lum(cx, cy - 1) > lum(cx, cy + 8),
         "highlight not spread to its neighbours by a ~2 px CoC"
     );
-    assert!(
-        (lum(cx + 5, cy) - lum(cx + 8, cy)).abs() < 0.01,
-        "the highlight leaks beyond the 3 px gather radius"
-    );
-    assert!(
-        lum(cx + 8, cy) > lum(0, 0),
-        "vignetting should darken the corner"
-    );
+    assert!((lum(cx + 5, cy) - lum(cx + 8, cy)).abs() < 0.01, "the highlight leaks beyond the 3 px gather radius");
+    assert!(lum(cx + 8, cy) > lum(0, 0), "vignetting should darken the corner");
     let meta = exr::meta::MetaData::read_from_file(dir.join("out.exr"), false).unwrap();
     for ch in &meta.headers[0].channels.list {
-        assert_eq!(
-            ch.sample_type,
-            exr::meta::attribute::SampleType::F32,
-            "{}",
-            ch.name
-        );
+        assert_eq!(ch.sample_type, exr::meta::attribute::SampleType::F32, "{}", ch.name);
     }
     let attrs = exr_text_attributes(&dir.join("out.exr"));
     assert_eq!(attribute(&attrs, "realcam/f_number"), "2");
@@ -688,10 +581,7 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     assert_eq!(attribute(&attrs, "realcam/sensor_mm"), "9.6x7.2");
     assert_eq!(attribute(&attrs, "realcam/shutter_s"), "0.02");
     assert_eq!(attribute(&attrs, "realcam/iso"), "100");
-    assert_eq!(
-        attribute(&attrs, "realcam/lens"),
-        "realcam standard 50 mm f/1.4"
-    );
+    assert_eq!(attribute(&attrs, "realcam/lens"), "realcam standard 50 mm f/1.4");
     assert_eq!(attribute(&attrs, "realcam/film"), "characteristic curve");
 
     // The PNG: signature and IHDR size.
@@ -701,16 +591,7 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
     assert_eq!((be(&png[16..20]), be(&png[20..24])), (w, h));
 
-    assert_listing(
-        &dir,
-        &[
-            "p_color.exr",
-            "p_depth.exr",
-            "out.exr",
-            "out.png",
-            "trace.json",
-        ],
-    );
+    assert_listing(&dir, &["p_color.exr", "p_depth.exr", "out.exr", "out.png", "trace.json"]);
 }
 
 #[test]
@@ -738,27 +619,16 @@ fn planner_skips_invisible_effects_and_output_equals_input() {
     let err = &run.stderr;
     for pass in ["coc", "bokeh_tiled", "vignette", "film"] {
         assert_contains(err, &format!("[skip] {pass}"));
-        assert!(
-            !err.contains(&format!("[run ] {pass}")),
-            "{pass} runs:\n{err}"
-        );
+        assert!(!err.contains(&format!("[run ] {pass}")), "{pass} runs:\n{err}");
     }
     assert_contains(err, "depth of field is invisible");
     assert_contains(err, "turned off (--no-vignetting)");
-    assert_contains(
-        err,
-        "linear film with exposure off: the sensor value is the scene value",
-    );
+    assert_contains(err, "linear film with exposure off: the sensor value is the scene value");
 
     let input = read_exr_rgba(&dir.join("p_color.exr")).unwrap();
     let out = read_exr_rgba(&dir.join("out.exr")).unwrap();
     assert_eq!((out.width, out.height, out.channels), (w, h, 4));
-    let worst = input
-        .data
-        .iter()
-        .zip(&out.data)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0f32, f32::max);
+    let worst = input.data.iter().zip(&out.data).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst <= 1e-6, "output differs from input by up to {worst}");
     assert_eq!(out.get(w / 2, h / 2, 0), 50.0);
     // The depth pass itself was not modified either.
@@ -777,10 +647,7 @@ fn report_mm(report: &str, label: &str) -> f64 {
         .find(|l| l.trim_start().starts_with(label))
         .unwrap_or_else(|| panic!("no {label:?} row in\n{report}"));
     let value = line.trim_start()[label.len()..].trim();
-    value
-        .strip_suffix(" mm")
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no mm value in {line:?}"))
+    value.strip_suffix(" mm").and_then(|v| v.trim().parse().ok()).unwrap_or_else(|| panic!("no mm value in {line:?}"))
 }
 
 #[test]
@@ -788,18 +655,7 @@ fn dof_matches_potmesil_chakravarty_table_1() {
     let dir = TestDir::new("dof");
     let run = realcam(
         &dir,
-        s(&[
-            "dof",
-            "--focal-length",
-            "55",
-            "--fstop",
-            "5.6",
-            "--focus",
-            "2",
-            "--coc",
-            "1/1000",
-            "--force",
-        ]),
+        s(&["dof", "--focal-length", "55", "--fstop", "5.6", "--focus", "2", "--coc", "1/1000", "--force"]),
     )
     .success();
     let out = &run.stdout;
@@ -825,9 +681,6 @@ fn devices_lists_at_least_one_device() {
     assert!(lines[0].starts_with("[0] "), "{}", run.describe());
     for (i, line) in lines.iter().enumerate() {
         let prefix = format!("[{i}] ");
-        assert!(
-            line.starts_with(&prefix) && line.len() > prefix.len(),
-            "{line:?}"
-        );
+        assert!(line.starts_with(&prefix) && line.len() > prefix.len(), "{line:?}");
     }
 }

@@ -120,14 +120,14 @@ fn in_focus_plane_passes_through_the_gather_unchanged() {
     let mut plan = planner::plan(&frame, &camera);
     assert!(!plan.runs("coc") && !runs_dof(&plan));
     plan.coc = Some(CocParams::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144));
-    plan.gather = Some(GatherParams::new(256, 144, 20.0, &camera.aperture));
+    plan.gather = Some(GatherParams::new(256, 144, 20.0, &camera.aperture, 64.0));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("bokeh_gather").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst <= 1e-3, "reference gather: largest change {worst}");
     // The tiled path classifies every tile as a copy.
     plan.gather = None;
-    plan.tiled = Some(TiledDofParams::new(256, 144, 20.0, &camera.aperture));
+    plan.tiled = Some(TiledDofParams::new(256, 144, 20.0, &camera.aperture, 64.0));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("dof_copy_tiles").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
@@ -289,4 +289,73 @@ fn bladed_highlight_is_a_polygon_with_the_right_orientation() {
         "vertical {vertical} px, horizontal {horizontal} px, ratio should be {expected_ratio:.3}"
     );
     let _ = ApertureShape::CIRCLE;
+}
+
+/// Mean excess over the plane in an annulus (fractions of the disk radius) around the centre.
+fn annulus_mean(rgba: &[f32], w: u32, h: u32, radius_px: f64, from: f64, to: f64) -> f64 {
+    let (cx, cy) = ((w / 2) as f64, (h / 2) as f64);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for y in 0..h {
+        for x in 0..w {
+            let r = ((x as f64 - cx).powi(2) + (y as f64 - cy).powi(2)).sqrt() / radius_px;
+            if r >= from && r < to {
+                sum += (at(rgba, w, x, y, 1) - PLANE) as f64;
+                n += 1;
+            }
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+#[test]
+fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
+    use realcam::optics::spherical;
+    let gpu = gpu();
+    // (scene, signed CoC sign), amount, f-number (f/2: exact small gather; f/1: sprite path).
+    for (scene, depth_m) in [("point_bg", 6.0), ("point_fg", 1.2)] {
+        for amount in [1.0, -1.0] {
+            for f_number in [2.0, 1.0] {
+                for mode in [BokehMode::Tiled, BokehMode::Reference] {
+                    let mut camera = dof_camera(50.0, f_number, 2.0, 0);
+                    camera.bokeh = mode;
+                    camera.aperture.spherical_aberration = amount;
+                    camera.max_coc_px = 24.0;
+                    let frame = testdata_frame(scene, &camera);
+                    let (rgba, _, _) = render(&gpu, &frame, &camera);
+                    let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
+                    let coc_px = (camera.lens.coc_mm(depth_m * 1000.0) / pitch_mm).clamp(-24.0, 24.0);
+                    let radius = coc_px.abs() / 2.0;
+                    let core = annulus_mean(&rgba, frame.width, frame.height, radius, 0.0, 0.35);
+                    let ring = annulus_mean(&rgba, frame.width, frame.height, radius, 0.6, 0.85);
+                    let measured = ring / core;
+                    // The model's ratio over the same annuli (area-weighted means).
+                    let s = spherical::strength(amount, coc_px, 24.0);
+                    let mean = |a: f64, b: f64| {
+                        let n = 400;
+                        let (mut num, mut den) = (0.0, 0.0);
+                        for i in 0..n {
+                            let r = a + (b - a) * (i as f64 + 0.5) / n as f64;
+                            num += spherical::intensity(s, r) * r;
+                            den += r;
+                        }
+                        num / den
+                    };
+                    let expected = mean(0.6, 0.85) / mean(0.0, 0.35);
+                    // Under-corrected: bright core behind (ratio < 1), bright ring in front (> 1);
+                    // over-corrected swaps them.
+                    let bright_ring_expected = (coc_px < 0.0) == (amount > 0.0);
+                    println!("{scene} SA {amount} f/{f_number} {mode:?}: ring/core {measured:.3}, model {expected:.3}");
+                    assert_eq!(
+                        measured > 1.0,
+                        bright_ring_expected,
+                        "{scene} SA {amount} f/{f_number} {mode:?}: ring/core {measured:.3}"
+                    );
+                    assert!(
+                        (measured / expected - 1.0).abs() < 0.05,
+                        "{scene} SA {amount} f/{f_number} {mode:?}: ring/core {measured:.3}, ray model {expected:.3}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -10,7 +10,8 @@ fn committed_testdata_matches_the_generator() {
     for (name, scene) in realcam::synth::testdata_scenes() {
         let (color, depth) = scene.render();
         let file_color = read_exr_rgba(&dir.join(format!("{name}_color.exr"))).unwrap_or_else(|e| panic!("{e}"));
-        let file_depth = read_exr_channel(&dir.join(format!("{name}_depth.exr")), "Z").unwrap_or_else(|e| panic!("{e}"));
+        let file_depth =
+            read_exr_channel(&dir.join(format!("{name}_depth.exr")), "Z").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(file_color.data, color.data, "{name}: color differs; run `realcam synth --out testdata`");
         assert_eq!(file_depth.data, depth.data, "{name}: depth differs; run `realcam synth --out testdata`");
     }

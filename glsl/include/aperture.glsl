@@ -8,7 +8,30 @@ struct Aperture {
     int blades;        // < 3: circular
     float rotation;    // radians; 0 puts a corner straight up (y up), as Blender/Cycles does
     float curvature;   // 0: straight blades, 1: circular
+    float sa_amount;   // spherical aberration: > 0 under-corrected, < 0 over-corrected, 0 uniform
+    float sa_max_coc_px; // the CoC at which the aberration reaches its full amount
 };
+
+// Spherical aberration from the ray model of src/optics/spherical.rs (Kyaw 2013 sec 6.3.1,
+// appendix 11.2-11.3): s grows with the CoC, flips sign in front of the focus plane.
+#define SA_MAX_STRENGTH 0.3
+float sa_strength(float coc_px, Aperture ap) {
+    float sa = clamp(ap.sa_amount * abs(coc_px) / max(ap.sa_max_coc_px, 1e-9), -1.0, 1.0);
+    return (coc_px < 0.0 ? -sa : sa) * SA_MAX_STRENGTH;
+}
+
+// Relative intensity at normalised film radius r of a disk with strength s (mean 1): the pupil
+// zone rho landing at r solves rho (1 + s rho^2) = (1 + s) r; I = (1+s)^2 / ((1+s rho^2)(1+3 s rho^2)).
+float sa_intensity(float r_norm, float s) {
+    if (s == 0.0) return 1.0;
+    float r = clamp(r_norm, 0.0, 1.0);
+    float rho = r;
+    for (int i = 0; i < 8; ++i) {
+        float f = rho + s * rho * rho * rho - (1.0 + s) * r;
+        rho = clamp(rho - f / (1.0 + 3.0 * s * rho * rho), 0.0, 1.0);
+    }
+    return (1.0 + s) * (1.0 + s) / ((1.0 + s * rho * rho) * (1.0 + 3.0 * s * rho * rho));
+}
 
 // Signed distance in pixels from offset o (x right, y DOWN, image convention) to the edge of the
 // aperture image of circumradius r: negative inside.

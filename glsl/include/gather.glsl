@@ -23,7 +23,8 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
             if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
             // The aperture's image is upright behind the focus plane and inverted in front.
             vec2 o = vec2(-dx, -dy) * (coc_q < 0.0 ? -1.0 : 1.0);
-            float w = aperture_coverage(o, reach, ap) / aperture_area(reach, ap);
+            float w = aperture_coverage(o, reach, ap) / aperture_area(reach, ap)
+                * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
             if (w <= 0.0) continue;
             vec4 c = finite_or_zero(imageLoad(color_in, q));
             float f = clamp((coc_p - coc_q) / layer_transition_px, 0.0, 1.0);

@@ -94,9 +94,9 @@ unsafe extern "system" fn debug_callback(
     } else {
         CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
     };
-    if severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-    ) {
+    if severity
+        .intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+    {
         if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
             log::error!("vulkan validation: {text}");
         } else {
@@ -142,9 +142,7 @@ impl Gpu {
         if options.validation && !has_layer(VALIDATION_LAYER) {
             return Err(GpuError::NoValidationLayer);
         }
-        let exts = entry
-            .enumerate_instance_extension_properties(None)
-            .vk("vkEnumerateInstanceExtensionProperties")?;
+        let exts = entry.enumerate_instance_extension_properties(None).vk("vkEnumerateInstanceExtensionProperties")?;
         let has_ext = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
         // Debug utils is always enabled when present: object names and pass labels show up in
         // RenderDoc, Nsight and Radeon GPU Profiler even without validation.
@@ -178,9 +176,8 @@ impl Gpu {
         let types = vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
             | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
             | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE;
-        let user_ptr = validation_log
-            .as_ref()
-            .map_or(std::ptr::null_mut(), |b| &**b as *const ValidationLog as *mut c_void);
+        let user_ptr =
+            validation_log.as_ref().map_or(std::ptr::null_mut(), |b| &**b as *const ValidationLog as *mut c_void);
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(severity)
             .message_type(types)
@@ -222,18 +219,16 @@ impl Gpu {
         let props = instance.get_physical_device_properties(physical_device);
         let core13 = props.api_version >= vk::API_VERSION_1_3;
         let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
+        let queue_infos =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut dev_exts = Vec::new();
         if !core13 {
             dev_exts.push(ash::khr::synchronization2::NAME.as_ptr());
         }
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
         let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
-        let mut device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&dev_exts);
+        let mut device_info =
+            vk::DeviceCreateInfo::default().queue_create_infos(&queue_infos).enabled_extension_names(&dev_exts);
         device_info = if core13 { device_info.push_next(&mut f13) } else { device_info.push_next(&mut sync2) };
         let device = match instance.create_device(physical_device, &device_info, None) {
             Ok(d) => d,
@@ -269,8 +264,8 @@ impl Gpu {
             .vk("vkCreatePipelineCache")?;
 
         let families = instance.get_physical_device_queue_family_properties(physical_device);
-        let timestamps = families[queue_family as usize].timestamp_valid_bits > 0
-            && props.limits.timestamp_period > 0.0;
+        let timestamps =
+            families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
 
         log::info!("GPU: {info}");
         let shared = Shared {
@@ -306,21 +301,18 @@ impl Gpu {
         if devices.is_empty() {
             return Err(GpuError::NoDevice);
         }
-        let infos: Vec<DeviceInfo> = devices
-            .iter()
-            .enumerate()
-            .map(|(index, &pd)| describe(instance, pd, index))
-            .collect();
+        let infos: Vec<DeviceInfo> =
+            devices.iter().enumerate().map(|(index, &pd)| describe(instance, pd, index)).collect();
         let chosen = match &options.device {
             Some(wanted) => {
                 let by_index = wanted.parse::<usize>().ok().filter(|&i| i < devices.len());
                 let lower = wanted.to_lowercase();
-                by_index
-                    .or_else(|| infos.iter().position(|i| i.name.to_lowercase().contains(&lower)))
-                    .ok_or_else(|| GpuError::DeviceNotFound {
+                by_index.or_else(|| infos.iter().position(|i| i.name.to_lowercase().contains(&lower))).ok_or_else(
+                    || GpuError::DeviceNotFound {
                         wanted: wanted.clone(),
                         found: infos.iter().map(|i| format!("[{}] {}", i.index, i.name)).collect::<Vec<_>>().join(", "),
-                    })?
+                    },
+                )?
             }
             None => (0..devices.len())
                 .max_by_key(|&i| {
@@ -374,11 +366,7 @@ impl Gpu {
 
     /// The texts of those messages.
     pub fn validation_messages(&self) -> Vec<String> {
-        self.shared
-            .validation
-            .as_ref()
-            .and_then(|v| v.messages.lock().ok().map(|m| m.clone()))
-            .unwrap_or_default()
+        self.shared.validation.as_ref().and_then(|v| v.messages.lock().ok().map(|m| m.clone())).unwrap_or_default()
     }
 
     pub fn validation_enabled(&self) -> bool {
@@ -455,10 +443,12 @@ fn cache_path(options: &GpuOptions, props: &vk::PhysicalDeviceProperties) -> Opt
             .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache").join("realcam")))?,
     };
     let uuid: String = props.pipeline_cache_uuid.iter().map(|b| format!("{b:02x}")).collect();
-    Some(dir.join(format!(
-        "pipelines-{:04x}-{:04x}-{}-{uuid}.bin",
-        props.vendor_id, props.device_id, props.driver_version
-    )))
+    Some(
+        dir.join(format!(
+            "pipelines-{:04x}-{:04x}-{}-{uuid}.bin",
+            props.vendor_id, props.device_id, props.driver_version
+        )),
+    )
 }
 
 impl Shared {

@@ -35,7 +35,12 @@ impl Profile {
         for p in &self.passes {
             out += &format!("  {:<24} {:>10.3} ms\n", p.name, p.gpu_ms);
         }
-        out += &format!("  {:<24} {:>10.3} ms  (submit to fence: {:.3} ms wall)\n", "total", self.total_gpu_ms(), self.submit_wall_ms);
+        out += &format!(
+            "  {:<24} {:>10.3} ms  (submit to fence: {:.3} ms wall)\n",
+            "total",
+            self.total_gpu_ms(),
+            self.submit_wall_ms
+        );
         out
     }
 

@@ -63,10 +63,7 @@ impl Recorder {
                 vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 64 },
             ];
             let descriptor_pool = device
-                .create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default().max_sets(128).pool_sizes(&sizes),
-                    None,
-                )
+                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(128).pool_sizes(&sizes), None)
                 .vk("vkCreateDescriptorPool")?;
             let query_pool = if gpu.shared.timestamps {
                 let pool = device
@@ -299,6 +296,45 @@ impl Recorder {
         Ok(())
     }
 
+    /// A device-local storage buffer holding `data` (lookup tables and the like). The copy is
+    /// made visible to compute-shader reads by the barrier recorded here.
+    pub fn upload_buffer(&mut self, name: &str, data: &[f32]) -> GpuResult<GpuBuffer> {
+        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let size = bytes.len().max(4) as u64;
+        let mut staging = self.gpu.create_buffer(
+            &format!("{name} upload"),
+            size,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write_bytes(&bytes);
+        let buffer = self.gpu.create_buffer(
+            name,
+            size,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        unsafe {
+            self.gpu.device().cmd_copy_buffer(
+                self.cb,
+                staging.buffer,
+                buffer.buffer,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
+            )
+        };
+        // Copy writes -> compute reads.
+        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+            .buffer(buffer.buffer)
+            .offset(0)
+            .size(vk::WHOLE_SIZE)]);
+        self.staging.push(staging);
+        Ok(buffer)
+    }
+
     /// Read an image back after the submission. The image must have been last written by a
     /// compute shader (every pass's output is).
     pub fn download_image(&mut self, image: &GpuImage, channels: u32) -> GpuResult<Download> {
@@ -399,7 +435,12 @@ impl Recorder {
                 let mut stamps = vec![0u64; (n * 2) as usize];
                 if n > 0 {
                     device
-                        .get_query_pool_results(pool, 0, &mut stamps, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                        .get_query_pool_results(
+                            pool,
+                            0,
+                            &mut stamps,
+                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                        )
                         .vk("vkGetQueryPoolResults")?;
                 }
                 let period_ms = self.gpu.shared.timestamp_period_ns * 1e-6;
@@ -414,10 +455,7 @@ impl Recorder {
                 }
             }
             let data = self.downloads.iter().map(|(buffer, _)| buffer.read_f32()).collect();
-            Ok((
-                Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms },
-                data,
-            ))
+            Ok((Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms }, data))
         }
     }
 }

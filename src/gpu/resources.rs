@@ -40,11 +40,7 @@ impl Gpu {
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(
-                vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::TRANSFER_DST,
-            )
+            .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         unsafe {
@@ -58,9 +54,7 @@ impl Gpu {
                     return Err(e);
                 }
             };
-            device
-                .bind_image_memory(image, allocation.memory(), allocation.offset())
-                .vk("vkBindImageMemory")?;
+            device.bind_image_memory(image, allocation.memory(), allocation.offset()).vk("vkBindImageMemory")?;
             let view_info = vk::ImageViewCreateInfo::default()
                 .image(image)
                 .view_type(vk::ImageViewType::TYPE_2D)
@@ -105,9 +99,7 @@ impl Gpu {
                     return Err(e);
                 }
             };
-            device
-                .bind_buffer_memory(buffer, allocation.memory(), allocation.offset())
-                .vk("vkBindBufferMemory")?;
+            device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset()).vk("vkBindBufferMemory")?;
             self.set_name(buffer, name);
             Ok(GpuBuffer {
                 shared: self.shared.clone(),

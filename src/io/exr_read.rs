@@ -74,16 +74,9 @@ impl ExrFile {
     fn open(path: &Path, what: &str) -> Result<ExrFile, IoError> {
         let read_err = |source: std::io::Error| {
             if source.kind() == std::io::ErrorKind::NotFound {
-                IoError::NotFound {
-                    what: what.into(),
-                    path: path.into(),
-                }
+                IoError::NotFound { what: what.into(), path: path.into() }
             } else {
-                IoError::Read {
-                    what: what.into(),
-                    path: path.into(),
-                    source,
-                }
+                IoError::Read { what: what.into(), path: path.into(), source }
             }
         };
         let mut magic = [0u8; 4];
@@ -92,18 +85,14 @@ impl ExrFile {
             return Err(read_err(std::io::Error::other("it is a directory")));
         }
         if file.read_exact(&mut magic).is_err() || magic != EXR_MAGIC {
-            return Err(IoError::NotExr {
-                what: what.into(),
-                path: path.into(),
-            });
+            return Err(IoError::NotExr { what: what.into(), path: path.into() });
         }
         drop(file);
-        let image =
-            exr::prelude::read_all_flat_layers_from_file(path).map_err(|source| IoError::Exr {
-                what: what.into(),
-                path: path.into(),
-                source,
-            })?;
+        let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|source| IoError::Exr {
+            what: what.into(),
+            path: path.into(),
+            source,
+        })?;
         let dw = image.attributes.display_window;
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();
@@ -123,10 +112,7 @@ impl ExrFile {
                         what: what.into(),
                         path: path.into(),
                         channel: name,
-                        reason: format!(
-                            "it is subsampled ({}x{} px per sample)",
-                            ch.sampling.0, ch.sampling.1
-                        ),
+                        reason: format!("it is subsampled ({}x{} px per sample)", ch.sampling.0, ch.sampling.1),
                     });
                 }
                 chans.push(Chan {
@@ -140,12 +126,7 @@ impl ExrFile {
         }
         Ok(ExrFile {
             path: path.into(),
-            display_window: (
-                dw.position.0,
-                dw.position.1,
-                dw.size.0 as u32,
-                dw.size.1 as u32,
-            ),
+            display_window: (dw.position.0, dw.position.1, dw.size.0 as u32, dw.size.1 as u32),
             chans,
         })
     }
@@ -169,13 +150,7 @@ impl ExrFile {
     /// The channel names, for error messages.
     fn found(&self) -> String {
         const MAX: usize = 64;
-        let mut s = self
-            .chans
-            .iter()
-            .take(MAX)
-            .map(|c| c.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ");
+        let mut s = self.chans.iter().take(MAX).map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
         if self.chans.is_empty() {
             s.push_str("(none)");
         } else if self.chans.len() > MAX {
@@ -244,14 +219,8 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
             let chans = f.require(WHAT, o, &names)?;
             return Ok(Found { chans, rule });
         }
-        let mut chans = f.require(
-            WHAT,
-            o,
-            &["R", "G", "B"]
-                .map(|c| format!("{o}.{c}"))
-                .each_ref()
-                .map(String::as_str),
-        )?;
+        let mut chans =
+            f.require(WHAT, o, &["R", "G", "B"].map(|c| format!("{o}.{c}")).each_ref().map(String::as_str))?;
         chans.extend(f.find(&format!("{o}.A")));
         return Ok(Found { chans, rule });
     }
@@ -265,39 +234,26 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
     }
     if let Some(mut chans) = f.find_all(&["R", "G", "B"]) {
         chans.extend(f.find("A"));
-        return Ok(Found {
-            chans,
-            rule: "R,G,B[,A]".into(),
-        });
+        return Ok(Found { chans, rule: "R,G,B[,A]".into() });
     }
     if let Some(mut chans) = f.find_all(&["rgba.red", "rgba.green", "rgba.blue"]) {
         chans.extend(f.find("rgba.alpha"));
-        return Ok(Found {
-            chans,
-            rule: "rgba.red/green/blue[/alpha]".into(),
-        });
+        return Ok(Found { chans, rule: "rgba.red/green/blue[/alpha]".into() });
     }
-    let mut prefixes: Vec<&str> = f
-        .chans
-        .iter()
-        .filter_map(|c| c.name.strip_suffix(".R"))
-        .filter(|p| rgba_with_prefix(f, p).is_some())
-        .collect();
+    let mut prefixes: Vec<&str> =
+        f.chans.iter().filter_map(|c| c.name.strip_suffix(".R")).filter(|p| rgba_with_prefix(f, p).is_some()).collect();
     prefixes.dedup();
     match prefixes[..] {
-        [p] => Ok(Found {
-            chans: rgba_with_prefix(f, p).unwrap_or_default(),
-            rule: format!("single layer {p}.R,G,B[,A]"),
-        }),
-        [] => Err(f.missing(
-            WHAT,
-            "<layer>.Combined.R/G/B[/A], R,G,B[,A], rgba.red/green/blue[/alpha], <layer>.R/G/B[/A]",
-        )),
-        _ => Err(IoError::AmbiguousChannels {
-            what: WHAT.into(),
-            path: f.path.clone(),
-            candidates: prefixes.join(", "),
-        }),
+        [p] => {
+            Ok(Found { chans: rgba_with_prefix(f, p).unwrap_or_default(), rule: format!("single layer {p}.R,G,B[,A]") })
+        }
+        [] => {
+            Err(f
+                .missing(WHAT, "<layer>.Combined.R/G/B[/A], R,G,B[,A], rgba.red/green/blue[/alpha], <layer>.R/G/B[/A]"))
+        }
+        _ => {
+            Err(IoError::AmbiguousChannels { what: WHAT.into(), path: f.path.clone(), candidates: prefixes.join(", ") })
+        }
     }
 }
 
@@ -307,12 +263,7 @@ fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
         let rule = format!("override \"{o}\"");
         return Ok(Found { chans, rule });
     }
-    let found = |c: &'a Chan, rule: &str| {
-        Ok(Found {
-            chans: vec![c],
-            rule: rule.into(),
-        })
-    };
+    let found = |c: &'a Chan, rule: &str| Ok(Found { chans: vec![c], rule: rule.into() });
     if let Some(c) = f.chans.iter().find(|c| c.name.ends_with(".Depth.Z")) {
         return found(c, "Blender <layer>.Depth.Z");
     }
@@ -324,10 +275,7 @@ fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
     if let [c] = &f.chans[..] {
         return found(c, "the only channel of a one-channel file");
     }
-    Err(f.missing(
-        "depth",
-        "<layer>.Depth.Z, Z, depth.Z, depth.R, depth, or the only channel of a one-channel file",
-    ))
+    Err(f.missing("depth", "<layer>.Depth.Z, Z, depth.Z, depth.R, depth, or the only channel of a one-channel file"))
 }
 
 /// Velocity channels: (dx, dy) = (sx * x, sy * y) in px per frame, x right, y down.
@@ -339,12 +287,12 @@ struct Velocity<'a> {
     rule: String,
 }
 
-const BLENDER_ZW: &str =
-    "Blender Vector Z,W = p[f]-p[f+1], x right/y up: dx = -Z, dy = +W px/frame";
+const BLENDER_ZW: &str = "Blender Vector Z,W = p[f]-p[f+1], x right/y up: dx = -Z, dy = +W px/frame";
 const BLENDER_XY: &str =
     "Blender Vector X,Y = p[f-1]-p[f], x right/y up, constant velocity assumed: dx = -X, dy = +Y px/frame";
 const NEXT_Y_UP: &str = "px toward the next frame, x right/y up: dx = +x, dy = -y px/frame";
-const VELOCITY_LOOKED_FOR: &str = "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v, motion.u/v, motion.x/y, velocity.X/Y, vel.X/Y";
+const VELOCITY_LOOKED_FOR: &str =
+    "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v, motion.u/v, motion.x/y, velocity.X/Y, vel.X/Y";
 
 fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocity<'a>>, IoError> {
     let vel = |x, y, sx, sy, rule: String| Ok(Some(Velocity { x, y, sx, sy, rule }));
@@ -361,29 +309,11 @@ fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocit
             }
         };
         return if c.len() == 4 {
-            vel(
-                c[2],
-                c[3],
-                -1.0,
-                1.0,
-                format!("override \"{o}\" as {BLENDER_ZW}"),
-            )
+            vel(c[2], c[3], -1.0, 1.0, format!("override \"{o}\" as {BLENDER_ZW}"))
         } else if names[0].contains(".Vector.") {
-            vel(
-                c[0],
-                c[1],
-                -1.0,
-                1.0,
-                format!("override \"{o}\" as {BLENDER_XY}"),
-            )
+            vel(c[0], c[1], -1.0, 1.0, format!("override \"{o}\" as {BLENDER_XY}"))
         } else {
-            vel(
-                c[0],
-                c[1],
-                1.0,
-                -1.0,
-                format!("override \"{o}\" as {NEXT_Y_UP}"),
-            )
+            vel(c[0], c[1], 1.0, -1.0, format!("override \"{o}\" as {NEXT_Y_UP}"))
         };
     }
     for c in &f.chans {
@@ -416,14 +346,7 @@ fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocit
 }
 
 /// Errors unless `b` has the size of `a`.
-fn same_size(
-    a: &str,
-    fa: &ExrFile,
-    ca: &Chan,
-    b: &str,
-    fb: &ExrFile,
-    cb: &Chan,
-) -> Result<(), IoError> {
+fn same_size(a: &str, fa: &ExrFile, ca: &Chan, b: &str, fb: &ExrFile, cb: &Chan) -> Result<(), IoError> {
     if ca.size == cb.size {
         return Ok(());
     }
@@ -453,11 +376,7 @@ fn interleave(chans: &[&Chan], channels: u32, fill: f32) -> Image {
 }
 
 fn names(chans: &[&Chan]) -> String {
-    chans
-        .iter()
-        .map(|c| c.name.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
+    chans.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ")
 }
 
 fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
@@ -493,18 +412,11 @@ fn open_other(path: &Option<PathBuf>, same: &Path, what: &str) -> Result<Option<
 /// Loads color, depth and (when present or required) velocity; see the module docs for
 /// the channel names and conventions.
 pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
-    let unit_m = if src.depth_unit_m == 0.0 {
-        1.0
-    } else {
-        src.depth_unit_m
-    };
+    let unit_m = if src.depth_unit_m == 0.0 { 1.0 } else { src.depth_unit_m };
     if !(unit_m.is_finite() && unit_m > 0.0) {
         return Err(IoError::InvalidArgument {
             what: "depth_unit_m".into(),
-            reason: format!(
-                "{} m per depth unit; it must be a positive, finite number of metres",
-                src.depth_unit_m
-            ),
+            reason: format!("{} m per depth unit; it must be a positive, finite number of metres", src.depth_unit_m),
         });
     }
     let cf = ExrFile::open(&src.color_path, "color")?;
@@ -523,10 +435,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         color_nan_count += 1;
     }
     if color_nan_count > 0 {
-        log::warn!(
-            "color: {color_nan_count} NaN/Inf value(s) in \"{}\" replaced by 0",
-            cf.path.display()
-        );
+        log::warn!("color: {color_nan_count} NaN/Inf value(s) in \"{}\" replaced by 0", cf.path.display());
     }
     report.push(format!(
         "color: \"{}\" channels {} ({}), {}{}{}",
@@ -534,16 +443,8 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         names(&cfound.chans),
         cfound.rule,
         c0.type_name(),
-        if cfound.chans.len() == 3 {
-            ", alpha = 1 (none in file)"
-        } else {
-            ""
-        },
-        if color_nan_count > 0 {
-            format!(", {color_nan_count} NaN/Inf value(s) replaced by 0")
-        } else {
-            String::new()
-        }
+        if cfound.chans.len() == 3 { ", alpha = 1 (none in file)" } else { "" },
+        if color_nan_count > 0 { format!(", {color_nan_count} NaN/Inf value(s) replaced by 0") } else { String::new() }
     ));
 
     // Depth.
@@ -598,10 +499,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
                 };
             }
             if nonfinite > 0 {
-                log::warn!(
-                    "velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0",
-                    vf.path.display()
-                );
+                log::warn!("velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0", vf.path.display());
             }
             report.push(format!(
                 "velocity: \"{}\" channels {} ({}), {}{}",
@@ -609,22 +507,13 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
                 names(&[v.x, v.y]),
                 v.rule,
                 v.x.type_name(),
-                if nonfinite > 0 {
-                    format!(", {nonfinite} NaN/Inf value(s) replaced by 0")
-                } else {
-                    String::new()
-                }
+                if nonfinite > 0 { format!(", {nonfinite} NaN/Inf value(s) replaced by 0") } else { String::new() }
             ));
             Some(im)
         }
-        None if explicit || src.require_velocity => {
-            return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR))
-        }
+        None if explicit || src.require_velocity => return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR)),
         None => {
-            report.push(format!(
-                "velocity: none (no velocity channels in \"{}\")",
-                vf.path.display()
-            ));
+            report.push(format!("velocity: none (no velocity channels in \"{}\")", vf.path.display()));
             None
         }
     };
@@ -664,34 +553,18 @@ mod tests {
 
     /// Writes `W`x`H` channels, each filled with a constant.
     fn write(path: &Path, chans: &[(&str, f32)], float32: bool) {
-        let planes: Vec<Vec<f32>> = chans
-            .iter()
-            .map(|&(_, v)| vec![v; (W * H) as usize])
-            .collect();
-        let list: Vec<(&str, &[f32])> = chans
-            .iter()
-            .zip(&planes)
-            .map(|(c, p)| (c.0, p.as_slice()))
-            .collect();
-        let opts = ExrWriteOptions {
-            float32,
-            ..Default::default()
-        };
+        let planes: Vec<Vec<f32>> = chans.iter().map(|&(_, v)| vec![v; (W * H) as usize]).collect();
+        let list: Vec<(&str, &[f32])> = chans.iter().zip(&planes).map(|(c, p)| (c.0, p.as_slice())).collect();
+        let opts = ExrWriteOptions { float32, ..Default::default() };
         write_exr_channels(path, W, H, &list, &opts).unwrap();
     }
 
     fn sources(color: &Path) -> PassSources {
-        PassSources {
-            color_path: color.into(),
-            ..Default::default()
-        }
+        PassSources { color_path: color.into(), ..Default::default() }
     }
 
     fn assert_const(im: &Image, expected: &[f32]) {
-        assert_eq!(
-            (im.width, im.height, im.channels as usize),
-            (W, H, expected.len())
-        );
+        assert_eq!((im.width, im.height, im.channels as usize), (W, H, expected.len()));
         for px in im.data.chunks_exact(expected.len()) {
             assert_eq!(px, expected);
         }
@@ -716,29 +589,18 @@ mod tests {
         // Two-channel vectors (previous frame only), constant velocity assumed.
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(p.velocity_px.as_ref().unwrap(), &[vx, -vy]);
-        assert!(
-            p.channel_report
-                .contains("ViewLayer.Vector.X, ViewLayer.Vector.Y"),
-            "{}",
-            p.channel_report
-        );
+        assert!(p.channel_report.contains("ViewLayer.Vector.X, ViewLayer.Vector.Y"), "{}", p.channel_report);
         chans.extend([("ViewLayer.Vector.Z", -vx), ("ViewLayer.Vector.W", -vy)]);
         write(&path, &chans, true);
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(&p.color, &[0.5, 0.25, 2.0, 1.0]);
         assert_const(&p.depth_m, &[1.0e10]);
         assert_const(p.velocity_px.as_ref().unwrap(), &[vx, -vy]);
-        assert_eq!(
-            (p.display_window, p.data_origin, p.color_nan_count),
-            ((0, 0, W, H), (0, 0), 0)
-        );
+        assert_eq!((p.display_window, p.data_origin, p.color_nan_count), ((0, 0, W, H), (0, 0), 0));
         let r = &p.channel_report;
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
-        assert!(
-            r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"),
-            "{r}"
-        );
+        assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"), "{r}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -746,29 +608,17 @@ mod tests {
     fn nuke_naming_and_nan_color() {
         let dir = test_dir("read-nuke");
         let path = dir.join("nuke.exr");
-        let chans = [
-            ("R", f32::NAN),
-            ("G", 0.5),
-            ("B", f32::INFINITY),
-            ("A", 0.5),
-            ("Z", 0.0),
-        ];
+        let chans = [("R", f32::NAN), ("G", 0.5), ("B", f32::INFINITY), ("A", 0.5), ("Z", 0.0)];
         write(&path, &chans, true);
         let no_velocity = load_passes(&sources(&path)).unwrap();
         assert!(no_velocity.velocity_px.is_none());
         assert_eq!(no_velocity.color_nan_count, 2 * (W * H) as u64);
         assert_const(&no_velocity.color, &[0.0, 0.5, 0.0, 0.5]);
         assert_const(&no_velocity.depth_m, &[0.0]);
-        write(
-            &path,
-            &[&chans[..], &[("forward.u", 3.0), ("forward.v", 2.0)]].concat(),
-            true,
-        );
+        write(&path, &[&chans[..], &[("forward.u", 3.0), ("forward.v", 2.0)]].concat(), true);
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(p.velocity_px.as_ref().unwrap(), &[3.0, -2.0]);
-        assert!(p
-            .channel_report
-            .contains("channels forward.u, forward.v (px toward the next frame"));
+        assert!(p.channel_report.contains("channels forward.u, forward.v (px toward the next frame"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -776,17 +626,9 @@ mod tests {
     fn separate_files_units_and_half() {
         let dir = test_dir("read-separate");
         let (c, d, v) = (dir.join("c.exr"), dir.join("d.exr"), dir.join("v.exr"));
-        write(
-            &c,
-            &[("beauty.R", 1.0), ("beauty.G", 2.0), ("beauty.B", 3.0)],
-            false,
-        );
+        write(&c, &[("beauty.R", 1.0), ("beauty.G", 2.0), ("beauty.B", 3.0)], false);
         write(&d, &[("Y", 250.0)], false);
-        write(
-            &v,
-            &[("X", -1.0), ("Y", -1.0), ("Z", -4.0), ("W", 5.0)],
-            true,
-        );
+        write(&v, &[("X", -1.0), ("Y", -1.0), ("Z", -4.0), ("W", 5.0)], true);
         let src = PassSources {
             depth_path: Some(d.clone()),
             velocity_path: Some(v.clone()),
@@ -797,22 +639,9 @@ mod tests {
         assert_const(&p.color, &[1.0, 2.0, 3.0, 1.0]);
         assert_const(&p.depth_m, &[2.5]);
         assert_const(p.velocity_px.as_ref().unwrap(), &[4.0, 5.0]);
-        assert!(p
-            .channel_report
-            .contains("the only channel of a one-channel file"));
+        assert!(p.channel_report.contains("the only channel of a one-channel file"));
         // Overrides.
-        write(
-            &c,
-            &[
-                ("a", 1.0),
-                ("b", 2.0),
-                ("c", 3.0),
-                ("d", 4.0),
-                ("mv.x", 1.0),
-                ("mv.y", 2.0),
-            ],
-            false,
-        );
+        write(&c, &[("a", 1.0), ("b", 2.0), ("c", 3.0), ("d", 4.0), ("mv.x", 1.0), ("mv.y", 2.0)], false);
         let src = PassSources {
             color_channels: Some("c, b, a".into()),
             depth_channel: Some("d".into()),
@@ -832,40 +661,19 @@ mod tests {
         let dir = test_dir("read-multipart");
         let path = dir.join("parts.exr");
         let part = |name: &str, chans: &[&str], v: f32| {
-            let list = chans
-                .iter()
-                .map(|c| AnyChannel::new(*c, FlatSamples::F32(vec![v; 12])))
-                .collect();
+            let list = chans.iter().map(|c| AnyChannel::new(*c, FlatSamples::F32(vec![v; 12]))).collect();
             let mut attrs = LayerAttributes::named(name);
             attrs.layer_position = Vec2(10, -2);
-            Layer::new(
-                (4, 3),
-                attrs,
-                Encoding::UNCOMPRESSED,
-                AnyChannels::sort(list),
-            )
+            Layer::new((4, 3), attrs, Encoding::UNCOMPRESSED, AnyChannels::sort(list))
         };
-        let layers = vec![
-            part("ViewLayer.Combined", &["R", "G", "B", "A"], 0.5),
-            part("ViewLayer.Depth", &["Z"], 7.0),
-        ];
+        let layers = vec![part("ViewLayer.Combined", &["R", "G", "B", "A"], 0.5), part("ViewLayer.Depth", &["Z"], 7.0)];
         let bounds = IntegerBounds::new(Vec2(0, 0), Vec2(20, 10));
-        Image::from_layers(ImageAttributes::new(bounds), layers)
-            .write()
-            .to_file(&path)
-            .unwrap();
+        Image::from_layers(ImageAttributes::new(bounds), layers).write().to_file(&path).unwrap();
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(&p.color, &[0.5; 4]);
         assert_const(&p.depth_m, &[7.0]);
-        assert_eq!(
-            (p.display_window, p.data_origin),
-            ((0, 0, 20, 10), (10, -2))
-        );
-        assert!(
-            p.channel_report.contains("ViewLayer.Depth.Z"),
-            "{}",
-            p.channel_report
-        );
+        assert_eq!((p.display_window, p.data_origin), ((0, 0, 20, 10), (10, -2)));
+        assert!(p.channel_report.contains("ViewLayer.Depth.Z"), "{}", p.channel_report);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -876,45 +684,27 @@ mod tests {
         let err = |src: &PassSources| load_passes(src).unwrap_err().to_string();
 
         let missing = dir.join("nope.exr");
-        assert_eq!(
-            err(&sources(&missing)),
-            format!("color: file \"{}\" does not exist", missing.display())
-        );
+        assert_eq!(err(&sources(&missing)), format!("color: file \"{}\" does not exist", missing.display()));
         std::fs::write(&d, "not an image").unwrap();
         let msg = err(&sources(&d));
-        assert!(
-            msg.contains(&format!("\"{}\" is not an OpenEXR file", d.display())),
-            "{msg}"
-        );
+        assert!(msg.contains(&format!("\"{}\" is not an OpenEXR file", d.display())), "{msg}");
 
         write(&c, &[("R", 1.0), ("G", 1.0), ("B", 1.0)], false);
         let msg = err(&sources(&c));
         assert!(
-            msg.starts_with(&format!(
-                "depth: no depth channel in \"{}\" (looked for <layer>.Depth.Z, Z,",
-                c.display()
-            )),
+            msg.starts_with(&format!("depth: no depth channel in \"{}\" (looked for <layer>.Depth.Z, Z,", c.display())),
             "{msg}"
         );
         assert!(msg.ends_with("; channels found: B, G, R"), "{msg}");
 
-        let src = PassSources {
-            color_channels: Some("beauty".into()),
-            ..sources(&c)
-        };
+        let src = PassSources { color_channels: Some("beauty".into()), ..sources(&c) };
         let msg = err(&src);
-        assert!(
-            msg.contains("channel \"beauty.R\" (from the override \"beauty\") not found"),
-            "{msg}"
-        );
+        assert!(msg.contains("channel \"beauty.R\" (from the override \"beauty\") not found"), "{msg}");
         assert!(msg.ends_with("channels found: B, G, R"), "{msg}");
 
         // Size mismatch: color 4x3 px, depth 2x2 px.
         write_exr_channels(&d, 2, 2, &[("Z", &[1.0; 4])], &ExrWriteOptions::default()).unwrap();
-        let src = PassSources {
-            depth_path: Some(d.clone()),
-            ..sources(&c)
-        };
+        let src = PassSources { depth_path: Some(d.clone()), ..sources(&c) };
         let msg = err(&src);
         assert!(
             msg.contains(&format!(
@@ -931,40 +721,18 @@ mod tests {
         z[2 * 4 + 3] = -1.0; // (x=3, y=2)
         write_exr_channels(&d, 4, 3, &[("Z", &z)], &ExrWriteOptions::default()).unwrap();
         let msg = err(&src);
-        assert!(
-            msg.contains(&format!(
-                "channel Z in \"{}\" has 2 invalid pixel(s)",
-                d.display()
-            )),
-            "{msg}"
-        );
-        assert!(
-            msg.contains("the first is pixel (x=2, y=1) of the data window with NaN m"),
-            "{msg}"
-        );
+        assert!(msg.contains(&format!("channel Z in \"{}\" has 2 invalid pixel(s)", d.display())), "{msg}");
+        assert!(msg.contains("the first is pixel (x=2, y=1) of the data window with NaN m"), "{msg}");
         z[4 + 2] = 1.0;
         write_exr_channels(&d, 4, 3, &[("Z", &z)], &ExrWriteOptions::default()).unwrap();
         assert!(err(&src).contains("(x=3, y=2) of the data window with -1 m"));
 
         // Required velocity that is absent.
-        let src = PassSources {
-            require_velocity: true,
-            depth_channel: Some("R".into()),
-            ..sources(&c)
-        };
+        let src = PassSources { require_velocity: true, depth_channel: Some("R".into()), ..sources(&c) };
         let msg = err(&src);
-        assert!(
-            msg.starts_with(&format!(
-                "velocity: no velocity channel in \"{}\"",
-                c.display()
-            )),
-            "{msg}"
-        );
+        assert!(msg.starts_with(&format!("velocity: no velocity channel in \"{}\"", c.display())), "{msg}");
         assert!(msg.ends_with("channels found: B, G, R"), "{msg}");
-        let src = PassSources {
-            depth_unit_m: -1.0,
-            ..sources(&c)
-        };
+        let src = PassSources { depth_unit_m: -1.0, ..sources(&c) };
         assert!(err(&src).contains("depth_unit_m"));
         let _ = std::fs::remove_dir_all(&dir);
     }
@@ -977,17 +745,10 @@ mod tests {
     fn blender_scene_a_if_present() {
         let dir = Path::new("/work/shared/data/sceneA");
         if !dir.join("passes.exr").exists() {
-            eprintln!(
-                "note: {} not present; skipping the Blender scene A check",
-                dir.display()
-            );
+            eprintln!("note: {} not present; skipping the Blender scene A check", dir.display());
             return;
         }
-        let multi = load_passes(&PassSources {
-            require_velocity: true,
-            ..sources(&dir.join("passes.exr"))
-        })
-        .unwrap();
+        let multi = load_passes(&PassSources { require_velocity: true, ..sources(&dir.join("passes.exr")) }).unwrap();
         let separate = load_passes(&PassSources {
             depth_path: Some(dir.join("depth.exr")),
             velocity_path: Some(dir.join("velocity.exr")),
@@ -999,17 +760,10 @@ mod tests {
         assert_eq!(multi.depth_m, separate.depth_m);
         assert_eq!(multi.velocity_px, separate.velocity_px);
         let v = multi.velocity_px.unwrap();
-        let (dx, dy, z) = (
-            v.get(360, 604, 0),
-            v.get(360, 604, 1),
-            multi.depth_m.get(360, 604, 0),
-        );
+        let (dx, dy, z) = (v.get(360, 604, 0), v.get(360, 604, 1), multi.depth_m.get(360, 604, 0));
         eprintln!("Mover at (360, 604): velocity ({dx}, {dy}) px/frame, depth {z} m");
         let scale = 3.5 / z;
-        assert!(
-            (dx - 76.19 * scale).abs() < 0.5 && (dy + 10.16 * scale).abs() < 0.5,
-            "({dx}, {dy})"
-        );
+        assert!((dx - 76.19 * scale).abs() < 0.5 && (dy + 10.16 * scale).abs() < 0.5, "({dx}, {dy})");
         assert_eq!(v.get(5, 5, 0), 0.0);
         assert_eq!(multi.depth_m.get(5, 5, 0), 1.0e10);
     }

@@ -27,11 +27,7 @@ pub struct ExrWriteOptions {
 /// Writes a 4-channel image as channels R, G, B, A.
 pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Result<(), IoError> {
     if image.channels != 4 {
-        return Err(IoError::WrongChannelCount {
-            path: path.into(),
-            expected: "4 (RGBA)".into(),
-            got: image.channels,
-        });
+        return Err(IoError::WrongChannelCount { path: path.into(), expected: "4 (RGBA)".into(), got: image.channels });
     }
     if image.data.len() != image.width as usize * image.height as usize * 4 {
         return Err(IoError::DataLength {
@@ -41,24 +37,18 @@ pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Res
             got: image.data.len(),
         });
     }
-    let planes: Vec<Vec<f32>> = (0..4)
-        .map(|c| image.data.iter().skip(c).step_by(4).copied().collect())
-        .collect();
-    let channels: Vec<(&str, &[f32])> = ["R", "G", "B", "A"]
-        .into_iter()
-        .zip(planes.iter().map(Vec::as_slice))
-        .collect();
+    let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
+    let channels: Vec<(&str, &[f32])> =
+        ["R", "G", "B", "A"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
     write_exr_channels(path, image.width, image.height, &channels, opts)
 }
 
 /// An EXR text; names (`allow_empty` false) must not be empty.
 fn text(path: &Path, what: &str, s: &str, allow_empty: bool) -> Result<Text, IoError> {
-    Text::new_or_none(s)
-        .filter(|_| allow_empty || !s.is_empty())
-        .ok_or_else(|| IoError::InvalidImage {
-            path: path.into(),
-            reason: format!("{what} \"{s}\" is empty or has characters outside Latin-1"),
-        })
+    Text::new_or_none(s).filter(|_| allow_empty || !s.is_empty()).ok_or_else(|| IoError::InvalidImage {
+        path: path.into(),
+        reason: format!("{what} \"{s}\" is empty or has characters outside Latin-1"),
+    })
 }
 
 /// Writes planar channels, each `width * height` values, row-major, top row first.
@@ -69,15 +59,9 @@ pub fn write_exr_channels(
     channels: &[(&str, &[f32])],
     opts: &ExrWriteOptions,
 ) -> Result<(), IoError> {
-    let invalid = |reason: String| IoError::InvalidImage {
-        path: path.into(),
-        reason,
-    };
+    let invalid = |reason: String| IoError::InvalidImage { path: path.into(), reason };
     if width == 0 || height == 0 || channels.is_empty() {
-        return Err(invalid(format!(
-            "nothing to write ({width}x{height} px, {} channel(s))",
-            channels.len()
-        )));
+        return Err(invalid(format!("nothing to write ({width}x{height} px, {} channel(s))", channels.len())));
     }
     let n = width as usize * height as usize;
     let mut list = exr::prelude::SmallVec::new();
@@ -107,10 +91,7 @@ pub fn write_exr_channels(
             };
             FlatSamples::F16(data.iter().map(to_half).collect())
         };
-        list.push(AnyChannel::new(
-            text(path, "channel name", name, false)?,
-            samples,
-        ));
+        list.push(AnyChannel::new(text(path, "channel name", name, false)?, samples));
     }
     if clamped > 0 {
         log::warn!(
@@ -126,35 +107,20 @@ pub fn write_exr_channels(
     };
     for (k, v) in &opts.attributes {
         let value = AttributeValue::Text(text(path, "attribute value", v, true)?);
-        attrs
-            .other
-            .insert(text(path, "attribute name", k, false)?, value);
+        attrs.other.insert(text(path, "attribute name", k, false)?, value);
     }
     let size = Vec2(width as usize, height as usize);
     let display = match opts.display_window {
         Some((_, _, 0, _)) | Some((_, _, _, 0)) => {
-            return Err(invalid(
-                "the display window is empty (0 px wide or high)".into(),
-            ))
+            return Err(invalid("the display window is empty (0 px wide or high)".into()))
         }
         Some((x, y, w, h)) => IntegerBounds::new(Vec2(x, y), Vec2(w as usize, h as usize)),
         None => IntegerBounds::new(attrs.layer_position, size),
     };
-    let layer = Layer::new(
-        size,
-        attrs,
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
+    let layer = Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
     let image = exr::image::Image::new(ImageAttributes::new(display), layer);
     let mut bytes = std::io::Cursor::new(Vec::new());
-    image
-        .write()
-        .to_buffered(&mut bytes)
-        .map_err(|source| IoError::ExrEncode {
-            path: path.into(),
-            source,
-        })?;
+    image.write().to_buffered(&mut bytes).map_err(|source| IoError::ExrEncode { path: path.into(), source })?;
     write_file_atomically(path, bytes.get_ref())
 }
 
@@ -190,24 +156,15 @@ mod tests {
             let expected: Vec<f32> = if float32 {
                 im.data.clone()
             } else {
-                im.data
-                    .iter()
-                    .map(|&v| half::f16::from_f32(v.min(HALF_MAX)).to_f32())
-                    .collect()
+                im.data.iter().map(|&v| half::f16::from_f32(v.min(HALF_MAX)).to_f32()).collect()
             };
             assert_eq!(back.data, expected);
             assert_eq!(back.data[5], if float32 { 1.0e5 } else { HALF_MAX });
             let file = read_all_flat_layers_from_file(&path).unwrap();
             let layer = &file.layer_data[0];
-            assert_eq!(
-                file.attributes.display_window,
-                IntegerBounds::new(Vec2(0, 0), Vec2(20, 10))
-            );
+            assert_eq!(file.attributes.display_window, IntegerBounds::new(Vec2(0, 0), Vec2(20, 10)));
             assert_eq!(layer.attributes.layer_position, Vec2(7, -3));
-            let value = layer
-                .attributes
-                .other
-                .get(&Text::from("realcam/focal_length_mm"));
+            let value = layer.attributes.other.get(&Text::from("realcam/focal_length_mm"));
             assert_eq!(value, Some(&AttributeValue::Text(Text::from("50"))));
             let is_f32 = matches!(layer.channel_data.list[0].sample_data, FlatSamples::F32(_));
             assert_eq!(is_f32, float32);
@@ -224,40 +181,18 @@ mod tests {
         let opts = ExrWriteOptions::default();
 
         let err = write_exr_rgba(&target, &Image::new(4, 2, 3), &opts).unwrap_err();
-        assert!(
-            err.to_string()
-                .contains("has 3 channel(s) per pixel, expected 4 (RGBA)"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("has 3 channel(s) per pixel, expected 4 (RGBA)"), "{err}");
         let err = write_exr_channels(&target, 4, 2, &[("Z", &[0.0; 7])], &opts).unwrap_err();
-        assert!(
-            err.to_string()
-                .contains("channel Z holds 7 values, expected 8"),
-            "{err}"
-        );
-        let reserved = ExrWriteOptions {
-            attributes: vec![("channels".into(), "x".into())],
-            ..Default::default()
-        };
+        assert!(err.to_string().contains("channel Z holds 7 values, expected 8"), "{err}");
+        let reserved = ExrWriteOptions { attributes: vec![("channels".into(), "x".into())], ..Default::default() };
         let err = write_exr_rgba(&target, &ramp(4, 2), &reserved).unwrap_err();
-        assert!(
-            err.to_string().starts_with("cannot encode OpenEXR file"),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("cannot encode OpenEXR file"), "{err}");
         assert_eq!(std::fs::read(&target).unwrap(), before);
-        assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            1,
-            "temporary files left behind"
-        );
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "temporary files left behind");
 
         let nowhere = dir.join("no_such_dir").join("out.exr");
         let err = write_exr_rgba(&nowhere, &ramp(4, 2), &opts).unwrap_err();
-        assert!(
-            err.to_string()
-                .contains(&format!("cannot write \"{}\"", nowhere.display())),
-            "{err}"
-        );
+        assert!(err.to_string().contains(&format!("cannot write \"{}\"", nowhere.display())), "{err}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

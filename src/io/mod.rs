@@ -29,104 +29,40 @@ pub enum IoError {
     #[error("{what}: file \"{}\" does not exist", .path.display())]
     NotFound { what: String, path: PathBuf },
     #[error("{what}: cannot read \"{}\": {source}", .path.display())]
-    Read {
-        what: String,
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Read { what: String, path: PathBuf, source: std::io::Error },
     #[error("{what}: \"{}\" is not an OpenEXR file (it does not start with the EXR magic number)", .path.display())]
     NotExr { what: String, path: PathBuf },
     #[error("{what}: cannot decode OpenEXR file \"{}\": {source}", .path.display())]
-    Exr {
-        what: String,
-        path: PathBuf,
-        source: exr::error::Error,
-    },
+    Exr { what: String, path: PathBuf, source: exr::error::Error },
     #[error("{what}: channel {channel} in \"{}\" is not supported: {reason}", .path.display())]
-    Unsupported {
-        what: String,
-        path: PathBuf,
-        channel: String,
-        reason: String,
-    },
+    Unsupported { what: String, path: PathBuf, channel: String, reason: String },
     #[error("{what}: no {what} channel in \"{}\" (looked for {looked_for}); channels found: {found}", .path.display())]
-    MissingChannel {
-        what: String,
-        path: PathBuf,
-        looked_for: String,
-        found: String,
-    },
+    MissingChannel { what: String, path: PathBuf, looked_for: String, found: String },
     #[error("{what}: several layers in \"{}\" could be the {what} ({candidates}); choose one with an explicit channel override", .path.display())]
-    AmbiguousChannels {
-        what: String,
-        path: PathBuf,
-        candidates: String,
-    },
+    AmbiguousChannels { what: String, path: PathBuf, candidates: String },
     #[error("{what}: channel \"{missing}\" (from the override \"{requested}\") not found in \"{}\"; channels found: {found}", .path.display())]
-    OverrideNotFound {
-        what: String,
-        path: PathBuf,
-        requested: String,
-        missing: String,
-        found: String,
-    },
+    OverrideNotFound { what: String, path: PathBuf, requested: String, missing: String, found: String },
     #[error("{what}: invalid channel override \"{requested}\": {reason}")]
-    BadOverride {
-        what: String,
-        requested: String,
-        reason: String,
-    },
+    BadOverride { what: String, requested: String, reason: String },
     #[error("size mismatch: {a} \"{}\" is {}x{} px but {b} \"{}\" is {}x{} px (the data windows must have the same size)",
         .a_path.display(), .a_size.0, .a_size.1, .b_path.display(), .b_size.0, .b_size.1)]
-    SizeMismatch {
-        a: String,
-        a_path: PathBuf,
-        a_size: (u32, u32),
-        b: String,
-        b_path: PathBuf,
-        b_size: (u32, u32),
-    },
+    SizeMismatch { a: String, a_path: PathBuf, a_size: (u32, u32), b: String, b_path: PathBuf, b_size: (u32, u32) },
     #[error("depth: channel {channel} in \"{}\" has {count} invalid pixel(s) (NaN or negative depth); the first is pixel (x={x}, y={y}) of the data window with {value_m} m", .path.display())]
-    InvalidDepth {
-        path: PathBuf,
-        channel: String,
-        x: usize,
-        y: usize,
-        value_m: f32,
-        count: u64,
-    },
+    InvalidDepth { path: PathBuf, channel: String, x: usize, y: usize, value_m: f32, count: u64 },
     #[error("invalid argument {what}: {reason}")]
     InvalidArgument { what: String, reason: String },
     #[error("cannot write \"{}\": the image has {got} channel(s) per pixel, expected {expected}", .path.display())]
-    WrongChannelCount {
-        path: PathBuf,
-        expected: String,
-        got: u32,
-    },
+    WrongChannelCount { path: PathBuf, expected: String, got: u32 },
     #[error("cannot write \"{}\": channel {channel} holds {got} values, expected {expected} (width x height x channels)", .path.display())]
-    DataLength {
-        path: PathBuf,
-        channel: String,
-        expected: usize,
-        got: usize,
-    },
+    DataLength { path: PathBuf, channel: String, expected: usize, got: usize },
     #[error("cannot write \"{}\": {reason}", .path.display())]
     InvalidImage { path: PathBuf, reason: String },
     #[error("cannot encode OpenEXR file \"{}\": {source}", .path.display())]
-    ExrEncode {
-        path: PathBuf,
-        source: exr::error::Error,
-    },
+    ExrEncode { path: PathBuf, source: exr::error::Error },
     #[error("cannot encode PNG file \"{}\": {source}", .path.display())]
-    PngEncode {
-        path: PathBuf,
-        source: image::ImageError,
-    },
+    PngEncode { path: PathBuf, source: image::ImageError },
     #[error("cannot write \"{}\": {source}", .path.display())]
-    Write {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Write { path: PathBuf, source: std::io::Error },
 }
 
 /// Interleaved f32 image, row-major, top row first (y down), `channels` values per pixel.
@@ -142,12 +78,7 @@ impl Image {
     /// An image of zeros.
     pub fn new(width: u32, height: u32, channels: u32) -> Image {
         let len = width as usize * height as usize * channels as usize;
-        Image {
-            width,
-            height,
-            channels,
-            data: vec![0.0; len],
-        }
+        Image { width, height, channels, data: vec![0.0; len] }
     }
 
     fn index(&self, x: u32, y: u32, c: u32) -> usize {
@@ -244,10 +175,7 @@ pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), IoE
     })();
     result.map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
-        IoError::Write {
-            path: path.to_path_buf(),
-            source,
-        }
+        IoError::Write { path: path.to_path_buf(), source }
     })
 }
 

@@ -38,23 +38,11 @@ pub fn write_png_srgb(path: &Path, image: &Image) -> Result<(), IoError> {
             got: image.data.len(),
         });
     }
-    let rgb: Vec<u8> = image
-        .data
-        .chunks_exact(n)
-        .flat_map(|px| [px[0], px[1], px[2]].map(to_srgb8))
-        .collect();
+    let rgb: Vec<u8> = image.data.chunks_exact(n).flat_map(|px| [px[0], px[1], px[2]].map(to_srgb8)).collect();
     let mut bytes = Vec::new();
     image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            &rgb,
-            image.width,
-            image.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|source| IoError::PngEncode {
-            path: path.into(),
-            source,
-        })?;
+        .write_image(&rgb, image.width, image.height, image::ExtendedColorType::Rgb8)
+        .map_err(|source| IoError::PngEncode { path: path.into(), source })?;
     write_file_atomically(path, &bytes)
 }
 
@@ -68,24 +56,7 @@ mod tests {
         let dir = test_dir("png");
         let path = dir.join("a.png");
         let mut im = Image::new(2, 2, 4);
-        im.data = vec![
-            0.0,
-            0.5,
-            1.0,
-            1.0,
-            f32::NAN,
-            2.0,
-            -1.0,
-            0.0,
-            0.001,
-            0.18,
-            0.214,
-            1.0,
-            1e9,
-            0.0,
-            0.0,
-            1.0,
-        ];
+        im.data = vec![0.0, 0.5, 1.0, 1.0, f32::NAN, 2.0, -1.0, 0.0, 0.001, 0.18, 0.214, 1.0, 1e9, 0.0, 0.0, 1.0];
         write_png_srgb(&path, &im).unwrap();
         let back = image::open(&path).unwrap();
         assert_eq!(back.color(), image::ColorType::Rgb8);
@@ -94,10 +65,7 @@ mod tests {
         // A failed write keeps the existing file.
         let before = std::fs::read(&path).unwrap();
         let err = write_png_srgb(&path, &Image::new(2, 2, 2)).unwrap_err();
-        assert!(
-            err.to_string().contains("expected 3 (RGB) or 4 (RGBA)"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("expected 3 (RGB) or 4 (RGBA)"), "{err}");
         assert_eq!(std::fs::read(&path).unwrap(), before);
         let _ = std::fs::remove_dir_all(&dir);
     }

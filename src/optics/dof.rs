@@ -30,10 +30,7 @@ impl CocCriterion {
         } else {
             None
         };
-        let invalid = |reason| OpticsError::InvalidCocCriterion {
-            text: text.to_string(),
-            reason,
-        };
+        let invalid = |reason| OpticsError::InvalidCocCriterion { text: text.to_string(), reason };
         criterion
             .ok_or_else(|| invalid("expected 1/RATIO (e.g. 1/1000) or a film CoC such as 0.03mm"))?
             .validate()
@@ -93,31 +90,18 @@ pub fn dof_limits(lens: &ThinLens, criterion: CocCriterion) -> DofLimits {
             // Potmesil & Chakravarty 1981: H = 1000 F/n (observation 1 after eq 4), then
             // U+ = U H / (H - U) for H > U, else infinity (eq 5), U- = U H / (H + U) (eq 6).
             let h = k * lens.entrance_pupil_diameter_mm();
-            let far = if h > s {
-                s * h / (h - s)
-            } else {
-                f64::INFINITY
-            };
+            let far = if h > s { s * h / (h - s) } else { f64::INFINITY };
             (h, s * h / (h + s), far)
         }
         CocCriterion::ImageMm(c) => {
             // Standard thin-lens forms; equal to |Kyaw 2013 eq 5.3| = c for P = 1 (see above).
             let h = f * f / (lens.f_number * c) + f;
             let near = s * (h - f) / (h + s - 2.0 * f);
-            let far = if s < h {
-                s * (h - f) / (h - s)
-            } else {
-                f64::INFINITY
-            };
+            let far = if s < h { s * (h - f) / (h - s) } else { f64::INFINITY };
             (h, near, far)
         }
     };
-    DofLimits {
-        near_mm,
-        far_mm,
-        depth_mm: far_mm - near_mm,
-        hyperfocal_mm,
-    }
+    DofLimits { near_mm, far_mm, depth_mm: far_mm - near_mm, hyperfocal_mm }
 }
 
 /// A human-readable summary of the lens, its field of view on `sensor` and its depth of field.
@@ -139,30 +123,16 @@ pub fn dof_report(lens: &ThinLens, sensor: &Sensor, criterion: CocCriterion) -> 
     row(out, "f-number N", format!("f/{}", lens.f_number));
     row(out, "focus distance S", mm(lens.focus_distance_mm));
     row(out, "image distance v", mm(lens.image_distance_mm()));
-    row(
-        out,
-        "magnification |m|",
-        format!("{:.5}", lens.magnification()),
-    );
-    row(
-        out,
-        "effective f-number N'",
-        format!("f/{:.3}", lens.effective_f_number()),
-    );
-    row(
-        out,
-        "entrance pupil diameter",
-        mm(lens.entrance_pupil_diameter_mm()),
-    );
+    row(out, "magnification |m|", format!("{:.5}", lens.magnification()));
+    row(out, "effective f-number N'", format!("f/{:.3}", lens.effective_f_number()));
+    row(out, "entrance pupil diameter", mm(lens.entrance_pupil_diameter_mm()));
     row(out, "pupil magnification P", lens.pupil_magnification);
     row(out, "transmittance T", lens.transmittance);
     let _ = writeln!(out, "Field of view on {sensor}");
     row(out, "", format!("{:>10}  {:>11}", "focused", "at infinity"));
-    for (label, k_mm) in [
-        ("horizontal", sensor.width_mm),
-        ("vertical", sensor.height_mm),
-        ("diagonal", sensor.diagonal_mm()),
-    ] {
+    for (label, k_mm) in
+        [("horizontal", sensor.width_mm), ("vertical", sensor.height_mm), ("diagonal", sensor.diagonal_mm())]
+    {
         let (near, far) = (lens.fov_deg(k_mm), lens.fov_at_infinity_deg(k_mm));
         row(out, label, format!("{near:>6.2} deg  {far:>7.2} deg"));
     }
@@ -171,11 +141,7 @@ pub fn dof_report(lens: &ThinLens, sensor: &Sensor, criterion: CocCriterion) -> 
     row(out, "near limit", mm(dof.near_mm));
     row(out, "far limit", mm(dof.far_mm));
     row(out, "total depth of field", mm(dof.depth_mm));
-    row(
-        out,
-        "CoC of an object at infinity",
-        format!("{:.4} mm", lens.coc_mm(f64::INFINITY)),
-    );
+    row(out, "CoC of an object at infinity", format!("{:.4} mm", lens.coc_mm(f64::INFINITY)));
     std::mem::take(out)
 }
 
@@ -237,23 +203,12 @@ mod tests {
     #[test]
     fn film_limits_are_where_the_coc_is_c() {
         let c_mm = 0.03;
-        for (f, n, focus_mm) in [
-            (50.0, 2.8, 5000.0),
-            (24.0, 1.4, 10_000.0),
-            (35.0, 8.0, 4000.0),
-            (100.0, 4.0, 300.0),
-        ] {
+        for (f, n, focus_mm) in [(50.0, 2.8, 5000.0), (24.0, 1.4, 10_000.0), (35.0, 8.0, 4000.0), (100.0, 4.0, 300.0)] {
             let lens = ThinLens::new(f, n, focus_mm).unwrap();
             let dof = dof_limits(&lens, CocCriterion::ImageMm(c_mm));
             assert!(dof.far_mm.is_finite() && dof.near_mm < focus_mm && dof.far_mm > focus_mm);
-            assert!(
-                rel_eq(lens.coc_mm(dof.near_mm), -c_mm, 1e-9),
-                "near, f {f} S {focus_mm}"
-            );
-            assert!(
-                rel_eq(lens.coc_mm(dof.far_mm), c_mm, 1e-9),
-                "far, f {f} S {focus_mm}"
-            );
+            assert!(rel_eq(lens.coc_mm(dof.near_mm), -c_mm, 1e-9), "near, f {f} S {focus_mm}");
+            assert!(rel_eq(lens.coc_mm(dof.far_mm), c_mm, 1e-9), "far, f {f} S {focus_mm}");
             let m = lens.magnification();
             assert!(rel_eq(lens.coc_eq54_mm(dof.far_mm), c_mm * (1.0 + m), 1e-9));
         }
@@ -261,10 +216,7 @@ mod tests {
 
     #[test]
     fn hyperfocal_focus_reaches_infinity() {
-        for criterion in [
-            CocCriterion::ImageMm(0.03),
-            CocCriterion::AngularRatio(1000.0),
-        ] {
+        for criterion in [CocCriterion::ImageMm(0.03), CocCriterion::AngularRatio(1000.0)] {
             let probe = ThinLens::new(50.0, 8.0, 1000.0).unwrap();
             let h_mm = dof_limits(&probe, criterion).hyperfocal_mm;
             let lens = ThinLens::new(50.0, 8.0, h_mm).unwrap();
@@ -283,27 +235,15 @@ mod tests {
 
     #[test]
     fn stopping_down_and_focusing_farther_deepen_the_field() {
-        let depth = |n, s| {
-            dof_limits(
-                &ThinLens::new(55.0, n, s).unwrap(),
-                CocCriterion::ImageMm(0.03),
-            )
-            .depth_mm
-        };
+        let depth = |n, s| dof_limits(&ThinLens::new(55.0, n, s).unwrap(), CocCriterion::ImageMm(0.03)).depth_mm;
         assert!(depth(5.6, 980.0) < depth(11.0, 980.0) && depth(11.0, 980.0) < depth(22.0, 980.0));
         assert!(depth(11.0, 290.0) < depth(11.0, 550.0) && depth(11.0, 550.0) < depth(11.0, 980.0));
     }
 
     #[test]
     fn parses_and_validates_criteria() {
-        assert_eq!(
-            CocCriterion::parse("1/1000").unwrap(),
-            CocCriterion::AngularRatio(1000.0)
-        );
-        assert_eq!(
-            CocCriterion::parse(" 0.03 MM").unwrap(),
-            CocCriterion::ImageMm(0.03)
-        );
+        assert_eq!(CocCriterion::parse("1/1000").unwrap(), CocCriterion::AngularRatio(1000.0));
+        assert_eq!(CocCriterion::parse(" 0.03 MM").unwrap(), CocCriterion::ImageMm(0.03));
         for text in ["0.03", "1/0", "-0.03mm", "1/inf", "nanmm", "abc"] {
             let err = CocCriterion::parse(text).unwrap_err().to_string();
             assert!(err.contains(&format!("{text:?}")), "{err}");

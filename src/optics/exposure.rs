@@ -14,16 +14,11 @@ use std::f64::consts::PI;
 ///
 /// Note that eq 4.6 of the same source, E = T L / (4 N^2), lacks the factor pi of eq 4.9;
 /// with L in cd/m^2 and E in lux the pi belongs there, so eq 4.9 is used throughout.
-pub fn illuminance_per_luminance(
-    lens: &ThinLens,
-    field_angle_rad: f64,
-    vignetting_factor: f64,
-) -> f64 {
+pub fn illuminance_per_luminance(lens: &ThinLens, field_angle_rad: f64, vignetting_factor: f64) -> f64 {
     let cos2 = field_angle_rad.cos().powi(2);
     let close_focus = 1.0 + lens.magnification() / lens.pupil_magnification;
     // Kyaw 2013 eq 4.9
-    vignetting_factor * PI * lens.transmittance * cos2 * cos2
-        / (4.0 * (lens.f_number * close_focus).powi(2))
+    vignetting_factor * PI * lens.transmittance * cos2 * cos2 / (4.0 * (lens.f_number * close_focus).powi(2))
 }
 
 /// Exposure H = E t in lux seconds.
@@ -85,32 +80,16 @@ mod tests {
         }
         // On axis at distant focus eq 4.9 reduces to pi T / (4 N^2).
         let l = lens(2.0).with_transmittance(0.9).unwrap();
-        assert!(rel_eq(
-            illuminance_per_luminance(&l, 0.0, 1.0),
-            PI * 0.9 / 16.0,
-            1e-10
-        ));
-        assert!(rel_eq(
-            illuminance_per_luminance(&l, 0.0, 0.5),
-            PI * 0.45 / 16.0,
-            1e-10
-        ));
+        assert!(rel_eq(illuminance_per_luminance(&l, 0.0, 1.0), PI * 0.9 / 16.0, 1e-10));
+        assert!(rel_eq(illuminance_per_luminance(&l, 0.0, 0.5), PI * 0.45 / 16.0, 1e-10));
     }
 
     #[test]
     fn shutter_and_reciprocity() {
         let l = lens(4.0);
         let g = exposure_gain(&l, 1.0 / 125.0, 200.0, 1.0);
-        assert!(rel_eq(
-            exposure_gain(&l, 2.0 / 125.0, 200.0, 1.0),
-            2.0 * g,
-            1e-15
-        ));
-        assert!(rel_eq(
-            exposure_gain(&l, 1.0 / 125.0, 400.0, 1.0),
-            2.0 * g,
-            1e-15
-        ));
+        assert!(rel_eq(exposure_gain(&l, 2.0 / 125.0, 200.0, 1.0), 2.0 * g, 1e-15));
+        assert!(rel_eq(exposure_gain(&l, 1.0 / 125.0, 400.0, 1.0), 2.0 * g, 1e-15));
         assert_eq!(exposure_lux_s(500.0, 0.02), 10.0);
         assert!(rel_eq(saturation_exposure_lux_s(100.0), 0.78, 1e-15));
         // eq 4.13: t1/t2 = N1^2/N2^2 gives the same exposure.
@@ -128,13 +107,11 @@ mod tests {
         let near = ThinLens::new(50.0, 4.0, 100.0).unwrap();
         assert_eq!(near.magnification(), 1.0);
         assert_eq!(near.effective_f_number(), 8.0);
-        let ratio =
-            exposure_gain(&near, 0.01, 100.0, 1.0) / exposure_gain(&lens(4.0), 0.01, 100.0, 1.0);
+        let ratio = exposure_gain(&near, 0.01, 100.0, 1.0) / exposure_gain(&lens(4.0), 0.01, 100.0, 1.0);
         assert!(rel_eq(ratio, 0.25, 1e-9));
         // A pupil magnification P > 1 softens the loss: (1 + m/P)^2.
         let retro = near.with_pupil_magnification(2.0).unwrap();
-        let ratio =
-            exposure_gain(&retro, 0.01, 100.0, 1.0) / exposure_gain(&lens(4.0), 0.01, 100.0, 1.0);
+        let ratio = exposure_gain(&retro, 0.01, 100.0, 1.0) / exposure_gain(&lens(4.0), 0.01, 100.0, 1.0);
         assert!(rel_eq(ratio, 1.0 / 2.25, 1e-9));
     }
 
@@ -142,19 +119,11 @@ mod tests {
     fn cos4_law() {
         assert!(rel_eq(natural_vignetting(50.0, 50.0), 0.25, 1e-15));
         let angle = PI / 4.0;
-        assert!(rel_eq(
-            illuminance_per_luminance(&lens(1.0), angle, 1.0),
-            PI / 4.0 * 0.25,
-            1e-9
-        ));
+        assert!(rel_eq(illuminance_per_luminance(&lens(1.0), angle, 1.0), PI / 4.0 * 0.25, 1e-9));
         assert_eq!(natural_vignetting(0.0, 50.0), 1.0);
         for r in [1.0, 10.0, 21.6, 100.0] {
             let theta = (r / 35.0f64).atan();
-            assert!(rel_eq(
-                natural_vignetting(r, 35.0),
-                theta.cos().powi(4),
-                1e-14
-            ));
+            assert!(rel_eq(natural_vignetting(r, 35.0), theta.cos().powi(4), 1e-14));
         }
         assert_eq!(natural_vignetting(f64::INFINITY, 50.0), 0.0);
     }

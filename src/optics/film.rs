@@ -88,56 +88,23 @@ impl FilmCurve {
         let c = self;
         let in_range = c.black_out < c.middle_grey_out && c.middle_grey_out < c.white_out;
         let rules = [
-            (
-                "middle_grey_in",
-                c.middle_grey_in,
-                c.middle_grey_in > 0.0,
-                "must be positive",
-            ),
+            ("middle_grey_in", c.middle_grey_in, c.middle_grey_in > 0.0, "must be positive"),
             ("contrast", c.contrast, c.contrast > 0.0, "must be positive"),
-            (
-                "toe_softness_decades",
-                c.toe_softness_decades,
-                c.toe_softness_decades >= 0.0,
-                "must not be negative",
-            ),
+            ("toe_softness_decades", c.toe_softness_decades, c.toe_softness_decades >= 0.0, "must not be negative"),
             (
                 "shoulder_softness_decades",
                 c.shoulder_softness_decades,
                 c.shoulder_softness_decades >= 0.0,
                 "must not be negative",
             ),
-            (
-                "black_out",
-                c.black_out,
-                c.black_out > 0.0,
-                "must be positive",
-            ),
-            (
-                "white_out",
-                c.white_out,
-                c.white_out > c.black_out,
-                "must be above black_out",
-            ),
-            (
-                "middle_grey_out",
-                c.middle_grey_out,
-                in_range,
-                "must lie between black_out and white_out",
-            ),
+            ("black_out", c.black_out, c.black_out > 0.0, "must be positive"),
+            ("white_out", c.white_out, c.white_out > c.black_out, "must be above black_out"),
+            ("middle_grey_out", c.middle_grey_out, in_range, "must lie between black_out and white_out"),
         ];
         for (name, value, ok, requirement) in rules {
-            let requirement = if value.is_finite() {
-                requirement
-            } else {
-                "must be finite"
-            };
+            let requirement = if value.is_finite() { requirement } else { "must be finite" };
             if !(value.is_finite() && ok) {
-                return Err(OpticsError::InvalidFilmCurve {
-                    name,
-                    value,
-                    requirement,
-                });
+                return Err(OpticsError::InvalidFilmCurve { name, value, requirement });
             }
         }
         Ok(self)
@@ -160,8 +127,7 @@ impl FilmCurve {
         let (lb, lw) = (self.black_out.log10(), self.white_out.log10());
         let (k_toe, k_shoulder) = (self.toe_softness_decades, self.shoulder_softness_decades);
         // Kyaw 2013 sec 4.5: straight part, then shoulder (highlights) and toe (shadows).
-        let linear =
-            self.middle_grey_out.log10() + self.contrast * (log10_in - self.middle_grey_in.log10());
+        let linear = self.middle_grey_out.log10() + self.contrast * (log10_in - self.middle_grey_in.log10());
         let shoulder = soft_min_decades(linear, lw, k_shoulder);
         let toe = soft_max_decades(shoulder, lb, k_toe);
         let ceiling = soft_max_decades(lw, lb, k_toe);
@@ -190,23 +156,9 @@ mod tests {
         let d = FilmCurve::default_filmic();
         vec![
             d,
-            FilmCurve {
-                contrast: 1.6,
-                toe_softness_decades: 0.05,
-                shoulder_softness_decades: 0.35,
-                ..d
-            },
-            FilmCurve {
-                contrast: 1.0,
-                black_out: 1e-4,
-                white_out: 0.9,
-                ..d
-            },
-            FilmCurve {
-                middle_grey_in: 0.128,
-                middle_grey_out: 0.2,
-                ..d
-            },
+            FilmCurve { contrast: 1.6, toe_softness_decades: 0.05, shoulder_softness_decades: 0.35, ..d },
+            FilmCurve { contrast: 1.0, black_out: 1e-4, white_out: 0.9, ..d },
+            FilmCurve { middle_grey_in: 0.128, middle_grey_out: 0.2, ..d },
         ]
     }
 
@@ -216,14 +168,8 @@ mod tests {
             let mut previous = 0.0;
             for x in grid() {
                 let out = curve.apply(10f64.powf(x));
-                assert!(
-                    out.is_finite() && out >= curve.black_out && out <= curve.white_out,
-                    "{x} {out}"
-                );
-                assert!(
-                    out >= previous,
-                    "not monotonic at 10^{x}: {out} < {previous}"
-                );
+                assert!(out.is_finite() && out >= curve.black_out && out <= curve.white_out, "{x} {out}");
+                assert!(out >= previous, "not monotonic at 10^{x}: {out} < {previous}");
                 previous = out;
             }
             // The extremes reach the asymptotes.
@@ -242,10 +188,7 @@ mod tests {
             assert!((curve.apply(f64::INFINITY) / curve.white_out - 1.0).abs() < 1e-12);
             for h in [0.0, 1e-300, 1e6, 1e300, f64::MAX, f64::INFINITY, f64::NAN] {
                 let out = curve.apply(h);
-                assert!(
-                    out >= curve.black_out && out <= curve.white_out,
-                    "{h} -> {out}"
-                );
+                assert!(out >= curve.black_out && out <= curve.white_out, "{h} -> {out}");
             }
         }
     }
@@ -257,14 +200,8 @@ mod tests {
     fn c1_in_log_log() {
         let max_slope_jump = |curve: &FilmCurve| {
             let ys: Vec<f64> = grid().map(|x| curve.apply_log10(x)).collect();
-            let slopes: Vec<f64> = ys
-                .windows(2)
-                .map(|w| (w[1] - w[0]) / STEP_DECADES)
-                .collect();
-            slopes
-                .windows(2)
-                .map(|s| (s[1] - s[0]).abs())
-                .fold(0.0, f64::max)
+            let slopes: Vec<f64> = ys.windows(2).map(|w| (w[1] - w[0]) / STEP_DECADES).collect();
+            slopes.windows(2).map(|s| (s[1] - s[0]).abs()).fold(0.0, f64::max)
         };
         for curve in curves() {
             let bound = STEP_DECADES
@@ -272,17 +209,10 @@ mod tests {
                 * LN_10
                 * (0.25 / curve.shoulder_softness_decades + 0.25 / curve.toe_softness_decades);
             let jump = max_slope_jump(&curve);
-            assert!(
-                jump <= 1.01 * bound + 1e-9,
-                "slope jump {jump} > {bound} for {curve:?}"
-            );
+            assert!(jump <= 1.01 * bound + 1e-9, "slope jump {jump} > {bound} for {curve:?}");
         }
         // The check has teeth: hard corners (softness 0) jump by the full contrast.
-        let hard = FilmCurve {
-            toe_softness_decades: 0.0,
-            shoulder_softness_decades: 0.0,
-            ..FilmCurve::default()
-        };
+        let hard = FilmCurve { toe_softness_decades: 0.0, shoulder_softness_decades: 0.0, ..FilmCurve::default() };
         assert!(max_slope_jump(&hard) > 0.5 * hard.contrast);
     }
 
@@ -290,32 +220,19 @@ mod tests {
     fn middle_grey_and_contrast_in_the_straight_part() {
         for curve in curves() {
             let out = curve.apply(curve.middle_grey_in);
-            assert!(
-                (out / curve.middle_grey_out - 1.0).abs() < 0.01,
-                "{out} for {curve:?}"
-            );
+            assert!((out / curve.middle_grey_out - 1.0).abs() < 0.01, "{out} for {curve:?}");
             let x = curve.middle_grey_in.log10();
             let slope = (curve.apply_log10(x + 1e-4) - curve.apply_log10(x - 1e-4)) / 2e-4;
-            assert!(
-                (slope / curve.contrast - 1.0).abs() < 0.02,
-                "slope {slope} for {curve:?}"
-            );
+            assert!((slope / curve.contrast - 1.0).abs() < 0.02, "slope {slope} for {curve:?}");
         }
         // The default shoulder keeps sensor saturation just under white.
         let at_saturation = FilmCurve::default_filmic().apply(1.0);
-        assert!(
-            at_saturation > 0.9 && at_saturation < 1.0,
-            "{at_saturation}"
-        );
+        assert!(at_saturation > 0.9 && at_saturation < 1.0, "{at_saturation}");
     }
 
     #[test]
     fn zero_softness_is_the_clamped_straight_line() {
-        let curve = FilmCurve {
-            toe_softness_decades: 0.0,
-            shoulder_softness_decades: 0.0,
-            ..FilmCurve::default()
-        };
+        let curve = FilmCurve { toe_softness_decades: 0.0, shoulder_softness_decades: 0.0, ..FilmCurve::default() };
         for h in [1e-6, 1e-3, 0.01, 0.18, 0.5, 2.0, 100.0] {
             let straight = curve.middle_grey_out * (h / curve.middle_grey_in).powf(curve.contrast);
             let expected = straight.clamp(curve.black_out, curve.white_out);
@@ -328,10 +245,7 @@ mod tests {
         let k = 0.3;
         assert!((soft_max_decades(1.0, 1.0, k) - (1.0 + k * 2f64.log10())).abs() < 1e-15);
         assert_eq!(soft_max_decades(-1.0, 700.0, k), 700.0);
-        assert_eq!(
-            soft_min_decades(3.0, -1.0, k),
-            -soft_max_decades(-3.0, 1.0, k)
-        );
+        assert_eq!(soft_min_decades(3.0, -1.0, k), -soft_max_decades(-3.0, 1.0, k));
         assert!(soft_max_decades(2.0, 1.0, k) > 2.0 && soft_min_decades(2.0, 1.0, k) < 1.0);
         // Equal to the textbook log-sum-exp where that does not overflow.
         let direct = k * (10f64.powf(0.2 / k) + 10f64.powf(0.5 / k)).log10();
@@ -344,52 +258,18 @@ mod tests {
         let d = FilmCurve::default_filmic();
         let bad = [
             (FilmCurve { contrast: 0.0, ..d }, "contrast = 0"),
-            (
-                FilmCurve {
-                    middle_grey_in: f64::NAN,
-                    ..d
-                },
-                "middle_grey_in = NaN",
-            ),
-            (
-                FilmCurve {
-                    toe_softness_decades: -0.1,
-                    ..d
-                },
-                "toe_softness_decades = -0.1",
-            ),
-            (
-                FilmCurve {
-                    black_out: 0.0,
-                    ..d
-                },
-                "black_out = 0",
-            ),
-            (
-                FilmCurve {
-                    white_out: 1e-4,
-                    ..d
-                },
-                "white_out = 0.0001",
-            ),
-            (
-                FilmCurve {
-                    middle_grey_out: 1.5,
-                    ..d
-                },
-                "middle_grey_out = 1.5",
-            ),
+            (FilmCurve { middle_grey_in: f64::NAN, ..d }, "middle_grey_in = NaN"),
+            (FilmCurve { toe_softness_decades: -0.1, ..d }, "toe_softness_decades = -0.1"),
+            (FilmCurve { black_out: 0.0, ..d }, "black_out = 0"),
+            (FilmCurve { white_out: 1e-4, ..d }, "white_out = 0.0001"),
+            (FilmCurve { middle_grey_out: 1.5, ..d }, "middle_grey_out = 1.5"),
         ];
         for (curve, message) in bad {
             let err = curve.validate().unwrap_err().to_string();
             assert!(err.contains(message), "{err:?} lacks {message:?}");
         }
         // Invalid curves still do not panic.
-        let upside_down = FilmCurve {
-            black_out: 2.0,
-            white_out: 0.5,
-            ..d
-        };
+        let upside_down = FilmCurve { black_out: 2.0, white_out: 0.5, ..d };
         let _ = upside_down.apply(0.3);
     }
 }

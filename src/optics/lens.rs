@@ -14,10 +14,7 @@ pub enum OpticsError {
         "focus distance {focus_distance_mm} mm is not beyond the focal length {focal_length_mm} mm; \
          a lens can only focus on objects farther away than its focal length"
     )]
-    FocusInsideFocalLength {
-        focus_distance_mm: f64,
-        focal_length_mm: f64,
-    },
+    FocusInsideFocalLength { focus_distance_mm: f64, focal_length_mm: f64 },
     #[error("pupil magnification (exit / entrance pupil diameter) must be positive, got {pupil_magnification}")]
     NonPositivePupilMagnification { pupil_magnification: f64 },
     #[error("lens transmittance must be in (0, 1], got {transmittance}")]
@@ -29,11 +26,7 @@ pub enum OpticsError {
     #[error("invalid circle-of-confusion criterion {text:?}: {reason}")]
     InvalidCocCriterion { text: String, reason: &'static str },
     #[error("invalid film curve: {name} = {value} ({requirement})")]
-    InvalidFilmCurve {
-        name: &'static str,
-        value: f64,
-        requirement: &'static str,
-    },
+    InvalidFilmCurve { name: &'static str, value: f64, requirement: &'static str },
 }
 
 pub(crate) fn require_finite(name: &'static str, value: f64) -> Result<f64, OpticsError> {
@@ -65,11 +58,7 @@ pub struct ThinLens {
 impl ThinLens {
     /// A symmetric (P = 1), lossless (T = 1) lens. Rejects non-finite values, f <= 0, N <= 0
     /// and focus distances not beyond the focal length (S <= f has no real image).
-    pub fn new(
-        focal_length_mm: f64,
-        f_number: f64,
-        focus_distance_mm: f64,
-    ) -> Result<Self, OpticsError> {
+    pub fn new(focal_length_mm: f64, f_number: f64, focus_distance_mm: f64) -> Result<Self, OpticsError> {
         require_finite("focal length (mm)", focal_length_mm)?;
         require_finite("f-number", f_number)?;
         require_finite("focus distance (mm)", focus_distance_mm)?;
@@ -80,32 +69,18 @@ impl ThinLens {
             return Err(OpticsError::NonPositiveFNumber { f_number });
         }
         if focus_distance_mm <= focal_length_mm {
-            return Err(OpticsError::FocusInsideFocalLength {
-                focus_distance_mm,
-                focal_length_mm,
-            });
+            return Err(OpticsError::FocusInsideFocalLength { focus_distance_mm, focal_length_mm });
         }
-        Ok(Self {
-            focal_length_mm,
-            f_number,
-            focus_distance_mm,
-            pupil_magnification: 1.0,
-            transmittance: 1.0,
-        })
+        Ok(Self { focal_length_mm, f_number, focus_distance_mm, pupil_magnification: 1.0, transmittance: 1.0 })
     }
 
     /// Sets P = exit / entrance pupil diameter (eq 4.2); must be finite and positive.
     pub fn with_pupil_magnification(self, p: f64) -> Result<Self, OpticsError> {
         require_finite("pupil magnification", p)?;
         if p <= 0.0 {
-            return Err(OpticsError::NonPositivePupilMagnification {
-                pupil_magnification: p,
-            });
+            return Err(OpticsError::NonPositivePupilMagnification { pupil_magnification: p });
         }
-        Ok(Self {
-            pupil_magnification: p,
-            ..self
-        })
+        Ok(Self { pupil_magnification: p, ..self })
     }
 
     /// Sets the transmittance T; must satisfy 0 < T <= 1.
@@ -114,10 +89,7 @@ impl ThinLens {
         if t <= 0.0 || t > 1.0 {
             return Err(OpticsError::TransmittanceOutOfRange { transmittance: t });
         }
-        Ok(Self {
-            transmittance: t,
-            ..self
-        })
+        Ok(Self { transmittance: t, ..self })
     }
 
     /// Image distance v at which the focus plane S is sharp.
@@ -160,16 +132,13 @@ impl ThinLens {
     /// closer ("focus breathing").
     pub fn fov_deg(&self, sensor_dimension_mm: f64) -> f64 {
         // Kyaw 2013 eq 3.8 with f replaced by v (sec 3.1.3)
-        2.0 * (sensor_dimension_mm / (2.0 * self.image_distance_mm()))
-            .atan()
-            .to_degrees()
+        2.0 * (sensor_dimension_mm / (2.0 * self.image_distance_mm())).atan().to_degrees()
     }
 
     /// Angle of view across a sensor dimension, in degrees, when focused at infinity.
     pub fn fov_at_infinity_deg(&self, sensor_dimension_mm: f64) -> f64 {
-        2.0 * (sensor_dimension_mm / (2.0 * self.focal_length_mm))
-            .atan()
-            .to_degrees() // Kyaw 2013 eq 3.8
+        2.0 * (sensor_dimension_mm / (2.0 * self.focal_length_mm)).atan().to_degrees()
+        // Kyaw 2013 eq 3.8
     }
 
     /// Signed circle-of-confusion diameter on the film, in mm, of an object at planar
@@ -205,37 +174,12 @@ mod tests {
     #[test]
     fn new_rejects_bad_values_with_the_value_in_the_message() {
         let cases = [
-            (
-                f64::NAN,
-                2.8,
-                1000.0,
-                "focal length (mm) must be a finite number, got NaN",
-            ),
-            (
-                50.0,
-                f64::INFINITY,
-                1000.0,
-                "f-number must be a finite number, got inf",
-            ),
-            (
-                50.0,
-                2.8,
-                f64::INFINITY,
-                "focus distance (mm) must be a finite number, got inf",
-            ),
-            (
-                -50.0,
-                2.8,
-                1000.0,
-                "focal length must be positive, got -50 mm",
-            ),
+            (f64::NAN, 2.8, 1000.0, "focal length (mm) must be a finite number, got NaN"),
+            (50.0, f64::INFINITY, 1000.0, "f-number must be a finite number, got inf"),
+            (50.0, 2.8, f64::INFINITY, "focus distance (mm) must be a finite number, got inf"),
+            (-50.0, 2.8, 1000.0, "focal length must be positive, got -50 mm"),
             (50.0, 0.0, 1000.0, "f-number must be positive, got f/0"),
-            (
-                50.0,
-                2.8,
-                50.0,
-                "focus distance 50 mm is not beyond the focal length 50 mm",
-            ),
+            (50.0, 2.8, 50.0, "focus distance 50 mm is not beyond the focal length 50 mm"),
             (50.0, 2.8, 20.0, "focus distance 20 mm is not beyond"),
             (50.0, 2.8, -100.0, "focus distance -100 mm is not beyond"),
         ];
@@ -246,12 +190,7 @@ mod tests {
         let lens = ThinLens::new(50.0, 2.8, 1000.0).unwrap();
         assert!(lens.with_pupil_magnification(0.0).is_err());
         assert!(lens.with_pupil_magnification(f64::NAN).is_err());
-        assert_eq!(
-            lens.with_pupil_magnification(0.5)
-                .unwrap()
-                .pupil_magnification,
-            0.5
-        );
+        assert_eq!(lens.with_pupil_magnification(0.5).unwrap().pupil_magnification, 0.5);
         for t in [0.0, -0.1, 1.01, f64::NAN] {
             assert!(lens.with_transmittance(t).is_err(), "T = {t}");
         }
@@ -267,11 +206,7 @@ mod tests {
             let v = lens.image_distance_mm();
             assert!(rel_eq(1.0 / s + 1.0 / v, 1.0 / f, 1e-14)); // eq 3.1
                                                                 // eq 3.5; the round trip is ill-conditioned (v - f cancels) at distant focus
-            assert!(rel_eq(
-                ThinLens::object_distance_for_image_mm(v, f),
-                s,
-                1e-9
-            ));
+            assert!(rel_eq(ThinLens::object_distance_for_image_mm(v, f), s, 1e-9));
             let m = lens.magnification();
             assert!(rel_eq(v, f * (1.0 + m), 1e-14)); // eq 3.4
             assert!(rel_eq(s, f * (1.0 + 1.0 / m), 1e-12)); // eq 3.3
@@ -296,11 +231,7 @@ mod tests {
         // With P: N (1 + m/P); a retrofocus-like P = 2 loses less light at close focus.
         let retro = lens.with_pupil_magnification(2.0).unwrap();
         let m = lens.magnification();
-        assert!(rel_eq(
-            retro.effective_f_number(),
-            2.8 * (1.0 + m / 2.0),
-            1e-14
-        ));
+        assert!(rel_eq(retro.effective_f_number(), 2.8 * (1.0 + m / 2.0), 1e-14));
         // Distant focus: N' -> N.
         let far = ThinLens::new(50.0, 2.8, 1e9).unwrap();
         assert!(rel_eq(far.effective_f_number(), 2.8, 1e-7));
@@ -331,16 +262,7 @@ mod tests {
             let lens = ThinLens::new(f, n, s).unwrap();
             let v = lens.image_distance_mm();
             let d = f / n;
-            for u in [
-                0.3 * f,
-                0.9 * f,
-                1.01 * f,
-                0.5 * s,
-                0.99 * s,
-                1.01 * s,
-                3.0 * s,
-                1e6,
-            ] {
+            for u in [0.3 * f, 0.9 * f, 1.01 * f, 0.5 * s, 0.99 * s, 1.01 * s, 3.0 * s, 1e6] {
                 let v_u = ThinLens::image_distance_for_object_mm(u, f);
                 let geometric = d * (v_u - v).abs() / v_u.abs();
                 let coc = lens.coc_mm(u);
@@ -355,10 +277,7 @@ mod tests {
 
     #[test]
     fn coc_special_distances() {
-        let lens = ThinLens::new(50.0, 2.0, 3000.0)
-            .unwrap()
-            .with_pupil_magnification(0.7)
-            .unwrap();
+        let lens = ThinLens::new(50.0, 2.0, 3000.0).unwrap().with_pupil_magnification(0.7).unwrap();
         let v = lens.image_distance_mm();
         assert_eq!(lens.coc_mm(3000.0), 0.0);
         let at_infinity = v * v / (3000.0 * lens.effective_f_number() * 0.7);
@@ -381,18 +300,10 @@ mod tests {
         let close = ThinLens::new(50.0, 4.0, 150.0).unwrap();
         let m = close.magnification();
         for u in [60.0, 100.0, 400.0, f64::INFINITY] {
-            assert!(rel_eq(
-                close.coc_eq54_mm(u),
-                close.coc_mm(u).abs() * (1.0 + m),
-                1e-14
-            ));
+            assert!(rel_eq(close.coc_eq54_mm(u), close.coc_mm(u).abs() * (1.0 + m), 1e-14));
         }
         let distant = ThinLens::new(50.0, 4.0, 1e8).unwrap();
-        assert!(rel_eq(
-            distant.coc_eq54_mm(5000.0),
-            distant.coc_mm(5000.0).abs(),
-            1e-6
-        ));
+        assert!(rel_eq(distant.coc_eq54_mm(5000.0), distant.coc_mm(5000.0).abs(), 1e-6));
         assert_eq!(distant.coc_eq54_mm(1e8), 0.0);
     }
 }

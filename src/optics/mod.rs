@@ -21,6 +21,7 @@ pub mod exposure;
 pub mod film;
 pub mod lens;
 pub mod sensor;
+pub mod spherical;
 
 pub use dof::{dof_limits, dof_report, CocCriterion, DofLimits};
 pub use film::FilmCurve;

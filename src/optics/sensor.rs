@@ -34,62 +34,38 @@ const FORMATS: &[(&[&str], f64, f64)] = &[
 
 impl Sensor {
     /// 135 film / full frame, 36 x 24 mm.
-    pub const FULL_FRAME: Sensor = Sensor {
-        width_mm: 36.0,
-        height_mm: 24.0,
-    };
+    pub const FULL_FRAME: Sensor = Sensor { width_mm: 36.0, height_mm: 24.0 };
 
     /// A sensor of the given size; both sides must be finite and positive.
     pub fn new(width_mm: f64, height_mm: f64) -> Result<Sensor, OpticsError> {
         require_finite("sensor width (mm)", width_mm)?;
         require_finite("sensor height (mm)", height_mm)?;
         if width_mm <= 0.0 || height_mm <= 0.0 {
-            return Err(OpticsError::InvalidSensorSize {
-                width_mm,
-                height_mm,
-            });
+            return Err(OpticsError::InvalidSensorSize { width_mm, height_mm });
         }
-        Ok(Sensor {
-            width_mm,
-            height_mm,
-        })
+        Ok(Sensor { width_mm, height_mm })
     }
 
     /// Parses a format name (case-insensitive, see [`Sensor::known_names`]) or a size
     /// `WxH` / `WxHmm` in millimetres, e.g. `36x20.25`.
     pub fn parse(text: &str) -> Result<Sensor, OpticsError> {
         let key = text.trim().to_ascii_lowercase();
-        if let Some(&(_, w, h)) = FORMATS
-            .iter()
-            .find(|(names, ..)| names.contains(&key.as_str()))
-        {
-            return Ok(Sensor {
-                width_mm: w,
-                height_mm: h,
-            });
+        if let Some(&(_, w, h)) = FORMATS.iter().find(|(names, ..)| names.contains(&key.as_str())) {
+            return Ok(Sensor { width_mm: w, height_mm: h });
         }
         let size = key.strip_suffix("mm").unwrap_or(&key);
-        let parsed = size.split_once('x').and_then(|(w, h)| {
-            Some((w.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?))
-        });
+        let parsed = size
+            .split_once('x')
+            .and_then(|(w, h)| Some((w.trim().parse::<f64>().ok()?, h.trim().parse::<f64>().ok()?)));
         match parsed {
-            Some((w, h)) => Sensor::new(w, h).map_err(|_| OpticsError::InvalidSensorSize {
-                width_mm: w,
-                height_mm: h,
-            }),
-            None => Err(OpticsError::UnknownSensor {
-                text: text.to_string(),
-                known: Self::known_names().join(", "),
-            }),
+            Some((w, h)) => Sensor::new(w, h).map_err(|_| OpticsError::InvalidSensorSize { width_mm: w, height_mm: h }),
+            None => Err(OpticsError::UnknownSensor { text: text.to_string(), known: Self::known_names().join(", ") }),
         }
     }
 
     /// Every accepted format name, aliases included.
     pub fn known_names() -> Vec<&'static str> {
-        FORMATS
-            .iter()
-            .flat_map(|(names, ..)| names.iter().copied())
-            .collect()
+        FORMATS.iter().flat_map(|(names, ..)| names.iter().copied()).collect()
     }
 
     /// The diagonal K used for the diagonal field of view (Kyaw 2013 eq 3.8).
@@ -113,10 +89,7 @@ impl Sensor {
     /// It may overhang the sensor in the other dimension when the aspect ratios differ.
     pub fn image_extent_mm(&self, width_px: u32, height_px: u32, fit: SensorFit) -> (f64, f64) {
         let pitch_mm = self.pixel_pitch_mm(width_px, height_px, fit);
-        (
-            pitch_mm * f64::from(width_px),
-            pitch_mm * f64::from(height_px),
-        )
+        (pitch_mm * f64::from(width_px), pitch_mm * f64::from(height_px))
     }
 }
 
@@ -153,24 +126,14 @@ mod tests {
             ("medium-format", 43.8, 32.9),
         ];
         for (text, w, h) in expect {
-            assert_eq!(
-                Sensor::parse(text).unwrap(),
-                Sensor {
-                    width_mm: w,
-                    height_mm: h
-                },
-                "{text}"
-            );
+            assert_eq!(Sensor::parse(text).unwrap(), Sensor { width_mm: w, height_mm: h }, "{text}");
         }
         assert_eq!("ff".parse::<Sensor>().unwrap(), Sensor::FULL_FRAME);
     }
 
     #[test]
     fn parses_explicit_sizes() {
-        let s = Sensor {
-            width_mm: 36.0,
-            height_mm: 20.25,
-        };
+        let s = Sensor { width_mm: 36.0, height_mm: 20.25 };
         for text in ["36x20.25", "36x20.25mm", "36X20.25MM", "36 x 20.25 mm"] {
             assert_eq!(Sensor::parse(text).unwrap(), s, "{text}");
         }
@@ -185,43 +148,25 @@ mod tests {
             assert!(err.contains(name), "{err} lacks {name}");
         }
         for text in ["", "x", "36x", "36x24x2", "axb", "36x24cm"] {
-            assert!(
-                matches!(Sensor::parse(text), Err(OpticsError::UnknownSensor { .. })),
-                "{text}"
-            );
+            assert!(matches!(Sensor::parse(text), Err(OpticsError::UnknownSensor { .. })), "{text}");
         }
         for text in ["0x24", "-36x24", "36x0", "infx24", "nanx24"] {
             let err = Sensor::parse(text).unwrap_err();
-            assert!(
-                matches!(err, OpticsError::InvalidSensorSize { .. }),
-                "{text}: {err}"
-            );
+            assert!(matches!(err, OpticsError::InvalidSensorSize { .. }), "{text}: {err}");
         }
-        assert!(Sensor::parse("-36x24")
-            .unwrap_err()
-            .to_string()
-            .contains("-36 x 24 mm"));
+        assert!(Sensor::parse("-36x24").unwrap_err().to_string().contains("-36 x 24 mm"));
     }
 
     #[test]
     fn diagonal_and_pixel_pitch() {
         assert!((Sensor::FULL_FRAME.diagonal_mm() - 43.266_615).abs() < 1e-6);
         let s = Sensor::FULL_FRAME;
-        assert_eq!(
-            s.pixel_pitch_mm(1920, 1080, SensorFit::Horizontal),
-            36.0 / 1920.0
-        );
-        assert_eq!(
-            s.pixel_pitch_mm(1920, 1080, SensorFit::Vertical),
-            24.0 / 1080.0
-        );
+        assert_eq!(s.pixel_pitch_mm(1920, 1080, SensorFit::Horizontal), 36.0 / 1920.0);
+        assert_eq!(s.pixel_pitch_mm(1920, 1080, SensorFit::Vertical), 24.0 / 1080.0);
         assert_eq!(s.pixel_pitch_mm(1920, 1080, SensorFit::Auto), 36.0 / 1920.0);
         // Portrait image: Auto puts the sensor width along the (larger) image height.
         assert_eq!(s.pixel_pitch_mm(1080, 1920, SensorFit::Auto), 36.0 / 1920.0);
-        assert_eq!(
-            s.image_extent_mm(1920, 1080, SensorFit::Horizontal),
-            (36.0, 20.25)
-        );
+        assert_eq!(s.image_extent_mm(1920, 1080, SensorFit::Horizontal), (36.0, 20.25));
         assert_eq!(s.pixel_pitch_mm(0, 0, SensorFit::Horizontal), f64::INFINITY);
     }
 }

@@ -13,10 +13,14 @@ pub struct ApertureShape {
     pub blades: u32,
     pub rotation_deg: f64,
     pub curvature: f64,
+    /// Spherical aberration amount (-1..1): > 0 under-corrected, < 0 over-corrected, 0 uniform
+    /// disks (src/optics/spherical.rs).
+    pub spherical_aberration: f64,
 }
 
 impl ApertureShape {
-    pub const CIRCLE: ApertureShape = ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0 };
+    pub const CIRCLE: ApertureShape =
+        ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0, spherical_aberration: 0.0 };
 }
 
 /// Push constants of glsl/bokeh_gather.comp.
@@ -28,17 +32,29 @@ pub struct GatherParams {
     pub blades: i32,
     pub rotation_rad: f32,
     pub curvature: f32,
+    pub sa_amount: f32,
+    pub sa_max_coc_px: f32,
     pub layer_transition_px: f32,
 }
 
 impl GatherParams {
-    pub fn new(width: u32, height: u32, max_abs_coc_px: f64, aperture: &ApertureShape) -> GatherParams {
+    /// `sa_max_coc_px`: the CoC diameter at which spherical aberration reaches its full amount
+    /// (the user's CoC clamp, like the appendix shader's largest CoC).
+    pub fn new(
+        width: u32,
+        height: u32,
+        max_abs_coc_px: f64,
+        aperture: &ApertureShape,
+        sa_max_coc_px: f64,
+    ) -> GatherParams {
         GatherParams {
             size: [width as i32, height as i32],
             radius_px: (0.5 * max_abs_coc_px).ceil() as i32 + 1,
             blades: aperture.blades as i32,
             rotation_rad: aperture.rotation_deg.to_radians() as f32,
             curvature: if aperture.blades < 3 { 1.0 } else { aperture.curvature.clamp(0.0, 1.0) as f32 },
+            sa_amount: aperture.spherical_aberration as f32,
+            sa_max_coc_px: sa_max_coc_px as f32,
             layer_transition_px: 1.0,
         }
     }
@@ -99,7 +115,11 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
                     } else {
                         (0.5 - aperture_sdf(o, reach, p)).clamp(0.0, 1.0)
                     };
-                    let wgt = cov / aperture_area(reach, p);
+                    let s =
+                        crate::optics::spherical::strength(p.sa_amount as f64, coc_q as f64, p.sa_max_coc_px as f64);
+                    let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
+                    let sa = crate::optics::spherical::intensity(s, r_norm as f64) as f32;
+                    let wgt = cov / aperture_area(reach, p) * sa;
                     if wgt <= 0.0 {
                         continue;
                     }

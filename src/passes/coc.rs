@@ -55,13 +55,8 @@ pub struct CocPass {
 impl CocPass {
     pub fn new(gpu: &Gpu) -> GpuResult<CocPass> {
         let bindings = [vk::DescriptorType::STORAGE_IMAGE; 2];
-        let pipeline = ComputePipeline::new(
-            gpu,
-            NAME,
-            shaders::spirv(NAME)?,
-            &bindings,
-            std::mem::size_of::<CocParams>() as u32,
-        )?;
+        let pipeline =
+            ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, std::mem::size_of::<CocParams>() as u32)?;
         Ok(CocPass { pipeline })
     }
 

@@ -15,6 +15,8 @@ pub struct SpritesParams {
     pub blades: i32,
     pub rotation_rad: f32,
     pub curvature: f32,
+    pub sa_amount: f32,
+    pub sa_max_coc_px: f32,
     pub sprite_capacity: i32,
 }
 

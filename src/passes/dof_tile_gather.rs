@@ -17,6 +17,8 @@ pub struct TileGatherParams {
     pub blades: i32,
     pub rotation_rad: f32,
     pub curvature: f32,
+    pub sa_amount: f32,
+    pub sa_max_coc_px: f32,
     pub layer_transition_px: f32,
 }
 

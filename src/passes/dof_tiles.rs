@@ -24,7 +24,13 @@ impl DofTilesPass {
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
 
-    pub fn record(&self, rec: &mut Recorder, coc: &GpuImage, tile_coc: &GpuBuffer, params: &TilesParams) -> GpuResult<()> {
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        coc: &GpuImage,
+        tile_coc: &GpuBuffer,
+        params: &TilesParams,
+    ) -> GpuResult<()> {
         rec.begin_pass(NAME);
         // coc: written by the CoC pass (read-after-write). tile_coc is fully overwritten and no
         // earlier pass of this recording touched it, so it needs no barrier.

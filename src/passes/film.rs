@@ -85,7 +85,13 @@ impl FilmPass {
         Ok(FilmPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
 
-    pub fn record(&self, rec: &mut Recorder, input: &GpuImage, output: &GpuImage, params: &FilmParams) -> GpuResult<()> {
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        input: &GpuImage,
+        output: &GpuImage,
+        params: &FilmParams,
+    ) -> GpuResult<()> {
         rec.begin_pass(NAME);
         // input: written by the previous compute pass (or the upload): wait for those writes.
         // output: written from scratch.

@@ -11,8 +11,8 @@ pub mod dof_half_gather;
 pub mod dof_sprites;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
-pub mod tiled_dof;
 pub mod film;
+pub mod tiled_dof;
 pub mod vignette;
 
 use crate::gpu::GpuImage;

@@ -40,10 +40,12 @@ pub struct TiledDofParams {
     /// Largest |CoC| diameter in the frame (after the clamp), for the dilation search.
     pub max_abs_coc_px: f32,
     pub aperture: ApertureShape,
+    /// CoC diameter at which spherical aberration reaches its full amount.
+    pub sa_max_coc_px: f32,
 }
 
 impl TiledDofParams {
-    pub fn new(width: u32, height: u32, max_abs_coc_px: f64, aperture: &ApertureShape) -> Self {
+    pub fn new(width: u32, height: u32, max_abs_coc_px: f64, aperture: &ApertureShape, sa_max_coc_px: f64) -> Self {
         TiledDofParams {
             width,
             height,
@@ -54,6 +56,7 @@ impl TiledDofParams {
             sprite_capacity: 16384,
             max_abs_coc_px: max_abs_coc_px as f32,
             aperture: *aperture,
+            sa_max_coc_px: sa_max_coc_px as f32,
         }
     }
 
@@ -65,10 +68,10 @@ impl TiledDofParams {
         [self.width.div_ceil(2) as i32, self.height.div_ceil(2) as i32]
     }
 
-    fn aperture_fields(&self) -> (i32, f32, f32) {
+    fn aperture_fields(&self) -> (i32, f32, f32, f32) {
         let a = &self.aperture;
         let curvature = if a.blades < 3 { 1.0 } else { a.curvature.clamp(0.0, 1.0) as f32 };
-        (a.blades as i32, a.rotation_deg.to_radians() as f32, curvature)
+        (a.blades as i32, a.rotation_deg.to_radians() as f32, curvature, a.spherical_aberration as f32)
     }
 }
 
@@ -136,7 +139,8 @@ impl TiledDof {
         let coc_half = gpu.create_image("dof coc (half)", hw as u32, hh as u32, vk::Format::R32_SFLOAT)?;
         let bg_half = gpu.create_image("dof background (half)", hw as u32, hh as u32, rgba)?;
         let fg_half = gpu.create_image("dof foreground (half)", hw as u32, hh as u32, rgba)?;
-        let (blades, rotation_rad, curvature) = p.aperture_fields();
+        let (blades, rotation_rad, curvature, sa_amount) = p.aperture_fields();
+        let sa_max_coc_px = p.sa_max_coc_px;
         let size = [p.width as i32, p.height as i32];
 
         self.tiles.record(rec, coc, &tile_coc, &TilesParams { size, tiles })?;
@@ -172,7 +176,17 @@ impl TiledDof {
         self.tile_gather.record(
             rec,
             &TileGatherBindings { color, coc, output, tile_lists: &tile_lists, tile_radius: &tile_radius, args: &args },
-            &TileGatherParams { size, tiles, tile_class: 0, blades, rotation_rad, curvature, layer_transition_px },
+            &TileGatherParams {
+                size,
+                tiles,
+                tile_class: 0,
+                blades,
+                rotation_rad,
+                curvature,
+                sa_amount,
+                sa_max_coc_px,
+                layer_transition_px,
+            },
         )?;
         let downsample = DownsampleParams {
             size,
@@ -190,9 +204,22 @@ impl TiledDof {
             blades,
             rotation_rad,
             curvature,
+            // The half-resolution gather works in half-size CoC units.
+            sa_amount,
+            sa_max_coc_px: 0.5 * sa_max_coc_px,
             layer_transition_px,
         };
-        self.half_gather.record(rec, &color_half, &coc_half, &bg_half, &fg_half, &tile_lists, &tile_radius, &args, &half)?;
+        self.half_gather.record(
+            rec,
+            &color_half,
+            &coc_half,
+            &bg_half,
+            &fg_half,
+            &tile_lists,
+            &tile_radius,
+            &args,
+            &half,
+        )?;
         let composite = CompositeParams {
             size,
             half_size: [hw, hh],
@@ -201,6 +228,8 @@ impl TiledDof {
             blades,
             rotation_rad,
             curvature,
+            sa_amount,
+            sa_max_coc_px,
             layer_transition_px,
         };
         self.composite.record(
@@ -216,9 +245,24 @@ impl TiledDof {
             },
             &composite,
         )?;
-        let sprites_params =
-            SpritesParams { size, tiles, blades, rotation_rad, curvature, sprite_capacity: p.sprite_capacity as i32 };
+        let sprites_params = SpritesParams {
+            size,
+            tiles,
+            blades,
+            rotation_rad,
+            curvature,
+            sa_amount,
+            sa_max_coc_px,
+            sprite_capacity: p.sprite_capacity as i32,
+        };
         self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, &sprites_params)?;
-        Ok(TiledFrame { args, tile_coc, tile_lists, tile_radius, sprites, images: vec![color_half, coc_half, bg_half, fg_half] })
+        Ok(TiledFrame {
+            args,
+            tile_coc,
+            tile_lists,
+            tile_radius,
+            sprites,
+            images: vec![color_half, coc_half, bg_half, fg_half],
+        })
     }
 }

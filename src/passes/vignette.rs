@@ -56,7 +56,13 @@ impl VignettePass {
         Ok(VignettePass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
 
-    pub fn record(&self, rec: &mut Recorder, input: &GpuImage, output: &GpuImage, params: &VignetteParams) -> GpuResult<()> {
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        input: &GpuImage,
+        output: &GpuImage,
+        params: &VignetteParams,
+    ) -> GpuResult<()> {
         rec.begin_pass(NAME);
         // input: written by the previous compute pass (or the upload, made visible to compute by
         //   its own barrier; the extra dependency is then harmless): wait for those writes.

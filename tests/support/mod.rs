@@ -41,6 +41,7 @@ pub fn dof_camera(focal_length_mm: f64, f_number: f64, focus_m: f64, blades: u32
         nits_per_unit: 160.0,
         blades: Some(blades),
         blade_rotation_deg: Some(0.0),
+        spherical_aberration: Some(0.0),
         exposure: false,
         vignetting: false,
         film: Some(FilmMode::Linear),
