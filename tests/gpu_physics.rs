@@ -359,3 +359,100 @@ fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
         }
     }
 }
+
+/// Edge radius of the disk along direction `theta` (radians, y up) from the centre: where the
+/// excess over the plane, bilinearly interpolated, first falls below half the inner mean.
+fn edge_radius(rgba: &[f32], w: u32, h: u32, theta: f64, half_level: f64) -> f64 {
+    let (cx, cy) = ((w / 2) as f64, (h / 2) as f64);
+    let sample = |x: f64, y: f64| {
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let v = |xi: f64, yi: f64| (at(rgba, w, xi as u32, yi as u32, 1) - PLANE) as f64;
+        (v(x0, y0) * (1.0 - fx) + v(x0 + 1.0, y0) * fx) * (1.0 - fy)
+            + (v(x0, y0 + 1.0) * (1.0 - fx) + v(x0 + 1.0, y0 + 1.0) * fx) * fy
+    };
+    let mut r = 0.0;
+    while r < (h as f64 / 2.0 - 2.0) {
+        if sample(cx + r * theta.cos(), cy - r * theta.sin()) < half_level {
+            return r;
+        }
+        r += 0.05;
+    }
+    r
+}
+
+#[test]
+fn bladed_highlight_has_the_blade_count_and_rotation_of_the_aperture() {
+    // A point at 6 m, focus 1.2 m, f/1: CoC radius ~23 px. The corners of the polygon are the
+    // directions where the disk reaches farthest: count them and compare their angles with the
+    // aperture's (a corner straight up at rotation 0, Cycles' convention).
+    let gpu = gpu();
+    for (blades, rotation_deg) in [(5u32, 0.0f64), (6, 0.0), (7, 15.0), (5, 36.0)] {
+        for mode in [BokehMode::Tiled, BokehMode::Reference] {
+            let mut camera = dof_camera(50.0, 1.0, 1.2, blades);
+            camera.bokeh = mode;
+            camera.aperture.rotation_deg = rotation_deg;
+            let frame = testdata_frame("point_bg", &camera);
+            let (rgba, _, _) = render(&gpu, &frame, &camera);
+            let (w, h) = (frame.width, frame.height);
+            let inner = annulus_mean(&rgba, w, h, 10.0, 0.0, 1.0);
+            let n = 720;
+            let radii: Vec<f64> = (0..n)
+                .map(|i| edge_radius(&rgba, w, h, i as f64 * std::f64::consts::TAU / n as f64, 0.5 * inner))
+                .collect();
+            // Smooth over +-3 degrees, then take the local maxima that stand out.
+            let smooth: Vec<f64> = (0..n)
+                .map(|i| (-6i64..=6).map(|k| radii[(i as i64 + k).rem_euclid(n as i64) as usize]).sum::<f64>() / 13.0)
+                .collect();
+            let (lo, hi) = smooth.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            let corners: Vec<f64> = (0..n)
+                .filter(|&i| {
+                    let v = smooth[i];
+                    v > lo + 0.5 * (hi - lo)
+                        && (1..=20).all(|k| v >= smooth[(i + k) % n] && v > smooth[(i + n - k) % n])
+                })
+                .map(|i| i as f64 * 360.0 / n as f64)
+                .collect();
+            assert_eq!(
+                corners.len(),
+                blades as usize,
+                "{blades} blades rot {rotation_deg} {mode:?}: corners at {corners:?}"
+            );
+            for c in &corners {
+                // Distance to the nearest expected corner angle (90 + rotation + k 360/n).
+                let step = 360.0 / blades as f64;
+                let offset = (c - 90.0 - rotation_deg).rem_euclid(step);
+                let error = offset.min(step - offset);
+                assert!(
+                    error < 4.0,
+                    "{blades} blades rot {rotation_deg} {mode:?}: corner at {c} deg is {error:.1} deg off"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn tiled_path_stays_close_to_the_reference() {
+    // The fast path against `--bokeh reference` on the demo scene (CoC up to 35 px) and the depth
+    // edges at f/1. Bound: display RMSE 0.02 (on values ~0.1-1, i.e. ~2-5% at the largest
+    // blurs, where the half-resolution gather's sparse taps leave fine noise) and energy 1%.
+    let gpu = gpu();
+    for (scene, f_number, focus_m) in [("demo", 1.4, 2.0), ("edges", 1.0, 8.0), ("edges", 1.0, 2.0)] {
+        let mut camera = dof_camera(50.0, f_number, focus_m, 7);
+        let frame = testdata_frame(scene, &camera);
+        camera.bokeh = BokehMode::Reference;
+        let (reference, _, _) = render(&gpu, &frame, &camera);
+        camera.bokeh = BokehMode::Tiled;
+        let (tiled, plan, _) = render(&gpu, &frame, &camera);
+        let e = realcam::metrics::compare_rgba(&tiled, &reference);
+        println!(
+            "{scene} f/{f_number} focus {focus_m}: CoC {:?}, display RMSE {:.4}, energy {:+.3}%",
+            plan.coc_range_px,
+            e.rmse_display,
+            100.0 * e.relative_energy_error
+        );
+        assert!(e.rmse_display < 0.02, "{scene}: display RMSE {}", e.rmse_display);
+        assert!(e.relative_energy_error.abs() < 0.01, "{scene}: energy {}", e.relative_energy_error);
+    }
+}
