@@ -22,6 +22,9 @@ layout(push_constant) uniform Push {
     float curvature;
     float sa_amount;
     float sa_max_coc_px;
+    float centre_x_px;
+    float centre_y_px;
+    float cats_eye_per_px;
     float layer_transition_px;  // CoC difference over which a sample moves from background to foreground
 } pc;
 
@@ -30,6 +33,7 @@ layout(push_constant) uniform Push {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
+                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
     imageStore(color_out, p, gather_exact(p, pc.size, pc.radius_px, ap, pc.layer_transition_px));
 }

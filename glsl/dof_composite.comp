@@ -23,6 +23,9 @@ layout(push_constant) uniform Push {
     float curvature;
     float sa_amount;
     float sa_max_coc_px;
+    float centre_x_px;
+    float centre_y_px;
+    float cats_eye_per_px;
     float layer_transition_px;
 } pc;
 
@@ -47,7 +50,8 @@ void main() {
     float blurred = smoothstep(0.5 * pc.small_radius_px, pc.small_radius_px, radius_p);
     vec4 base = bg;
     if (blurred < 1.0) {
-        Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
+        Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
+                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
         vec4 exact = gather_exact(p, pc.size, int(ceil(pc.small_radius_px)) + 1, ap, pc.layer_transition_px);
         base = mix(exact, bg, blurred);
     }

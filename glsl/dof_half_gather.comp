@@ -24,6 +24,9 @@ layout(push_constant) uniform Push {
     float curvature;
     float sa_amount;
     float sa_max_coc_px;
+    float centre_x_px;
+    float centre_y_px;
+    float cats_eye_per_px;
     float layer_transition_px;
 } pc;
 
@@ -31,7 +34,8 @@ void main() {
     uint t = tile_list[CLASS_LARGE * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
     ivec2 ph = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * (TILE_SIZE / 2) + ivec2(gl_LocalInvocationID.xy);
     if (outside(ph, pc.half_size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
+                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
     // Half-resolution units: CoC diameters and distances halve.
     float coc_p = 0.5 * imageLoad(coc_half, ph).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
@@ -50,14 +54,16 @@ void main() {
         float tap_area = k == 0 ? PI * 0.25 * spacing * spacing : PI * spacing * spacing / 3.0;
         for (int j = 0; j < n; ++j) {
             float theta = (float(j) + jitter) * 2.0 * PI / float(n);
-            ivec2 q = ph + ivec2(round(rho * vec2(cos(theta), sin(theta))));
-            if (outside(q, pc.half_size)) continue;
+            ivec2 q_unclamped = ph + ivec2(round(rho * vec2(cos(theta), sin(theta))));
+            // Beyond the frame the edge pixels continue, as in the exact gather.
+            ivec2 q = clamp(q_unclamped, ivec2(0), pc.half_size - 1);
             float coc_q = 0.5 * imageLoad(coc_half, q).r;
             float radius_q = max(0.5 * abs(coc_q), 0.5);
             float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
-            vec2 o = vec2(ph - q) * (coc_q < 0.0 ? -1.0 : 1.0);
-            float cov = clamp(0.5 - aperture_sdf(o, reach, ap) / ramp, 0.0, 1.0);
-            float w = cov * tap_area / aperture_area(reach, ap) * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
+            float flip = coc_q < 0.0 ? -1.0 : 1.0;
+            vec2 o = vec2(ph - q_unclamped) * flip;
+            float w = tap_area * aperture_weight(o, reach, ap, vec2(q_unclamped) + 0.5, flip, ramp)
+                * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
             if (w <= 0.0) continue;
             vec4 c = imageLoad(color_half, q);
             float f = clamp((coc_p - coc_q) / pc.layer_transition_px, 0.0, 1.0);

@@ -25,6 +25,9 @@ layout(push_constant) uniform Push {
     float curvature;
     float sa_amount;
     float sa_max_coc_px;
+    float centre_x_px;
+    float centre_y_px;
+    float cats_eye_per_px;
     int sprite_capacity;
 } pc;
 
@@ -36,7 +39,8 @@ void main() {
     ivec2 tile_origin = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * TILE_SIZE;
     ivec2 p = tile_origin + ivec2(gl_LocalInvocationID.xy);
     bool inside = !outside(p, pc.size);
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
+                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
     float coc_p = inside ? imageLoad(coc_px, p).r : 0.0;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
     uint total = min(args[ARGS_SPRITE_COUNT], uint(pc.sprite_capacity));
@@ -58,8 +62,9 @@ void main() {
             Sprite s = s_batch[k];
             float radius_q = max(0.5 * abs(s.coc_px), 0.5);
             float reach = s.coc_px > coc_p ? min(radius_q, radius_p) : radius_q;
-            vec2 o = (vec2(p) + 0.5 - s.centre_px) * (s.coc_px < 0.0 ? -1.0 : 1.0);
-            sum += s.color.rgb * (aperture_coverage(o, reach, ap) / aperture_area(reach, ap)
+            float flip = s.coc_px < 0.0 ? -1.0 : 1.0;
+            vec2 o = (vec2(p) + 0.5 - s.centre_px) * flip;
+            sum += s.color.rgb * (aperture_weight(o, reach, ap, s.centre_px, flip, 1.0)
                 * sa_intensity(length(o) / radius_q, sa_strength(s.coc_px, ap)));
         }
         barrier();

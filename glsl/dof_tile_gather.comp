@@ -21,6 +21,9 @@ layout(push_constant) uniform Push {
     float curvature;
     float sa_amount;
     float sa_max_coc_px;
+    float centre_x_px;
+    float centre_y_px;
+    float cats_eye_per_px;
     float layer_transition_px;
 } pc;
 
@@ -35,6 +38,7 @@ void main() {
         return;
     }
     int r = int(ceil(tile_radius_px[t])) + 1;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px);
+    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
+                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
     imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));
 }

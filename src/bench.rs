@@ -49,6 +49,7 @@ fn bench_camera(width: u32, height: u32, bokeh: BokehMode) -> Camera {
         blades: Some(7),
         blade_rotation_deg: Some(0.0),
         spherical_aberration: Some(0.0),
+        cats_eye: Some(0.0),
         exposure: false,
         vignetting: false,
         film: Some(FilmMode::Linear),

@@ -73,6 +73,8 @@ pub struct CameraRequest {
     pub blade_rotation_deg: Option<f64>,
     /// Spherical aberration amount (-1..1); the lens file's when None.
     pub spherical_aberration: Option<f64>,
+    /// Cat's eye at the frame corners (0..1); the lens file's when None.
+    pub cats_eye: Option<f64>,
     pub exposure: bool,
     pub vignetting: bool,
     pub film: Option<FilmMode>,
@@ -123,6 +125,11 @@ impl Camera {
             return Err(CameraError::Invalid(format!("--max-coc must be >= 0 px, got {}", req.max_coc_px)));
         }
         let blades = req.blades.unwrap_or(lens_file.aperture.blades);
+        if let Some(c) = req.cats_eye {
+            if !(0.0..=1.0).contains(&c) {
+                return Err(CameraError::Invalid(format!("--cats-eye {c}: use a value in [0, 1]")));
+            }
+        }
         if let Some(sa) = req.spherical_aberration {
             if !(-1.0..=1.0).contains(&sa) {
                 return Err(CameraError::Invalid(format!(
@@ -139,8 +146,9 @@ impl Camera {
             aperture: ApertureShape {
                 blades,
                 rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
-                curvature: lens_file.aperture.curvature,
+                curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
+                cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),

@@ -27,9 +27,34 @@ pub struct ApertureSpec {
     pub blades: u32,
     #[serde(default)]
     pub rotation_deg: f64,
-    /// 0 straight blades .. 1 circular.
+    /// 0 straight blades .. 1 circular (stopped down, see below).
     #[serde(default)]
     pub curvature: f64,
+    /// Blade curvature wide open, when it differs: many lenses are round wide open and
+    /// polygonal stopped down. Default: `curvature`.
+    #[serde(default)]
+    pub curvature_wide_open: Option<f64>,
+    /// The f-number from which the blades have `curvature`; between f_number_min and this the
+    /// curvature goes from `curvature_wide_open` to `curvature` linearly in stops.
+    #[serde(default)]
+    pub polygonal_from_f_number: Option<f64>,
+    /// Cat's eye (optical vignetting of the bokeh) at the frame's farthest corner, 0..1.
+    #[serde(default)]
+    pub cats_eye: f64,
+}
+
+impl ApertureSpec {
+    /// Blade curvature at f-number `n` for a lens whose widest aperture is `f_number_min`.
+    pub fn curvature_at(&self, n: f64, f_number_min: f64) -> f64 {
+        let wide = self.curvature_wide_open.unwrap_or(self.curvature);
+        let stopped_at = self.polygonal_from_f_number.unwrap_or(f_number_min);
+        if stopped_at <= f_number_min || n >= stopped_at {
+            return if n >= stopped_at { self.curvature } else { wide };
+        }
+        // Linear in stops (log2 of the f-number squared).
+        let t = ((n / f_number_min).log2() / (stopped_at / f_number_min).log2()).clamp(0.0, 1.0);
+        wide + (self.curvature - wide) * t
+    }
 }
 
 /// A lens as a lens file describes it.
@@ -109,8 +134,25 @@ impl LensFile {
         if !(-1.0..=1.0).contains(&self.spherical_aberration) {
             return bad(format!("spherical_aberration = {} must be in [-1, 1]", self.spherical_aberration));
         }
-        if !(0.0..=1.0).contains(&self.aperture.curvature) {
-            return bad(format!("aperture.curvature = {} must be in [0, 1]", self.aperture.curvature));
+        let a = &self.aperture;
+        for (key, value) in [
+            ("aperture.curvature", Some(a.curvature)),
+            ("aperture.curvature_wide_open", a.curvature_wide_open),
+            ("aperture.cats_eye", Some(a.cats_eye)),
+        ] {
+            if let Some(v) = value {
+                if !(0.0..=1.0).contains(&v) {
+                    return bad(format!("{key} = {v} must be in [0, 1]"));
+                }
+            }
+        }
+        if let Some(n) = a.polygonal_from_f_number {
+            if !(n.is_finite() && n >= self.f_number_min) {
+                return bad(format!(
+                    "aperture.polygonal_from_f_number = {n} must be at least f_number_min = {}",
+                    self.f_number_min
+                ));
+            }
         }
         Ok(())
     }
@@ -138,6 +180,17 @@ mod tests {
         let text = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\nfocal_lenght = 3\n[aperture]\nblades = 9\n";
         let err = LensFile::parse(text, Path::new("l.toml")).unwrap_err().to_string();
         assert!(err.contains("line 7") && err.contains("focal_lenght"), "{err}");
+    }
+
+    #[test]
+    fn blades_round_wide_open_and_polygonal_stopped_down() {
+        let text = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n[aperture]\nblades = 9\ncurvature = 0.2\ncurvature_wide_open = 1.0\npolygonal_from_f_number = 5.6\n";
+        let lens = LensFile::parse(text, Path::new("l.toml")).unwrap();
+        let a = lens.aperture;
+        assert_eq!(a.curvature_at(1.4, 1.4), 1.0);
+        assert_eq!(a.curvature_at(8.0, 1.4), 0.2);
+        // f/2.8 is one of the two stops between f/1.4 and f/5.6: halfway.
+        assert!((a.curvature_at(2.8, 1.4) - 0.6).abs() < 1e-12);
     }
 
     #[test]

@@ -138,6 +138,9 @@ struct RenderArgs {
     /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
     #[arg(long = "spherical-aberration")]
     spherical_aberration: Option<String>,
+    /// Cat's eye (optical vignetting of the bokeh) at the frame corners, 0..1; default from the lens file.
+    #[arg(long = "cats-eye")]
+    cats_eye: Option<f64>,
     /// Depth-of-field method.
     #[arg(long, value_enum, default_value = "tiled")]
     bokeh: BokehArg,
@@ -292,6 +295,7 @@ fn render(args: RenderArgs) -> Result<()> {
         blades: args.blades,
         blade_rotation_deg: args.blade_rotation_deg,
         spherical_aberration: None,
+        cats_eye: args.cats_eye,
         exposure: !args.no_exposure,
         vignetting: !args.no_vignetting,
         film: Some(match args.film {

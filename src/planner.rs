@@ -90,7 +90,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         coc = Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h));
         match camera.bokeh {
             BokehMode::Reference => {
-                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px);
+                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
                 steps.push(Step {
                     pass: crate::passes::bokeh_gather::NAME,
                     run: true,
@@ -102,7 +102,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                 gather = Some(g);
             }
             BokehMode::Tiled => {
-                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px);
+                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
                 steps.push(Step {
                     pass: BOKEH_TILED,
                     run: true,

@@ -10,6 +10,8 @@ struct Aperture {
     float curvature;   // 0: straight blades, 1: circular
     float sa_amount;   // spherical aberration: > 0 under-corrected, < 0 over-corrected, 0 uniform
     float sa_max_coc_px; // the CoC at which the aberration reaches its full amount
+    vec2 centre_px;      // optical centre, in the shader's pixel units
+    float cats_eye_per_px; // cat's-eye amount / distance from the centre to the farthest corner
 };
 
 // Spherical aberration from the ray model of src/optics/spherical.rs (Kyaw 2013 sec 6.3.1,
@@ -59,13 +61,39 @@ float aperture_area(float r, Aperture ap) {
     return mix(polygon, circle, ap.curvature);
 }
 
-// Fraction of the pixel at offset o covered by the aperture image (a one-pixel linear ramp
+// Fraction of the pixel at offset o covered by the aperture image (a linear ramp `ramp` px wide
 // across the edge: antialiased, and exactly 1 for the centre pixel of a point-sized image).
-float aperture_coverage(vec2 o, float r, Aperture ap) {
+float aperture_coverage_ramp(vec2 o, float r, Aperture ap, float ramp) {
     // Nothing beyond the circumscribed circle's ramp: the polygon's edge-line distance
     // underestimates the true distance near corners, which would leak light past them.
-    if (dot(o, o) >= (r + 0.5) * (r + 0.5)) return 0.0;
-    return clamp(0.5 - aperture_sdf(o, r, ap), 0.0, 1.0);
+    float limit = r + 0.5 * ramp;
+    if (dot(o, o) >= limit * limit) return 0.0;
+    return clamp(0.5 - aperture_sdf(o, r, ap) / ramp, 0.0, 1.0);
+}
+
+float aperture_coverage(vec2 o, float r, Aperture ap) {
+    return aperture_coverage_ramp(o, r, ap, 1.0);
+}
+
+// The weight a sample at image position sample_px (flip = -1 in front of the focus plane, where
+// the aperture's image is inverted; o is already flipped) gives the pixel at offset o: coverage
+// over area, energy spread over the CoC. With the cat's eye (optical vignetting), the aperture
+// is clipped by a circle of the same radius shifted toward the image centre in proportion to the
+// sample's distance from it; the area shrinks with the two circles' overlap, so the highlight
+// keeps its energy while its shape narrows toward the corners.
+float aperture_weight(vec2 o, float r, Aperture ap, vec2 sample_px, float flip, float ramp) {
+    float cov = aperture_coverage_ramp(o, r, ap, ramp);
+    float area = aperture_area(r, ap);
+    if (ap.cats_eye_per_px > 0.0 && cov > 0.0) {
+        vec2 c = (ap.centre_px - sample_px) * ap.cats_eye_per_px * r * flip;
+        float d = min(length(c), 2.0 * r);
+        cov = min(cov, clamp(0.5 - (length(o - c) - r) / ramp, 0.0, 1.0));
+        // Overlap of two circles of radius r at distance d, relative to one circle.
+        float h = 0.5 * d / max(r, 1e-6);
+        float overlap = (2.0 * acos(h) - 2.0 * h * sqrt(max(1.0 - h * h, 0.0))) / PI;
+        area *= max(overlap, 1e-3);
+    }
+    return cov / area;
 }
 
 #endif

@@ -7,6 +7,7 @@
 #include "aperture.glsl"
 
 // Needs, declared by the including shader: images color_in (rgba32f) and coc_px (r32f).
+// Beyond the frame the edge pixels continue (clamp to edge).
 vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transition_px) {
     float coc_p = imageLoad(coc_px, p).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
@@ -14,16 +15,18 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
     float bg_w = 0.0, fg_w = 0.0;
     for (int dy = -r; dy <= r; ++dy) {
         for (int dx = -r; dx <= r; ++dx) {
-            ivec2 q = p + ivec2(dx, dy);
-            if (outside(q, size)) continue;
+            // Beyond the frame the edge pixels continue (clamp to edge), so pixels near the
+            // border see as much light from outside as a uniform scene would send them.
+            ivec2 q = clamp(p + ivec2(dx, dy), ivec2(0), size - 1);
             float coc_q = imageLoad(coc_px, q).r;
             float radius_q = max(0.5 * abs(coc_q), 0.5);
             // A sample behind p spreads no farther than p's own CoC.
             float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
             if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
             // The aperture's image is upright behind the focus plane and inverted in front.
-            vec2 o = vec2(-dx, -dy) * (coc_q < 0.0 ? -1.0 : 1.0);
-            float w = aperture_coverage(o, reach, ap) / aperture_area(reach, ap)
+            float flip = coc_q < 0.0 ? -1.0 : 1.0;
+            vec2 o = vec2(-dx, -dy) * flip;
+            float w = aperture_weight(o, reach, ap, vec2(p + ivec2(dx, dy)) + 0.5, flip, 1.0)
                 * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
             if (w <= 0.0) continue;
             vec4 c = finite_or_zero(imageLoad(color_in, q));

@@ -16,11 +16,27 @@ pub struct ApertureShape {
     /// Spherical aberration amount (-1..1): > 0 under-corrected, < 0 over-corrected, 0 uniform
     /// disks (src/optics/spherical.rs).
     pub spherical_aberration: f64,
+    /// Cat's eye (optical vignetting) at the frame's farthest corner, 0..1: the aperture is
+    /// clipped by a circle shifted by this fraction of its radius there (less nearer the centre).
+    pub cats_eye: f64,
 }
 
 impl ApertureShape {
     pub const CIRCLE: ApertureShape =
-        ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0, spherical_aberration: 0.0 };
+        ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0, spherical_aberration: 0.0, cats_eye: 0.0 };
+
+    /// cats_eye / (distance from the optical centre to the farthest corner), per pixel.
+    pub fn cats_eye_per_px(&self, width: u32, height: u32, centre_px: [f64; 2]) -> f64 {
+        let corner = [(0.0, 0.0), (width as f64, 0.0), (0.0, height as f64), (width as f64, height as f64)]
+            .iter()
+            .map(|&(x, y)| ((x - centre_px[0]).powi(2) + (y - centre_px[1]).powi(2)).sqrt())
+            .fold(0.0, f64::max);
+        if corner > 0.0 {
+            self.cats_eye.clamp(0.0, 1.0) / corner
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Push constants of glsl/bokeh_gather.comp.
@@ -34,6 +50,9 @@ pub struct GatherParams {
     pub curvature: f32,
     pub sa_amount: f32,
     pub sa_max_coc_px: f32,
+    pub centre_x_px: f32,
+    pub centre_y_px: f32,
+    pub cats_eye_per_px: f32,
     pub layer_transition_px: f32,
 }
 
@@ -46,6 +65,7 @@ impl GatherParams {
         max_abs_coc_px: f64,
         aperture: &ApertureShape,
         sa_max_coc_px: f64,
+        centre_px: [f64; 2],
     ) -> GatherParams {
         GatherParams {
             size: [width as i32, height as i32],
@@ -55,6 +75,9 @@ impl GatherParams {
             curvature: if aperture.blades < 3 { 1.0 } else { aperture.curvature.clamp(0.0, 1.0) as f32 },
             sa_amount: aperture.spherical_aberration as f32,
             sa_max_coc_px: sa_max_coc_px as f32,
+            centre_x_px: centre_px[0] as f32,
+            centre_y_px: centre_px[1] as f32,
+            cats_eye_per_px: aperture.cats_eye_per_px(width, height, centre_px) as f32,
             layer_transition_px: 1.0,
         }
     }
@@ -84,6 +107,27 @@ pub fn aperture_area(r: f32, p: &GatherParams) -> f32 {
     polygon + (circle - polygon) * p.curvature
 }
 
+/// Coverage over area of a sample's aperture image, with the cat's eye
+/// (aperture_weight in glsl/include/aperture.glsl).
+pub fn aperture_weight(o: [f32; 2], r: f32, p: &GatherParams, sample_px: [f32; 2], flip: f32) -> f32 {
+    if o[0] * o[0] + o[1] * o[1] >= (r + 0.5) * (r + 0.5) {
+        return 0.0;
+    }
+    let mut cov = (0.5 - aperture_sdf(o, r, p)).clamp(0.0, 1.0);
+    let mut area = aperture_area(r, p);
+    if p.cats_eye_per_px > 0.0 && cov > 0.0 {
+        let k = p.cats_eye_per_px * r * flip;
+        let c = [(p.centre_x_px - sample_px[0]) * k, (p.centre_y_px - sample_px[1]) * k];
+        let d = (c[0] * c[0] + c[1] * c[1]).sqrt().min(2.0 * r);
+        let dist = ((o[0] - c[0]).powi(2) + (o[1] - c[1]).powi(2)).sqrt();
+        cov = cov.min((0.5 - (dist - r)).clamp(0.0, 1.0));
+        let h = 0.5 * d / r.max(1e-6);
+        let overlap = (2.0 * h.acos() - 2.0 * h * (1.0 - h * h).max(0.0).sqrt()) / std::f32::consts::PI;
+        area *= overlap.max(1e-3);
+    }
+    cov / area
+}
+
 /// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
 pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
@@ -97,10 +141,9 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
             let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
             for dy in -p.radius_px..=p.radius_px {
                 for dx in -p.radius_px..=p.radius_px {
-                    let (qx, qy) = (x + dx, y + dy);
-                    if qx < 0 || qy < 0 || qx >= w || qy >= h {
-                        continue;
-                    }
+                    // Clamp to edge, like the shader.
+                    let (ux, uy) = (x + dx, y + dy);
+                    let (qx, qy) = (ux.clamp(0, w - 1), uy.clamp(0, h - 1));
                     let qi = (qy * w + qx) as usize;
                     let coc_q = coc_px[qi];
                     let radius_q = (0.5 * coc_q.abs()).max(0.5);
@@ -108,18 +151,15 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
                     if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
                         continue;
                     }
-                    let s = if coc_q < 0.0 { -1.0 } else { 1.0 };
-                    let o = [-dx as f32 * s, -dy as f32 * s];
-                    let cov = if o[0] * o[0] + o[1] * o[1] >= (reach + 0.5) * (reach + 0.5) {
-                        0.0
-                    } else {
-                        (0.5 - aperture_sdf(o, reach, p)).clamp(0.0, 1.0)
-                    };
+                    let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
+                    let o = [-dx as f32 * flip, -dy as f32 * flip];
+                    let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
+                    let cov_over_area = aperture_weight(o, reach, p, sample_px, flip);
                     let s =
                         crate::optics::spherical::strength(p.sa_amount as f64, coc_q as f64, p.sa_max_coc_px as f64);
                     let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
                     let sa = crate::optics::spherical::intensity(s, r_norm as f64) as f32;
-                    let wgt = cov / aperture_area(reach, p) * sa;
+                    let wgt = cov_over_area * sa;
                     if wgt <= 0.0 {
                         continue;
                     }

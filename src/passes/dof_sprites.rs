@@ -17,6 +17,9 @@ pub struct SpritesParams {
     pub curvature: f32,
     pub sa_amount: f32,
     pub sa_max_coc_px: f32,
+    pub centre_x_px: f32,
+    pub centre_y_px: f32,
+    pub cats_eye_per_px: f32,
     pub sprite_capacity: i32,
 }
 

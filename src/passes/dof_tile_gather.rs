@@ -19,6 +19,9 @@ pub struct TileGatherParams {
     pub curvature: f32,
     pub sa_amount: f32,
     pub sa_max_coc_px: f32,
+    pub centre_x_px: f32,
+    pub centre_y_px: f32,
+    pub cats_eye_per_px: f32,
     pub layer_transition_px: f32,
 }
 

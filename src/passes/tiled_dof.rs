@@ -42,10 +42,20 @@ pub struct TiledDofParams {
     pub aperture: ApertureShape,
     /// CoC diameter at which spherical aberration reaches its full amount.
     pub sa_max_coc_px: f32,
+    /// Optical centre in pixels and the cat's-eye amount per pixel from it.
+    pub centre_px: [f32; 2],
+    pub cats_eye_per_px: f32,
 }
 
 impl TiledDofParams {
-    pub fn new(width: u32, height: u32, max_abs_coc_px: f64, aperture: &ApertureShape, sa_max_coc_px: f64) -> Self {
+    pub fn new(
+        width: u32,
+        height: u32,
+        max_abs_coc_px: f64,
+        aperture: &ApertureShape,
+        sa_max_coc_px: f64,
+        centre_px: [f64; 2],
+    ) -> Self {
         TiledDofParams {
             width,
             height,
@@ -57,6 +67,8 @@ impl TiledDofParams {
             max_abs_coc_px: max_abs_coc_px as f32,
             aperture: *aperture,
             sa_max_coc_px: sa_max_coc_px as f32,
+            centre_px: [centre_px[0] as f32, centre_px[1] as f32],
+            cats_eye_per_px: aperture.cats_eye_per_px(width, height, centre_px) as f32,
         }
     }
 
@@ -141,6 +153,8 @@ impl TiledDof {
         let fg_half = gpu.create_image("dof foreground (half)", hw as u32, hh as u32, rgba)?;
         let (blades, rotation_rad, curvature, sa_amount) = p.aperture_fields();
         let sa_max_coc_px = p.sa_max_coc_px;
+        let [centre_x_px, centre_y_px] = p.centre_px;
+        let cats_eye_per_px = p.cats_eye_per_px;
         let size = [p.width as i32, p.height as i32];
 
         self.tiles.record(rec, coc, &tile_coc, &TilesParams { size, tiles })?;
@@ -185,6 +199,9 @@ impl TiledDof {
                 curvature,
                 sa_amount,
                 sa_max_coc_px,
+                centre_x_px,
+                centre_y_px,
+                cats_eye_per_px,
                 layer_transition_px,
             },
         )?;
@@ -207,6 +224,9 @@ impl TiledDof {
             // The half-resolution gather works in half-size CoC units.
             sa_amount,
             sa_max_coc_px: 0.5 * sa_max_coc_px,
+            centre_x_px: 0.5 * centre_x_px,
+            centre_y_px: 0.5 * centre_y_px,
+            cats_eye_per_px: 2.0 * cats_eye_per_px,
             layer_transition_px,
         };
         self.half_gather.record(
@@ -230,6 +250,9 @@ impl TiledDof {
             curvature,
             sa_amount,
             sa_max_coc_px,
+            centre_x_px,
+            centre_y_px,
+            cats_eye_per_px,
             layer_transition_px,
         };
         self.composite.record(
@@ -253,6 +276,9 @@ impl TiledDof {
             curvature,
             sa_amount,
             sa_max_coc_px,
+            centre_x_px,
+            centre_y_px,
+            cats_eye_per_px,
             sprite_capacity: p.sprite_capacity as i32,
         };
         self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, &sprites_params)?;

@@ -42,6 +42,7 @@ pub fn dof_camera(focal_length_mm: f64, f_number: f64, focus_m: f64, blades: u32
         blades: Some(blades),
         blade_rotation_deg: Some(0.0),
         spherical_aberration: Some(0.0),
+        cats_eye: Some(0.0),
         exposure: false,
         vignetting: false,
         film: Some(FilmMode::Linear),
