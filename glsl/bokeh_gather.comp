@@ -8,6 +8,7 @@
 //    coverage it reaches (alpha), so a blurred foreground covers what is behind it softly.
 //  - A sharp subject (tiny CoC) reaches only its own pixel, so it does not bleed into the background.
 #include "common.glsl"
+#define APERTURE_MASK_BINDING 3
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;

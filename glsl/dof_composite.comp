@@ -3,6 +3,7 @@
 // background, or for pixels that are themselves nearly sharp the exact gather (so a sharp
 // subject stays sharp at full resolution), with the half-resolution foreground composited over.
 #include "common.glsl"
+#define APERTURE_MASK_BINDING 6
 #include "dof_tiles.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;

@@ -4,6 +4,7 @@
 // layer rules as the exact gather; the rings are rotated per pixel to turn aliasing into fine
 // noise. Writes the background colour and the foreground colour with its coverage (alpha).
 #include "common.glsl"
+#define APERTURE_MASK_BINDING 6
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
 

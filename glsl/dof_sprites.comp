@@ -5,6 +5,7 @@
 // then every pixel sums those. Same occlusion rule as the gather: a sprite behind a pixel
 // spreads no farther than the pixel's own CoC.
 #include "common.glsl"
+#define APERTURE_MASK_BINDING 5
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
 

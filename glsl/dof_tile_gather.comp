@@ -3,6 +3,7 @@
 // exact gather (include/gather.glsl) with the tile's own radius for small CoC. Dispatched
 // indirectly, one workgroup per tile of the class's list.
 #include "common.glsl"
+#define APERTURE_MASK_BINDING 5
 #include "dof_tiles.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;

@@ -56,6 +56,8 @@ pub struct Camera {
     /// User clamp on |CoC| in pixels.
     pub max_coc_px: f64,
     pub bokeh: BokehMode,
+    /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
+    pub aperture_mask: Option<crate::aperture_mask::ApertureMask>,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -160,6 +162,7 @@ impl Camera {
             film: req.film.unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc_px: req.max_coc_px,
             bokeh: req.bokeh,
+            aperture_mask: None,
         })
     }
 

@@ -138,6 +138,10 @@ struct RenderArgs {
     /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
     #[arg(long = "spherical-aberration")]
     spherical_aberration: Option<String>,
+    /// An aperture image (PNG or EXR, grey levels = transmission) used as the iris shape instead
+    /// of the blades; upright for background bokeh, turned by --blade-rotation.
+    #[arg(long = "aperture-image")]
+    aperture_image: Option<PathBuf>,
     /// Cat's eye (optical vignetting of the bokeh) at the frame corners, 0..1; default from the lens file.
     #[arg(long = "cats-eye")]
     cats_eye: Option<f64>,
@@ -319,7 +323,10 @@ fn render(args: RenderArgs) -> Result<()> {
                 .with_context(|| format!("--spherical-aberration {text:?}: a number in [-1, 1] or 'uniform'"))?,
         ),
     };
-    let camera = Camera::new(&lens_file, &request)?;
+    let mut camera = Camera::new(&lens_file, &request)?;
+    if let Some(path) = &args.aperture_image {
+        camera.aperture_mask = Some(realcam::aperture_mask::ApertureMask::load(path)?);
+    }
     if !(args.depth_unit_m.is_finite() && args.depth_unit_m > 0.0) {
         bail!("--depth-unit must be a positive number of metres, got {}", args.depth_unit_m);
     }

@@ -36,6 +36,8 @@ pub struct Plan {
     pub tiled: Option<TiledDofParams>,
     pub vignette: Option<VignetteParams>,
     pub film: Option<FilmParams>,
+    /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
+    pub aperture_mask: Vec<f32>,
     /// Signed CoC range over the frame in pixels (after the user clamp).
     pub coc_range_px: (f64, f64),
 }
@@ -79,7 +81,9 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         camera.lens.f_number,
         camera.lens.focus_distance_mm / 1000.0
     );
-    let aperture_text = if camera.aperture.blades >= 3 {
+    let aperture_text = if camera.aperture_mask.is_some() {
+        "the user's aperture image".to_string()
+    } else if camera.aperture.blades >= 3 {
         format!("{}-bladed aperture", camera.aperture.blades)
     } else {
         "circular aperture".into()
@@ -199,5 +203,6 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         Some(FilmParams::new(w, h, gain, curve.as_ref()))
     };
 
-    Plan { steps, coc, gather, tiled, vignette, film, coc_range_px }
+    let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
+    Plan { steps, coc, gather, tiled, vignette, film, aperture_mask, coc_range_px }
 }

@@ -71,13 +71,21 @@ impl Renderer {
         if let (Some(pass), Some(params), Some(depth), Some(coc)) = (&self.coc, &plan.coc, &depth, &coc_image) {
             pass.record(&mut rec, depth, coc, params)?;
         }
-        if let (Some(pass), Some(params), Some(coc), Some(out)) = (&self.gather, &plan.gather, &coc_image, &dof_out) {
-            pass.record(&mut rec, current, coc, out, params)?;
+        let aperture_mask = match (&self.gather, &self.tiled) {
+            (None, None) => None,
+            _ => Some(rec.upload_buffer("aperture image", &plan.aperture_mask)?),
+        };
+        if let (Some(pass), Some(params), Some(coc), Some(out), Some(mask)) =
+            (&self.gather, &plan.gather, &coc_image, &dof_out, &aperture_mask)
+        {
+            pass.record(&mut rec, current, coc, out, mask, params)?;
             current = out;
         }
         let mut _tiled_frame = None;
-        if let (Some(tiled), Some(params), Some(coc), Some(out)) = (&self.tiled, &plan.tiled, &coc_image, &dof_out) {
-            _tiled_frame = Some(tiled.record(&mut rec, current, coc, out, params)?);
+        if let (Some(tiled), Some(params), Some(coc), Some(out), Some(mask)) =
+            (&self.tiled, &plan.tiled, &coc_image, &dof_out, &aperture_mask)
+        {
+            _tiled_frame = Some(tiled.record(&mut rec, current, coc, out, mask, params)?);
             current = out;
         }
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {

@@ -552,3 +552,50 @@ fn cats_eye_narrows_corner_bokeh_radially_and_keeps_its_energy() {
         assert!(ratio_r < ratio_t - 0.15, "the cat's eye narrows the disk radially more than tangentially");
     }
 }
+
+#[test]
+fn aperture_image_shapes_the_bokeh_upright_behind_and_inverted_in_front() {
+    // A half-disk aperture image (the upper half open): behind the focus plane the highlight's
+    // bokeh is the upper half-disk, in front of it the lower one (the image is inverted); the
+    // energy stays.
+    let gpu = gpu();
+    let s = 128u32;
+    let grey: Vec<f32> = (0..s * s)
+        .map(|i| {
+            let (x, y) = ((i % s) as f64 + 0.5 - 64.0, (i / s) as f64 + 0.5 - 64.0);
+            if x * x + y * y <= 64.0 * 64.0 && y < 0.0 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mask = realcam::aperture_mask::ApertureMask::from_grey(s, s, &grey).unwrap();
+    for (scene, upper_expected) in [("point_bg", true), ("point_fg", false)] {
+        for mode in [BokehMode::Tiled, BokehMode::Reference] {
+            let mut camera = dof_camera(50.0, 1.0, 2.0, 0);
+            camera.bokeh = mode;
+            camera.aperture_mask = Some(mask.clone());
+            let frame = testdata_frame(scene, &camera);
+            let (rgba, _, _) = render(&gpu, &frame, &camera);
+            let (w, h) = (frame.width, frame.height);
+            let (mut above, mut below) = (0.0, 0.0);
+            for y in 0..h {
+                for x in 0..w {
+                    let v = (at(&rgba, w, x, y, 1) - PLANE) as f64;
+                    if (y as i32) < (h / 2) as i32 {
+                        above += v;
+                    } else if y > h / 2 {
+                        below += v;
+                    }
+                }
+            }
+            let energy = energy(&rgba) - energy(&frame.color);
+            let energy_error = energy.abs() / (3.0 * (HIGHLIGHT - PLANE) as f64);
+            println!("{scene} {mode:?}: above {above:.1}, below {below:.1}, energy error {:.3}%", energy_error * 100.0);
+            let (lit, dark) = if upper_expected { (above, below) } else { (below, above) };
+            assert!(lit > 20.0 * dark.abs().max(1e-3), "{scene} {mode:?}: lit half {lit}, dark half {dark}");
+            assert!(energy_error < 0.01, "{scene} {mode:?}: energy error {:.3}%", energy_error * 100.0);
+        }
+    }
+}

@@ -45,8 +45,23 @@ fn assert_close(gpu: &[f32], cpu: &[f32], what: &str, relative: f32) {
 #[test]
 fn whole_pipeline_matches_the_cpu_twins() {
     let gpu = gpu();
-    for blades in [0, 5] {
+    // A triangular aperture image for the third run.
+    let s = 32u32;
+    let triangle: Vec<f32> = (0..s * s)
+        .map(|i| {
+            if (i % s) as f32 >= ((i / s) as f32) * 0.5 && (i % s) as f32 <= s as f32 - ((i / s) as f32) * 0.5 {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let mask = realcam::aperture_mask::ApertureMask::from_grey(s, s, &triangle).unwrap();
+    for (blades, with_mask) in [(0, false), (5, false), (0, true)] {
         let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
+        camera.aperture_mask = with_mask.then(|| mask.clone());
+        camera.aperture.spherical_aberration = 0.5;
+        camera.aperture.cats_eye = 0.3;
         camera.bokeh = realcam::camera::BokehMode::Reference;
         camera.vignetting = true;
         camera.exposure = true;
@@ -62,7 +77,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
 
         let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap());
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
-        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap());
+        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap(), &plan.aperture_mask);
         let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap());
         let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap());
         assert_close(&out.rgba, &cpu, &format!("pipeline with {blades} blades"), 1e-4);

@@ -14,6 +14,25 @@ struct Aperture {
     float cats_eye_per_px; // cat's-eye amount / distance from the centre to the farthest corner
 };
 
+// The user's aperture image (src/aperture_mask.rs): [size, mean, size*size values], size 0 when
+// none. Each shader that includes this file defines APERTURE_MASK_BINDING.
+layout(binding = APERTURE_MASK_BINDING, std430) readonly buffer ApertureMask { float aperture_mask[]; };
+
+float mask_texel(ivec2 i, int n) {
+    if (any(lessThan(i, ivec2(0))) || any(greaterThanEqual(i, ivec2(n)))) return 0.0;
+    return aperture_mask[2 + i.y * n + i.x];
+}
+
+// The mask, bilinear, at uv in [-1, 1]^2 (the CoC's circumscribed square, y down).
+float mask_value(vec2 uv) {
+    int n = int(aperture_mask[0]);
+    vec2 t = (uv * 0.5 + 0.5) * float(n) - 0.5;
+    ivec2 i = ivec2(floor(t));
+    vec2 f = t - vec2(i);
+    return mix(mix(mask_texel(i, n), mask_texel(i + ivec2(1, 0), n), f.x),
+               mix(mask_texel(i + ivec2(0, 1), n), mask_texel(i + ivec2(1, 1), n), f.x), f.y);
+}
+
 // Spherical aberration from the ray model of src/optics/spherical.rs (Kyaw 2013 sec 6.3.1,
 // appendix 11.2-11.3): s grows with the CoC, flips sign in front of the focus plane.
 #define SA_MAX_STRENGTH 0.3
@@ -82,8 +101,19 @@ float aperture_coverage(vec2 o, float r, Aperture ap) {
 // sample's distance from it; the area shrinks with the two circles' overlap, so the highlight
 // keeps its energy while its shape narrows toward the corners.
 float aperture_weight(vec2 o, float r, Aperture ap, vec2 sample_px, float flip, float ramp) {
-    float cov = aperture_coverage_ramp(o, r, ap, ramp);
-    float area = aperture_area(r, ap);
+    float cov, area;
+    if (aperture_mask[0] > 0.0 && r > 1.0) {
+        // The user's aperture image, turned by the rotation (counter-clockwise, y up).
+        float c = cos(ap.rotation), s = sin(ap.rotation);
+        vec2 up = vec2(o.x, -o.y);
+        vec2 turned = vec2(c * up.x + s * up.y, -s * up.x + c * up.y);
+        cov = mask_value(vec2(turned.x, -turned.y) / r);
+        area = aperture_mask[1] * 4.0 * r * r;
+    } else {
+        // Points of a pixel or less show no shape: the polygon / circle.
+        cov = aperture_coverage_ramp(o, r, ap, ramp);
+        area = aperture_area(r, ap);
+    }
     if (ap.cats_eye_per_px > 0.0 && cov > 0.0) {
         vec2 c = (ap.centre_px - sample_px) * ap.cats_eye_per_px * r * flip;
         float d = min(length(c), 2.0 * r);

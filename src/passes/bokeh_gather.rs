@@ -2,7 +2,7 @@
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
 use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuImage, GpuResult, Recorder};
+use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
 use ash::vk;
 
 pub const NAME: &str = "bokeh_gather";
@@ -107,14 +107,35 @@ pub fn aperture_area(r: f32, p: &GatherParams) -> f32 {
     polygon + (circle - polygon) * p.curvature
 }
 
+/// The aperture image, bilinear, at uv in [-1, 1]^2 (mask_value in glsl/include/aperture.glsl).
+pub fn mask_value(mask: &[f32], uv: [f32; 2]) -> f32 {
+    let n = mask[0] as i32;
+    let texel = |x: i32, y: i32| if x < 0 || y < 0 || x >= n || y >= n { 0.0 } else { mask[2 + (y * n + x) as usize] };
+    let t = [(uv[0] * 0.5 + 0.5) * n as f32 - 0.5, (uv[1] * 0.5 + 0.5) * n as f32 - 0.5];
+    let (i, j) = (t[0].floor() as i32, t[1].floor() as i32);
+    let (fx, fy) = (t[0] - i as f32, t[1] - j as f32);
+    let top = texel(i, j) + (texel(i + 1, j) - texel(i, j)) * fx;
+    let bottom = texel(i, j + 1) + (texel(i + 1, j + 1) - texel(i, j + 1)) * fx;
+    top + (bottom - top) * fy
+}
+
 /// Coverage over area of a sample's aperture image, with the cat's eye
 /// (aperture_weight in glsl/include/aperture.glsl).
-pub fn aperture_weight(o: [f32; 2], r: f32, p: &GatherParams, sample_px: [f32; 2], flip: f32) -> f32 {
-    if o[0] * o[0] + o[1] * o[1] >= (r + 0.5) * (r + 0.5) {
-        return 0.0;
+pub fn aperture_weight(o: [f32; 2], r: f32, p: &GatherParams, sample_px: [f32; 2], flip: f32, mask: &[f32]) -> f32 {
+    let (mut cov, mut area);
+    if mask.first().copied().unwrap_or(0.0) > 0.0 && r > 1.0 {
+        let (c, s) = (p.rotation_rad.cos(), p.rotation_rad.sin());
+        let up = [o[0], -o[1]];
+        let turned = [c * up[0] + s * up[1], -s * up[0] + c * up[1]];
+        cov = mask_value(mask, [turned[0] / r, -turned[1] / r]);
+        area = mask[1] * 4.0 * r * r;
+    } else {
+        if o[0] * o[0] + o[1] * o[1] >= (r + 0.5) * (r + 0.5) {
+            return 0.0;
+        }
+        cov = (0.5 - aperture_sdf(o, r, p)).clamp(0.0, 1.0);
+        area = aperture_area(r, p);
     }
-    let mut cov = (0.5 - aperture_sdf(o, r, p)).clamp(0.0, 1.0);
-    let mut area = aperture_area(r, p);
     if p.cats_eye_per_px > 0.0 && cov > 0.0 {
         let k = p.cats_eye_per_px * r * flip;
         let c = [(p.centre_x_px - sample_px[0]) * k, (p.centre_y_px - sample_px[1]) * k];
@@ -129,7 +150,8 @@ pub fn aperture_weight(o: [f32; 2], r: f32, p: &GatherParams, sample_px: [f32; 2
 }
 
 /// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
-pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
+/// `aperture_mask`: the buffer data of src/aperture_mask.rs ([0, 0] for none).
+pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams, aperture_mask: &[f32]) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
     let mut out = vec![0.0f32; rgba.len()];
     let finite = |v: f32| if v.is_finite() { v.clamp(-3.0e38, 3.0e38) } else { 0.0 };
@@ -154,7 +176,7 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams) -> Vec<f32> {
                     let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
                     let o = [-dx as f32 * flip, -dy as f32 * flip];
                     let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
-                    let cov_over_area = aperture_weight(o, reach, p, sample_px, flip);
+                    let cov_over_area = aperture_weight(o, reach, p, sample_px, flip, aperture_mask);
                     let s =
                         crate::optics::spherical::strength(p.sa_amount as f64, coc_q as f64, p.sa_max_coc_px as f64);
                     let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
@@ -191,7 +213,12 @@ pub struct BokehGatherPass {
 
 impl BokehGatherPass {
     pub fn new(gpu: &Gpu) -> GpuResult<BokehGatherPass> {
-        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 3];
+        let bindings = [
+            vk::DescriptorType::STORAGE_IMAGE,
+            vk::DescriptorType::STORAGE_IMAGE,
+            vk::DescriptorType::STORAGE_IMAGE,
+            vk::DescriptorType::STORAGE_BUFFER,
+        ];
         let size = std::mem::size_of::<GatherParams>() as u32;
         Ok(BokehGatherPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -202,6 +229,7 @@ impl BokehGatherPass {
         color: &GpuImage,
         coc: &GpuImage,
         output: &GpuImage,
+        aperture_mask: &GpuBuffer,
         params: &GatherParams,
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
@@ -212,7 +240,7 @@ impl BokehGatherPass {
         rec.image_barriers(&[after_compute_write(coc), after_compute_write(color), overwrite(output)]);
         rec.dispatch(
             &self.pipeline,
-            &[Bind::Image(color), Bind::Image(coc), Bind::Image(output)],
+            &[Bind::Image(color), Bind::Image(coc), Bind::Image(output), Bind::Buffer(aperture_mask)],
             push_bytes(params),
             groups_for(color.width, color.height),
         )?;

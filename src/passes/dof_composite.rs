@@ -37,12 +37,13 @@ pub struct CompositeBindings<'a> {
     pub output: &'a GpuImage,
     pub tile_lists: &'a GpuBuffer,
     pub args: &'a GpuBuffer,
+    pub aperture_mask: &'a GpuBuffer,
 }
 
 impl DofCompositePass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 5];
-        bindings.push(vk::DescriptorType::STORAGE_BUFFER);
+        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
         let size = std::mem::size_of::<CompositeParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -66,6 +67,7 @@ impl DofCompositePass {
                 Bind::Image(b.fg_half),
                 Bind::Image(b.output),
                 Bind::Buffer(b.tile_lists),
+                Bind::Buffer(b.aperture_mask),
             ],
             push_bytes(params),
             b.args,

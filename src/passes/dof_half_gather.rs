@@ -31,7 +31,7 @@ pub struct DofHalfGatherPass {
 impl DofHalfGatherPass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 4];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
+        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
         let size = std::mem::size_of::<HalfGatherParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -47,6 +47,7 @@ impl DofHalfGatherPass {
         tile_lists: &GpuBuffer,
         tile_radius: &GpuBuffer,
         args: &GpuBuffer,
+        aperture_mask: &GpuBuffer,
         params: &HalfGatherParams,
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
@@ -68,6 +69,7 @@ impl DofHalfGatherPass {
                 Bind::Image(fg_half),
                 Bind::Buffer(tile_lists),
                 Bind::Buffer(tile_radius),
+                Bind::Buffer(aperture_mask),
             ],
             push_bytes(params),
             args,

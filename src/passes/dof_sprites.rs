@@ -30,7 +30,7 @@ pub struct DofSpritesPass {
 impl DofSpritesPass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 2];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
+        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 4]);
         let size = std::mem::size_of::<SpritesParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -44,6 +44,7 @@ impl DofSpritesPass {
         args: &GpuBuffer,
         sprites: &GpuBuffer,
         tile_lists: &GpuBuffer,
+        aperture_mask: &GpuBuffer,
         params: &SpritesParams,
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
@@ -59,6 +60,7 @@ impl DofSpritesPass {
                 Bind::Buffer(args),
                 Bind::Buffer(sprites),
                 Bind::Buffer(tile_lists),
+                Bind::Buffer(aperture_mask),
             ],
             push_bytes(params),
             args,

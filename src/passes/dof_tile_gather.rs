@@ -36,12 +36,13 @@ pub struct TileGatherBindings<'a> {
     pub tile_lists: &'a GpuBuffer,
     pub tile_radius: &'a GpuBuffer,
     pub args: &'a GpuBuffer,
+    pub aperture_mask: &'a GpuBuffer,
 }
 
 impl DofTileGatherPass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 3];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
+        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
         let size = std::mem::size_of::<TileGatherParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -55,6 +56,7 @@ impl DofTileGatherPass {
             Bind::Image(b.output),
             Bind::Buffer(b.tile_lists),
             Bind::Buffer(b.tile_radius),
+            Bind::Buffer(b.aperture_mask),
         ];
         for (class, label) in [(0, "dof_copy_tiles"), (1, "dof_small_tiles")] {
             rec.begin_pass(label);

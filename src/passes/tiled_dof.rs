@@ -128,6 +128,7 @@ impl TiledDof {
         color: &GpuImage,
         coc: &GpuImage,
         output: &GpuImage,
+        aperture_mask: &GpuBuffer,
         p: &TiledDofParams,
     ) -> GpuResult<TiledFrame> {
         let gpu = rec.gpu().clone();
@@ -189,7 +190,7 @@ impl TiledDof {
         let layer_transition_px = 1.0;
         self.tile_gather.record(
             rec,
-            &TileGatherBindings { color, coc, output, tile_lists: &tile_lists, tile_radius: &tile_radius, args: &args },
+            &TileGatherBindings { color, coc, output, tile_lists: &tile_lists, tile_radius: &tile_radius, args: &args, aperture_mask },
             &TileGatherParams {
                 size,
                 tiles,
@@ -238,6 +239,7 @@ impl TiledDof {
             &tile_lists,
             &tile_radius,
             &args,
+            aperture_mask,
             &half,
         )?;
         let composite = CompositeParams {
@@ -265,6 +267,7 @@ impl TiledDof {
                 output,
                 tile_lists: &tile_lists,
                 args: &args,
+                aperture_mask,
             },
             &composite,
         )?;
@@ -281,7 +284,7 @@ impl TiledDof {
             cats_eye_per_px,
             sprite_capacity: p.sprite_capacity as i32,
         };
-        self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, &sprites_params)?;
+        self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, aperture_mask, &sprites_params)?;
         Ok(TiledFrame {
             args,
             tile_coc,

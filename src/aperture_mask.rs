@@ -1,0 +1,124 @@
+//! A user-supplied aperture image (PNG or EXR): the iris shape as a grey-level mask, used
+//! instead of the bladed polygon for the bokeh. Resampled to a fixed square grid that spans the
+//! CoC's circumscribed square; its mean sets the area over which each sample's energy spreads.
+
+use std::path::{Path, PathBuf};
+
+/// Grid the mask is resampled to (MASK_SIZE x MASK_SIZE values).
+pub const MASK_SIZE: u32 = 64;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ApertureMaskError {
+    #[error("aperture image {path}: {message}")]
+    Read { path: PathBuf, message: String },
+    #[error("aperture image {path}: the mask is empty (every value is 0 or below)")]
+    Empty { path: PathBuf },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ApertureMask {
+    /// MASK_SIZE^2 values in 0..1, row-major, top row first (the aperture as seen for background
+    /// bokeh, upright).
+    pub values: Vec<f32>,
+    /// Mean of the values: the fraction of the circumscribed square the aperture covers.
+    pub mean: f32,
+}
+
+impl ApertureMask {
+    /// Load a PNG (luminance, times alpha if any) or an EXR (the first of A, Y, R, G, B found as
+    /// its colour channels' mean) and resample it, centred, into the square grid.
+    pub fn load(path: &Path) -> Result<ApertureMask, ApertureMaskError> {
+        let err = |message: String| ApertureMaskError::Read { path: path.to_path_buf(), message };
+        let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let (w, h, grey) = if is_exr {
+            let img = crate::io::read_exr_rgba(path).map_err(|e| err(e.to_string()))?;
+            let grey: Vec<f32> = img.data.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
+            (img.width, img.height, grey)
+        } else {
+            let img = image::open(path).map_err(|e| err(e.to_string()))?.to_luma_alpha32f();
+            let grey: Vec<f32> = img.pixels().map(|p| p.0[0] * p.0[1]).collect();
+            (img.width(), img.height(), grey)
+        };
+        Self::from_grey(w, h, &grey).ok_or_else(|| ApertureMaskError::Empty { path: path.to_path_buf() })
+    }
+
+    /// Resample a grey image (values clamped to 0..1) into the square grid, each cell the mean
+    /// of 8x8 point samples (nearest source pixel); a non-square image is centred in the square
+    /// of its longer side. None if it is empty.
+    pub fn from_grey(width: u32, height: u32, grey: &[f32]) -> Option<ApertureMask> {
+        const SUB: u32 = 8;
+        let side = width.max(height) as f64;
+        let (ox, oy) = ((side - width as f64) / 2.0, (side - height as f64) / 2.0);
+        let n = MASK_SIZE;
+        let sample = |sx: f64, sy: f64| {
+            let (x, y) = (sx - ox, sy - oy);
+            if x < 0.0 || y < 0.0 || x >= width as f64 || y >= height as f64 {
+                return 0.0;
+            }
+            let v = grey[(y as u32 * width + x as u32) as usize];
+            if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 }
+        };
+        let mut values = Vec::with_capacity((n * n) as usize);
+        for gy in 0..n {
+            for gx in 0..n {
+                let mut sum = 0.0;
+                for j in 0..SUB {
+                    for i in 0..SUB {
+                        let u = (gx as f64 + (i as f64 + 0.5) / SUB as f64) / n as f64 * side;
+                        let v = (gy as f64 + (j as f64 + 0.5) / SUB as f64) / n as f64 * side;
+                        sum += sample(u, v);
+                    }
+                }
+                values.push(sum / (SUB * SUB) as f32);
+            }
+        }
+        let mean = values.iter().sum::<f32>() / (n * n) as f32;
+        (mean > 0.0).then_some(ApertureMask { values, mean })
+    }
+
+    /// The storage-buffer layout the shaders read (glsl/include/aperture.glsl): [size, mean, values...].
+    pub fn buffer_data(mask: Option<&ApertureMask>) -> Vec<f32> {
+        match mask {
+            None => vec![0.0, 0.0],
+            Some(m) => {
+                let mut data = vec![MASK_SIZE as f32, m.mean];
+                data.extend_from_slice(&m.values);
+                data
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_filled_disk_covers_pi_over_4_of_the_square() {
+        let s = 256u32;
+        let grey: Vec<f32> = (0..s * s)
+            .map(|i| {
+                let (x, y) = ((i % s) as f64 + 0.5 - 128.0, (i / s) as f64 + 0.5 - 128.0);
+                if x * x + y * y <= 128.0 * 128.0 { 1.0 } else { 0.0 }
+            })
+            .collect();
+        let m = ApertureMask::from_grey(s, s, &grey).unwrap();
+        assert!((m.mean as f64 - std::f64::consts::FRAC_PI_4).abs() < 0.01, "{}", m.mean);
+    }
+
+    #[test]
+    fn wide_image_is_centred_and_empty_is_rejected() {
+        // 128x64 all ones: the middle half of the rows is filled.
+        let m = ApertureMask::from_grey(128, 64, &vec![1.0; 128 * 64]).unwrap();
+        assert!((m.mean - 0.5).abs() < 1e-6);
+        assert_eq!(m.values[0], 0.0);
+        assert_eq!(m.values[32 * 64 + 32], 1.0);
+        assert!(ApertureMask::from_grey(8, 8, &[0.0; 64]).is_none());
+    }
+
+    #[test]
+    fn missing_file_is_named() {
+        let e = ApertureMask::load(Path::new("/nonexistent/iris.png")).unwrap_err().to_string();
+        assert!(e.starts_with("aperture image /nonexistent/iris.png:"), "{e}");
+    }
+}
