@@ -21,6 +21,7 @@ layout(push_constant) uniform Push {
     float highlight_min;     // a highlight is at least this bright (luminance) ...
     float highlight_ratio;   // ... and this many times its neighbours' mean
     int sprite_capacity;
+    float sprite_visibility;  // smallest visible excess per pixel, relative to the surroundings
 } pc;
 
 float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
@@ -48,8 +49,15 @@ void main() {
                         count += 1.0;
                     }
                 }
-                float reference = max(pc.highlight_min, pc.highlight_ratio * neighbours / max(count, 1.0));
-                if (lum > reference) {
+                float mean = neighbours / max(count, 1.0);
+                float reference = max(pc.highlight_min, pc.highlight_ratio * mean);
+                // A sprite is worth drawing only if its disk stands out: the excess spread over
+                // the CoC's area must be a visible fraction of the surroundings. A faint disk is
+                // left to the gather (its shape would not show), which keeps the scatter's cost
+                // from growing with the square of the CoC.
+                float area = PI * 0.25 * coc * coc;
+                bool visible = (lum - reference) / max(area, 1.0) > pc.sprite_visibility * max(mean, pc.highlight_min * 0.01);
+                if (lum > reference && visible) {
                     vec3 excess = c.rgb * (1.0 - reference / lum);
                     uint slot = atomicAdd(args[ARGS_SPRITE_COUNT], 1u);
                     if (slot < uint(pc.sprite_capacity)) {

@@ -10,6 +10,7 @@
 pub mod aperture_mask;
 pub mod bench;
 pub mod camera;
+pub mod focus_processor;
 pub mod gpu;
 pub mod io;
 pub mod lens_file;

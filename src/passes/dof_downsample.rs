@@ -16,6 +16,7 @@ pub struct DownsampleParams {
     pub highlight_min: f32,
     pub highlight_ratio: f32,
     pub sprite_capacity: i32,
+    pub sprite_visibility: f32,
 }
 
 pub struct DofDownsamplePass {

@@ -4,6 +4,7 @@
 
 pub mod bokeh_gather;
 pub mod coc;
+pub mod diffraction;
 pub mod dof_classify;
 pub mod dof_composite;
 pub mod dof_downsample;

@@ -37,6 +37,9 @@ pub struct TiledDofParams {
     /// ... and this many times brighter than its neighbours' mean.
     pub highlight_ratio: f32,
     pub sprite_capacity: u32,
+    /// A highlight becomes a sprite only if its excess spread over its CoC is at least this
+    /// fraction of its surroundings' luminance per pixel.
+    pub sprite_visibility: f32,
     /// Largest |CoC| diameter in the frame (after the clamp), for the dilation search.
     pub max_abs_coc_px: f32,
     pub aperture: ApertureShape,
@@ -64,6 +67,7 @@ impl TiledDofParams {
             highlight_min: 1.0,
             highlight_ratio: 4.0,
             sprite_capacity: 16384,
+            sprite_visibility: 0.05,
             max_abs_coc_px: max_abs_coc_px as f32,
             aperture: *aperture,
             sa_max_coc_px: sa_max_coc_px as f32,
@@ -213,6 +217,7 @@ impl TiledDof {
             highlight_min: p.highlight_min,
             highlight_ratio: p.highlight_ratio,
             sprite_capacity: p.sprite_capacity as i32,
+            sprite_visibility: p.sprite_visibility,
         };
         self.downsample.record(rec, color, coc, &color_half, &coc_half, &args, &sprites, &downsample)?;
         let half = HalfGatherParams {
