@@ -13,6 +13,8 @@ layout(binding = 2, rgba32f) uniform readonly image2D bg_half;
 layout(binding = 3, rgba32f) uniform readonly image2D fg_half;
 layout(binding = 4, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
+layout(binding = 7, r32f) uniform readonly image2D coc_half;
+layout(binding = 8, rgba32f) uniform readonly image2D fg_big_half;
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -34,6 +36,7 @@ layout(push_constant) uniform Push {
 
 vec4 load_half_bg(ivec2 q) { return imageLoad(bg_half, clamp(q, ivec2(0), pc.half_size - 1)); }
 vec4 load_half_fg(ivec2 q) { return imageLoad(fg_half, clamp(q, ivec2(0), pc.half_size - 1)); }
+vec4 load_half_fg_big(ivec2 q) { return imageLoad(fg_big_half, clamp(q, ivec2(0), pc.half_size - 1)); }
 
 void main() {
     uint t = tile_list[CLASS_LARGE * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
@@ -43,18 +46,39 @@ void main() {
     vec2 h = (vec2(p) + 0.5) * 0.5 - 0.5;
     ivec2 h0 = ivec2(floor(h));
     vec2 f = h - vec2(h0);
-    vec4 bg = mix(mix(load_half_bg(h0), load_half_bg(h0 + ivec2(1, 0)), f.x),
-                  mix(load_half_bg(h0 + ivec2(0, 1)), load_half_bg(h0 + ivec2(1, 1)), f.x), f.y);
+    // Joint bilateral upsampling of the background: each half-resolution texel also weighted by
+    // how close its CoC is to this pixel's, so a blurred pixel next to a sharp subject (or an
+    // in-focus highlight) does not pull that content in from the coarser grid.
+    float coc_here = imageLoad(coc_px, p).r;
+    vec4 bg = vec4(0.0);
+    float bg_weight = 0.0;
+    for (int j = 0; j < 2; ++j) {
+        for (int i = 0; i < 2; ++i) {
+            ivec2 q = clamp(h0 + ivec2(i, j), ivec2(0), pc.half_size - 1);
+            float bilinear = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
+            float similar = 1.0 / (1.0 + abs(imageLoad(coc_half, q).r - coc_here));
+            bg += (bilinear * similar) * imageLoad(bg_half, q);
+            bg_weight += bilinear * similar;
+        }
+    }
+    bg = bg_weight > 0.0 ? bg / bg_weight : load_half_bg(h0);
     vec4 fg = mix(mix(load_half_fg(h0), load_half_fg(h0 + ivec2(1, 0)), f.x),
                   mix(load_half_fg(h0 + ivec2(0, 1)), load_half_fg(h0 + ivec2(1, 1)), f.x), f.y);
-    float radius_p = 0.5 * abs(imageLoad(coc_px, p).r);
-    float blurred = smoothstep(0.5 * pc.small_radius_px, pc.small_radius_px, radius_p);
+    float radius_p = 0.5 * abs(coc_here);
+    // Pixels whose own CoC is small are gathered exactly, as in the small-CoC tiles (so nothing
+    // changes across a tile border), with only the large-CoC foreground composited over them;
+    // blurred pixels take the half-resolution layers. A 2 px wide blend joins the two.
+    float blurred = smoothstep(pc.small_radius_px - 1.0, pc.small_radius_px + 1.0, radius_p);
     vec4 base = bg;
     if (blurred < 1.0) {
         Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
-        vec4 exact = gather_exact(p, pc.size, int(ceil(pc.small_radius_px)) + 1, ap, pc.layer_transition_px);
+                               vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+        vec4 exact = gather_exact(p, pc.size, int(ceil(pc.small_radius_px)) + 2, ap, pc.layer_transition_px);
+        vec4 fg_big = mix(mix(load_half_fg_big(h0), load_half_fg_big(h0 + ivec2(1, 0)), f.x),
+                          mix(load_half_fg_big(h0 + ivec2(0, 1)), load_half_fg_big(h0 + ivec2(1, 1)), f.x), f.y);
+        exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);
         base = mix(exact, bg, blurred);
+        fg = vec4(fg.rgb, fg.a * blurred);
     }
     imageStore(color_out, p, vec4(mix(base.rgb, fg.rgb, fg.a), base.a));
 }

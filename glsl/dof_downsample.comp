@@ -2,7 +2,8 @@
 // Tiled depth of field, step 3: the half-resolution colour and CoC for the large-CoC path, and
 // the highlights: a pixel with a large CoC much brighter than its neighbours gives its excess
 // energy to a sprite (scattered with the exact aperture shape by dof_sprites.comp) instead of
-// to the sparse half-resolution gather, which could not draw a crisp bokeh shape from it.
+// to the sparse half-resolution gather, which could not draw a crisp bokeh shape from it. Also
+// writes the full-resolution colour without the sprites' energy.
 #include "common.glsl"
 #include "dof_tiles.glsl"
 
@@ -13,6 +14,9 @@ layout(binding = 2, rgba32f) uniform writeonly image2D color_half;
 layout(binding = 3, r32f) uniform writeonly image2D coc_half;
 layout(binding = 4, std430) buffer Args { uint args[]; };
 layout(binding = 5, std430) writeonly buffer Sprites { Sprite sprites[]; };
+// The full-resolution colour less the energy given to sprites: what the large tiles' exact
+// gather (dof_composite) reads, so a highlight is not counted twice.
+layout(binding = 6, rgba32f) uniform writeonly image2D color_base;
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -40,11 +44,15 @@ void main() {
             float coc = imageLoad(coc_px, p).r;
             float lum = luminance(c.rgb);
             if (0.5 * abs(coc) > pc.small_radius_px && lum > pc.highlight_min) {
+                // The surroundings: the ring of pixels 3 px away, so a highlight a few pixels
+                // wide (a small bright sphere) is measured against what is around it, not
+                // against its own other pixels.
                 float neighbours = 0.0, count = 0.0;
-                for (int dy = -1; dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        ivec2 q = p + ivec2(dx, dy);
-                        if ((dx == 0 && dy == 0) || outside(q, pc.size)) continue;
+                for (int k = -3; k < 3; ++k) {
+                    ivec2 ring[4] = ivec2[4](ivec2(k, -3), ivec2(3, k), ivec2(-k, 3), ivec2(-3, -k));
+                    for (int m = 0; m < 4; ++m) {
+                        ivec2 q = p + ring[m];
+                        if (outside(q, pc.size)) continue;
                         neighbours += luminance(finite_or_zero(imageLoad(color_in, q)).rgb);
                         count += 1.0;
                     }
@@ -68,6 +76,7 @@ void main() {
                     }
                 }
             }
+            imageStore(color_base, p, c);
             sum += c;
             coc_sum += coc;
             n += 1.0;

@@ -2,7 +2,8 @@
 // Tiled depth of field, large-CoC tiles: a gather at half resolution with a fixed number of
 // taps on rings scaled to the tile's radius, so its cost does not grow with the CoC. Same
 // layer rules as the exact gather; the rings are rotated per pixel to turn aliasing into fine
-// noise. Writes the background colour and the foreground colour with its coverage (alpha).
+// noise. Writes the background colour and the foreground colour with its coverage (alpha), and
+// the same foreground for large-CoC samples only.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
 #include "aperture.glsl"
@@ -15,6 +16,7 @@ layout(binding = 2, rgba32f) uniform writeonly image2D bg_half;
 layout(binding = 3, rgba32f) uniform writeonly image2D fg_half;
 layout(binding = 4, std430) readonly buffer TileLists { uint tile_list[]; };
 layout(binding = 5, std430) readonly buffer TileRadius { float tile_radius_px[]; };
+layout(binding = 7, rgba32f) uniform writeonly image2D fg_big_half;
 
 layout(push_constant) uniform Push {
     ivec2 half_size;
@@ -29,6 +31,7 @@ layout(push_constant) uniform Push {
     float centre_y_px;
     float cats_eye_per_px;
     float layer_transition_px;
+    float small_radius_px;      // in half-resolution px: larger CoC samples also go to fg_big
 } pc;
 
 void main() {
@@ -46,8 +49,8 @@ void main() {
     // Interleaved gradient noise: a per-pixel rotation of the rings.
     float jitter = fract(52.9829189 * fract(dot(vec2(ph), vec2(0.06711056, 0.00583715))));
 
-    vec4 bg = vec4(0.0), fg = vec4(0.0);
-    float bg_w = 0.0, fg_w = 0.0;
+    vec4 bg = vec4(0.0), fg = vec4(0.0), fg_big = vec4(0.0);
+    float bg_w = 0.0, fg_w = 0.0, fg_big_w = 0.0;
     for (int k = 0; k <= pc.rings; ++k) {
         int n = k == 0 ? 1 : 6 * k;
         float rho = float(k) * spacing;
@@ -70,6 +73,10 @@ void main() {
             float f = clamp((coc_p - coc_q) / pc.layer_transition_px, 0.0, 1.0);
             fg += (f * w) * c;
             fg_w += f * w;
+            if (radius_q > pc.small_radius_px) {
+                fg_big += (f * w) * c;
+                fg_big_w += f * w;
+            }
             bg += ((1.0 - f) * w) * c;
             bg_w += (1.0 - f) * w;
         }
@@ -78,4 +85,8 @@ void main() {
     vec4 foreground = fg_w > 0.0 ? fg / fg_w : vec4(0.0);
     imageStore(bg_half, ph, background);
     imageStore(fg_half, ph, vec4(foreground.rgb, clamp(fg_w, 0.0, 1.0)));
+    // The foreground of large-CoC samples only: what nearly sharp pixels, whose exact gather
+    // already holds the small ones, composite over themselves.
+    vec4 big = fg_big_w > 0.0 ? fg_big / fg_big_w : vec4(0.0);
+    imageStore(fg_big_half, ph, vec4(big.rgb, clamp(fg_big_w, 0.0, 1.0)));
 }

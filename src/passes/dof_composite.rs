@@ -38,12 +38,15 @@ pub struct CompositeBindings<'a> {
     pub tile_lists: &'a GpuBuffer,
     pub args: &'a GpuBuffer,
     pub aperture_mask: &'a GpuBuffer,
+    pub coc_half: &'a GpuImage,
+    pub fg_big_half: &'a GpuImage,
 }
 
 impl DofCompositePass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 5];
         bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
+        bindings.extend([vk::DescriptorType::STORAGE_IMAGE; 2]);
         let size = std::mem::size_of::<CompositeParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -51,11 +54,16 @@ impl DofCompositePass {
     pub fn record(&self, rec: &mut Recorder, b: &CompositeBindings<'_>, params: &CompositeParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
         // bg_half, fg_half: written by dof_half_gather (read-after-write).
+        // color (the colour less the sprites' energy) and coc_half: written by dof_downsample
+        //   (coc_half was already waited for by dof_half_gather; the extra dependency is free).
         // output: the full-resolution tile passes wrote other tiles of it; the write-after-write
         //   dependency keeps sync validation (which tracks whole images) and any driver honest.
         rec.image_barriers(&[
+            super::after_compute_write(b.color),
+            super::after_compute_write(b.coc_half),
             super::after_compute_write(b.bg_half),
             super::after_compute_write(b.fg_half),
+            super::after_compute_write(b.fg_big_half),
             write_after_write(b.output),
         ]);
         rec.dispatch_indirect(
@@ -68,6 +76,8 @@ impl DofCompositePass {
                 Bind::Image(b.output),
                 Bind::Buffer(b.tile_lists),
                 Bind::Buffer(b.aperture_mask),
+                Bind::Image(b.coc_half),
+                Bind::Image(b.fg_big_half),
             ],
             push_bytes(params),
             b.args,

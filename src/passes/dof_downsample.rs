@@ -27,6 +27,7 @@ impl DofDownsamplePass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 4];
         bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
+        bindings.push(vk::DescriptorType::STORAGE_IMAGE);
         let size = std::mem::size_of::<DownsampleParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -41,12 +42,13 @@ impl DofDownsamplePass {
         coc_half: &GpuImage,
         args: &GpuBuffer,
         sprites: &GpuBuffer,
+        color_base: &GpuImage,
         params: &DownsampleParams,
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
-        // color_half, coc_half: written from scratch. The inputs (colour, CoC) and the args
-        // buffer were made visible to compute by the barriers before dof_classify.
-        rec.image_barriers(&[super::overwrite(color_half), super::overwrite(coc_half)]);
+        // color_half, coc_half, color_base: written from scratch. The inputs (colour, CoC) and
+        // the args buffer were made visible to compute by the barriers before dof_classify.
+        rec.image_barriers(&[super::overwrite(color_half), super::overwrite(coc_half), super::overwrite(color_base)]);
         rec.dispatch(
             &self.pipeline,
             &[
@@ -56,6 +58,7 @@ impl DofDownsamplePass {
                 Bind::Image(coc_half),
                 Bind::Buffer(args),
                 Bind::Buffer(sprites),
+                Bind::Image(color_base),
             ],
             push_bytes(params),
             groups_for(color_half.width, color_half.height),

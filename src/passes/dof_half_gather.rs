@@ -22,6 +22,9 @@ pub struct HalfGatherParams {
     pub centre_y_px: f32,
     pub cats_eye_per_px: f32,
     pub layer_transition_px: f32,
+    /// In half-resolution px: samples with a larger CoC radius also go to the large-CoC
+    /// foreground layer.
+    pub small_radius_px: f32,
 }
 
 pub struct DofHalfGatherPass {
@@ -32,6 +35,7 @@ impl DofHalfGatherPass {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 4];
         bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
+        bindings.push(vk::DescriptorType::STORAGE_IMAGE);
         let size = std::mem::size_of::<HalfGatherParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -44,6 +48,7 @@ impl DofHalfGatherPass {
         coc_half: &GpuImage,
         bg_half: &GpuImage,
         fg_half: &GpuImage,
+        fg_big_half: &GpuImage,
         tile_lists: &GpuBuffer,
         tile_radius: &GpuBuffer,
         args: &GpuBuffer,
@@ -52,13 +57,14 @@ impl DofHalfGatherPass {
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
         // color_half, coc_half: written by dof_downsample (read-after-write).
-        // bg_half, fg_half: written from scratch (only the large tiles' pixels; the rest is
+        // bg_half, fg_half, fg_big_half: written from scratch (only the large tiles' pixels; the rest is
         //   never read).
         rec.image_barriers(&[
             super::after_compute_write(color_half),
             super::after_compute_write(coc_half),
             super::overwrite(bg_half),
             super::overwrite(fg_half),
+            super::overwrite(fg_big_half),
         ]);
         rec.dispatch_indirect(
             &self.pipeline,
@@ -70,6 +76,7 @@ impl DofHalfGatherPass {
                 Bind::Buffer(tile_lists),
                 Bind::Buffer(tile_radius),
                 Bind::Buffer(aperture_mask),
+                Bind::Image(fg_big_half),
             ],
             push_bytes(params),
             args,

@@ -156,6 +156,8 @@ impl TiledDof {
         let coc_half = gpu.create_image("dof coc (half)", hw as u32, hh as u32, vk::Format::R32_SFLOAT)?;
         let bg_half = gpu.create_image("dof background (half)", hw as u32, hh as u32, rgba)?;
         let fg_half = gpu.create_image("dof foreground (half)", hw as u32, hh as u32, rgba)?;
+        let fg_big_half = gpu.create_image("dof large-CoC foreground (half)", hw as u32, hh as u32, rgba)?;
+        let color_base = gpu.create_image("dof colour less sprites", p.width, p.height, rgba)?;
         let (blades, rotation_rad, curvature, sa_amount) = p.aperture_fields();
         let sa_max_coc_px = p.sa_max_coc_px;
         let [centre_x_px, centre_y_px] = p.centre_px;
@@ -219,7 +221,7 @@ impl TiledDof {
             sprite_capacity: p.sprite_capacity as i32,
             sprite_visibility: p.sprite_visibility,
         };
-        self.downsample.record(rec, color, coc, &color_half, &coc_half, &args, &sprites, &downsample)?;
+        self.downsample.record(rec, color, coc, &color_half, &coc_half, &args, &sprites, &color_base, &downsample)?;
         let half = HalfGatherParams {
             half_size: [hw, hh],
             tiles,
@@ -234,6 +236,7 @@ impl TiledDof {
             centre_y_px: 0.5 * centre_y_px,
             cats_eye_per_px: 2.0 * cats_eye_per_px,
             layer_transition_px,
+            small_radius_px: 0.5 * p.small_radius_px,
         };
         self.half_gather.record(
             rec,
@@ -241,6 +244,7 @@ impl TiledDof {
             &coc_half,
             &bg_half,
             &fg_half,
+            &fg_big_half,
             &tile_lists,
             &tile_radius,
             &args,
@@ -264,8 +268,9 @@ impl TiledDof {
         };
         self.composite.record(
             rec,
+            // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
             &CompositeBindings {
-                color,
+                color: &color_base,
                 coc,
                 bg_half: &bg_half,
                 fg_half: &fg_half,
@@ -273,6 +278,8 @@ impl TiledDof {
                 tile_lists: &tile_lists,
                 args: &args,
                 aperture_mask,
+                coc_half: &coc_half,
+                fg_big_half: &fg_big_half,
             },
             &composite,
         )?;
@@ -296,7 +303,7 @@ impl TiledDof {
             tile_lists,
             tile_radius,
             sprites,
-            images: vec![color_half, coc_half, bg_half, fg_half],
+            images: vec![color_half, coc_half, bg_half, fg_half, fg_big_half, color_base],
         })
     }
 }
