@@ -9,6 +9,8 @@ layout(local_size_x = 64) in;
 layout(binding = 0, std430) readonly buffer TileCoc { vec2 tile_coc[]; };
 layout(binding = 1, std430) buffer Args { uint args[]; };
 layout(binding = 2, std430) writeonly buffer TileLists { uint tile_list[]; }; // CLASS_COUNT lists of tile_count
+// [0, tile_count): the gather radius; [tile_count, 2 tile_count): the largest radius of a
+// foreground sample (in front of the focus plane) that reaches the tile.
 layout(binding = 3, std430) writeonly buffer TileRadius { float tile_radius_px[]; };
 
 layout(push_constant) uniform Push {
@@ -28,7 +30,7 @@ void main() {
     }
     if (t >= tile_count) return;
     ivec2 tc = ivec2(t % pc.tiles.x, t / pc.tiles.x);
-    float radius = 0.0;
+    float radius = 0.0, fg_radius = 0.0;
     for (int dy = -pc.search_tiles; dy <= pc.search_tiles; ++dy) {
         for (int dx = -pc.search_tiles; dx <= pc.search_tiles; ++dx) {
             ivec2 n = tc + ivec2(dx, dy);
@@ -38,10 +40,13 @@ void main() {
             // Gap in pixels between the two tiles' rectangles.
             vec2 gap = vec2(max(abs(dx) - 1, 0), max(abs(dy) - 1, 0)) * float(TILE_SIZE);
             if (r_n + 1.0 > length(gap)) radius = max(radius, r_n);
+            float fg_n = range.x < 0.0 ? -0.5 * range.x : 0.0;
+            if (fg_n + 1.0 > length(gap)) fg_radius = max(fg_radius, fg_n);
         }
     }
     int cls = radius <= 0.5 ? CLASS_COPY : (radius <= pc.small_radius_px ? CLASS_SMALL : CLASS_LARGE);
     tile_radius_px[t] = radius;
+    tile_radius_px[tile_count + t] = fg_radius;
     uint slot = atomicAdd(args[ARGS_DISPATCH(cls)], 1u);
     tile_list[cls * tile_count + int(slot)] = uint(t);
 }

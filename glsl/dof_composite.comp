@@ -15,6 +15,7 @@ layout(binding = 4, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
 layout(binding = 7, r32f) uniform readonly image2D coc_half;
 layout(binding = 8, rgba32f) uniform readonly image2D fg_big_half;
+layout(binding = 9, std430) readonly buffer TileRadius { float tile_radius_px[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -73,7 +74,10 @@ void main() {
     if (blurred < 1.0) {
         Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
                                vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
-        vec4 exact = gather_exact(p, pc.size, int(ceil(pc.small_radius_px)) + 2, ap, pc.layer_transition_px);
+        // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
+        float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
+        int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;
+        vec4 exact = gather_exact(p, pc.size, r, ap, pc.layer_transition_px);
         vec4 fg_big = mix(mix(load_half_fg_big(h0), load_half_fg_big(h0 + ivec2(1, 0)), f.x),
                           mix(load_half_fg_big(h0 + ivec2(0, 1)), load_half_fg_big(h0 + ivec2(1, 1)), f.x), f.y);
         exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);

@@ -38,7 +38,11 @@ void main() {
         imageStore(color_out, p, finite_or_zero(imageLoad(color_in, p)));
         return;
     }
-    int r = int(ceil(tile_radius_px[t])) + 1;
+    // Samples behind p reach no farther than p's own CoC; only foreground samples (in front of
+    // the focus plane) can reach farther, and the tile knows the largest of those.
+    float radius_p = 0.5 * abs(imageLoad(coc_px, p).r);
+    float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
+    int r = int(ceil(min(tile_radius_px[t], max(radius_p, fg_radius)))) + 1;
     Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
                            vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
     imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));

@@ -40,6 +40,7 @@ pub struct CompositeBindings<'a> {
     pub aperture_mask: &'a GpuBuffer,
     pub coc_half: &'a GpuImage,
     pub fg_big_half: &'a GpuImage,
+    pub tile_radius: &'a GpuBuffer,
 }
 
 impl DofCompositePass {
@@ -47,6 +48,7 @@ impl DofCompositePass {
         let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 5];
         bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
         bindings.extend([vk::DescriptorType::STORAGE_IMAGE; 2]);
+        bindings.push(vk::DescriptorType::STORAGE_BUFFER);
         let size = std::mem::size_of::<CompositeParams>() as u32;
         Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -78,6 +80,7 @@ impl DofCompositePass {
                 Bind::Buffer(b.aperture_mask),
                 Bind::Image(b.coc_half),
                 Bind::Image(b.fg_big_half),
+                Bind::Buffer(b.tile_radius),
             ],
             push_bytes(params),
             b.args,

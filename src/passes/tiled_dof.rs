@@ -148,7 +148,8 @@ impl TiledDof {
         )?;
         let tile_coc = gpu.create_buffer("dof tile CoC range", tile_count * 8, storage, device)?;
         let tile_lists = gpu.create_buffer("dof tile lists", tile_count * 4 * 3, storage, device)?;
-        let tile_radius = gpu.create_buffer("dof tile radius", tile_count * 4, storage, device)?;
+        // Per tile: the gather radius, then the largest foreground radius reaching it.
+        let tile_radius = gpu.create_buffer("dof tile radius", tile_count * 4 * 2, storage, device)?;
         let sprites = gpu.create_buffer("dof sprites", p.sprite_capacity as u64 * SPRITE_BYTES, storage, device)?;
         let [hw, hh] = p.half_size();
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
@@ -280,6 +281,7 @@ impl TiledDof {
                 aperture_mask,
                 coc_half: &coc_half,
                 fg_big_half: &fg_big_half,
+                tile_radius: &tile_radius,
             },
             &composite,
         )?;
