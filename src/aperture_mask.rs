@@ -56,7 +56,11 @@ impl ApertureMask {
                 return 0.0;
             }
             let v = grey[(y as u32 * width + x as u32) as usize];
-            if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 }
+            if v.is_finite() {
+                v.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
         };
         let mut values = Vec::with_capacity((n * n) as usize);
         for gy in 0..n {
@@ -99,7 +103,11 @@ mod tests {
         let grey: Vec<f32> = (0..s * s)
             .map(|i| {
                 let (x, y) = ((i % s) as f64 + 0.5 - 128.0, (i / s) as f64 + 0.5 - 128.0);
-                if x * x + y * y <= 128.0 * 128.0 { 1.0 } else { 0.0 }
+                if x * x + y * y <= 128.0 * 128.0 {
+                    1.0
+                } else {
+                    0.0
+                }
             })
             .collect();
         let m = ApertureMask::from_grey(s, s, &grey).unwrap();

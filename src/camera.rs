@@ -27,6 +27,10 @@ pub enum BokehMode {
     /// Every pixel's exact aperture sprite evaluated at every pixel it covers (written as a
     /// gather over the largest CoC): the accuracy reference, cost grows with the CoC squared.
     Reference,
+    /// Potmesil & Chakravarty's focus processor: every sample spread by the diffraction pattern
+    /// of a defocused circular aperture at three wavelengths (src/focus_processor.rs); no
+    /// occlusion. The accuracy reference of `realcam accuracy`.
+    Diffraction,
 }
 
 /// How sensor values become output values.

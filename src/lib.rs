@@ -7,6 +7,7 @@
 //! - [`passes`]: one module per compute pass, joining optics and the runtime.
 //! - [`planner`]: decides which passes a scene and camera call for.
 
+pub mod accuracy;
 pub mod aperture_mask;
 pub mod bench;
 pub mod camera;

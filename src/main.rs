@@ -30,6 +30,9 @@ enum Command {
     Dof(DofArgs),
     /// List the Vulkan devices.
     Devices,
+    /// Every depth-of-field method on your frame against the diffraction reference: GPU time,
+    /// RMSE, PSNR, energy and FLIP, as Markdown, CSV and an SVG plot of error against time.
+    Accuracy(AccuracyArgs),
     /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
     /// defocused), with the fast path's error against the reference.
     Bench(BenchArgs),
@@ -61,8 +64,10 @@ enum FilmArg {
 enum BokehArg {
     /// Tiled gather-scatter: cost nearly flat in the CoC radius.
     Tiled,
-    /// Exact aperture sprite of every pixel (the accuracy reference; cost grows with CoC^2).
+    /// Exact aperture sprite of every pixel (the geometric reference; cost grows with CoC^2).
     Reference,
+    /// Potmesil & Chakravarty's diffraction focus processor (the accuracy reference; slow).
+    Diffraction,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -208,6 +213,30 @@ struct GpuArgs {
 }
 
 #[derive(Args)]
+#[command(allow_negative_numbers = true)]
+struct AccuracyArgs {
+    /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
+    #[arg(long)]
+    color: PathBuf,
+    /// Depth pass EXR (a Z channel); default: look in the color file.
+    #[arg(long)]
+    depth: Option<PathBuf>,
+    #[command(flatten)]
+    lens: LensArgs,
+    /// Aperture blades (0 = circular); default from the lens file.
+    #[arg(long)]
+    blades: Option<u32>,
+    /// Clamp on the CoC diameter in pixels.
+    #[arg(long = "max-coc", default_value_t = 64.0)]
+    max_coc_px: f64,
+    /// Folder for accuracy.md, accuracy.csv and accuracy.svg.
+    #[arg(long = "out-dir", default_value = "accuracy")]
+    out_dir: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args)]
 struct BenchArgs {
     /// Resolutions, e.g. 1280x720,1920x1080.
     #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',')]
@@ -246,6 +275,7 @@ fn main() {
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
         Command::Bench(args) => bench(args),
+        Command::Accuracy(args) => accuracy(args),
         Command::Compare { test, reference } => compare(&test, &reference),
         Command::Synth { out } => synth(&out),
     };
@@ -311,6 +341,7 @@ fn render(args: RenderArgs) -> Result<()> {
         bokeh: match args.bokeh {
             BokehArg::Tiled => realcam::camera::BokehMode::Tiled,
             BokehArg::Reference => realcam::camera::BokehMode::Reference,
+            BokehArg::Diffraction => realcam::camera::BokehMode::Diffraction,
         },
     };
     let mut request = request;
@@ -498,5 +529,71 @@ fn bench(args: BenchArgs) -> Result<()> {
     if let Some(out) = &args.out {
         write_text_atomically(out, &table).with_context(|| format!("writing {}", out.display()))?;
     }
+    Ok(())
+}
+
+fn accuracy(args: AccuracyArgs) -> Result<()> {
+    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    // The blur alone: no exposure, vignetting or film curve; no aberrations in the bokeh, which
+    // the diffraction reference does not model.
+    let request = CameraRequest {
+        focal_length_mm: args.lens.focal_length_mm,
+        f_number: args.lens.f_number,
+        focus_distance_m: args.lens.focus_m,
+        sensor: Some(args.lens.sensor.clone()),
+        sensor_fit: Some(fit(args.lens.sensor_fit)),
+        shutter_s: 0.02,
+        iso: 100.0,
+        nits_per_unit: 160.0,
+        blades: Some(args.blades.unwrap_or(0)),
+        blade_rotation_deg: None,
+        spherical_aberration: Some(0.0),
+        cats_eye: Some(0.0),
+        exposure: false,
+        vignetting: false,
+        film: Some(FilmMode::Linear),
+        max_coc_px: args.max_coc_px,
+        force: args.lens.force,
+        bokeh: realcam::camera::BokehMode::Reference,
+    };
+    let camera = Camera::new(&lens_file, &request)?;
+    let sources = PassSources {
+        color_path: args.color.clone(),
+        depth_path: args.depth.clone(),
+        depth_unit_m: 1.0,
+        ..Default::default()
+    };
+    let frame = Frame::from_passes(io::load_passes(&sources)?, &camera, DepthKind::Planar);
+    let mut options = GpuOptions::from_env();
+    options.validation |= args.gpu.validate;
+    if args.gpu.device.is_some() {
+        options.device = args.gpu.device.clone();
+    }
+    let gpu = Gpu::new(&options)?;
+    eprintln!("device: {}", gpu.info());
+    let bar = indicatif::ProgressBar::new(7);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let results = realcam::accuracy::run(&gpu, &frame, &camera, |m| {
+        bar.set_message(m.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let device = gpu.info().to_string();
+    let table = realcam::accuracy::markdown(&device, &command, &results);
+    print!("{table}");
+    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
+    for (name, text) in [
+        ("accuracy.md", table.clone()),
+        ("accuracy.csv", realcam::accuracy::csv(&results)),
+        ("accuracy.svg", realcam::accuracy::svg(&device, &results)),
+    ] {
+        let path = args.out_dir.join(name);
+        write_text_atomically(&path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    eprintln!("wrote {}/accuracy.{{md,csv,svg}}", args.out_dir.display());
     Ok(())
 }

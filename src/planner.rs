@@ -34,6 +34,9 @@ pub struct Plan {
     pub gather: Option<GatherParams>,
     /// The tiled path (`--bokeh tiled`, the default).
     pub tiled: Option<TiledDofParams>,
+    /// The diffraction focus processor (`--bokeh diffraction`): its tables and push constants.
+    pub diffraction:
+        Option<(std::sync::Arc<crate::focus_processor::PsfTables>, crate::passes::diffraction::DiffractionParams)>,
     pub vignette: Option<VignetteParams>,
     pub film: Option<FilmParams>,
     /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
@@ -88,7 +91,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     } else {
         "circular aperture".into()
     };
-    let (mut coc, mut gather, mut tiled) = (None, None, None);
+    let (mut coc, mut gather, mut tiled, mut diffraction) = (None, None, None, None);
     if dof {
         steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
         coc = Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h));
@@ -104,6 +107,37 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                     ),
                 });
                 gather = Some(g);
+            }
+            BokehMode::Diffraction => {
+                // The focus processor maps depth to its tables itself: no CoC image.
+                coc = None;
+                if let Some(step) = steps.last_mut() {
+                    step.run = false;
+                    step.why = format!("{}; not needed by the focus processor", step.why);
+                }
+                let settings = crate::focus_processor::PsfTableSettings {
+                    subpixel: 1,
+                    max_radius_px: (0.5 * camera.max_coc_px).ceil().max(1.0) as u32 + 4,
+                    ..Default::default()
+                };
+                let tables = crate::focus_processor::build_tables(
+                    &camera.lens,
+                    pitch_mm,
+                    near_m.max(1e-6) as f64,
+                    far_m as f64,
+                    &settings,
+                );
+                let params = crate::passes::diffraction::DiffractionParams::new(&tables, w, h);
+                steps.push(Step {
+                    pass: crate::passes::diffraction::NAME,
+                    run: true,
+                    why: format!(
+                        "--bokeh diffraction: Potmesil & Chakravarty focus processor, {} depth tables of radius {} px at 650/550/450 nm, gathered over the whole frame",
+                        tables.levels(),
+                        tables.radius_px
+                    ),
+                });
+                diffraction = Some((std::sync::Arc::new(tables), params));
             }
             BokehMode::Tiled => {
                 let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
@@ -204,5 +238,5 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
 
     let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
-    Plan { steps, coc, gather, tiled, vignette, film, aperture_mask, coc_range_px }
+    Plan { steps, coc, gather, tiled, diffraction, vignette, film, aperture_mask, coc_range_px }
 }

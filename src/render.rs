@@ -14,6 +14,7 @@ pub struct Renderer {
     coc: Option<CocPass>,
     gather: Option<BokehGatherPass>,
     tiled: Option<TiledDof>,
+    diffraction: Option<crate::passes::diffraction::DiffractionPass>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -34,6 +35,11 @@ impl Renderer {
             coc: plan.coc.as_ref().map(|_| CocPass::new(gpu)).transpose()?,
             gather: plan.gather.as_ref().map(|_| BokehGatherPass::new(gpu)).transpose()?,
             tiled: plan.tiled.as_ref().map(|_| TiledDof::new(gpu)).transpose()?,
+            diffraction: plan
+                .diffraction
+                .as_ref()
+                .map(|_| crate::passes::diffraction::DiffractionPass::new(gpu))
+                .transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -46,13 +52,13 @@ impl Renderer {
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
         let color_in = gpu.create_image("color (input)", w, h, rgba)?;
         rec.begin_pass("upload");
-        let depth = match &plan.coc {
-            Some(_) => {
+        let depth = match plan.coc.is_some() || plan.diffraction.is_some() {
+            true => {
                 let depth = gpu.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?;
                 rec.upload_images(&[(&color_in, &frame.color), (&depth, &frame.depth_m)])?;
                 Some(depth)
             }
-            None => {
+            false => {
                 rec.upload_images(&[(&color_in, &frame.color)])?;
                 None
             }
@@ -63,7 +69,11 @@ impl Renderer {
         // passes); `current` is the latest color.
         let image = |name: &str, format, needed: bool| needed.then(|| gpu.create_image(name, w, h, format)).transpose();
         let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
-        let dof_out = image("color (depth of field)", rgba, self.gather.is_some() || self.tiled.is_some())?;
+        let dof_out = image(
+            "color (depth of field)",
+            rgba,
+            self.gather.is_some() || self.tiled.is_some() || self.diffraction.is_some(),
+        )?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -82,11 +92,20 @@ impl Renderer {
             current = out;
         }
         let mut _tiled_frame = None;
+        let mut _tables = None;
         if let (Some(tiled), Some(params), Some(coc), Some(out), Some(mask)) =
             (&self.tiled, &plan.tiled, &coc_image, &dof_out, &aperture_mask)
         {
             _tiled_frame = Some(tiled.record(&mut rec, current, coc, out, mask, params)?);
             current = out;
+        }
+        if let (Some(pass), Some((tables, params)), Some(depth), Some(out)) =
+            (&self.diffraction, &plan.diffraction, &depth, &dof_out)
+        {
+            let table = rec.upload_buffer("psf tables", &tables.data)?;
+            pass.record(&mut rec, current, depth, &table, out, params)?;
+            current = out;
+            _tables = Some(table);
         }
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {
             pass.record(&mut rec, current, out, params)?;

@@ -197,7 +197,15 @@ impl TiledDof {
         let layer_transition_px = 1.0;
         self.tile_gather.record(
             rec,
-            &TileGatherBindings { color, coc, output, tile_lists: &tile_lists, tile_radius: &tile_radius, args: &args, aperture_mask },
+            &TileGatherBindings {
+                color,
+                coc,
+                output,
+                tile_lists: &tile_lists,
+                tile_radius: &tile_radius,
+                args: &args,
+                aperture_mask,
+            },
             &TileGatherParams {
                 size,
                 tiles,

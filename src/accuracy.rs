@@ -1,0 +1,209 @@
+//! `realcam accuracy`: every depth-of-field method on the user's own frame, against the
+//! diffraction reference (Potmesil & Chakravarty's focus processor): GPU time per pass, RMSE,
+//! PSNR, energy error and the perceptual FLIP difference, as Markdown, CSV and an SVG plot of
+//! error against time. "Show what accuracy costs in time."
+
+use crate::camera::{BokehMode, Camera};
+use crate::gpu::{Gpu, GpuResult, Profile};
+use crate::metrics::{compare_rgba, ImageError};
+use crate::planner::{plan, Plan};
+use crate::render::Renderer;
+use crate::scene::Frame;
+
+/// One method's result.
+#[derive(Clone, Debug)]
+pub struct MethodResult {
+    pub method: String,
+    /// GPU time of the depth-of-field passes (upload, download and the other passes excluded).
+    pub dof_ms: f64,
+    pub profile: Profile,
+    pub error: ImageError,
+    /// Mean FLIP error (0 identical .. 1) of the sRGB previews (values clamped to [0, 1]).
+    pub flip_mean: f64,
+}
+
+/// A method to run: a name, the bokeh mode and how to adjust the plan (quality settings).
+struct Method {
+    name: String,
+    mode: BokehMode,
+    adjust: Box<dyn Fn(&mut Plan)>,
+}
+
+fn methods() -> Vec<Method> {
+    let mut list = vec![
+        Method { name: "diffraction (reference)".into(), mode: BokehMode::Diffraction, adjust: Box::new(|_| ()) },
+        Method { name: "geometric full gather".into(), mode: BokehMode::Reference, adjust: Box::new(|_| ()) },
+    ];
+    // The tiled path's quality settings: half-resolution rings and the exact-gather radius.
+    for (rings, small_radius_px) in [(4, 4.0f32), (8, 4.0), (8, 8.0), (12, 8.0), (16, 16.0)] {
+        list.push(Method {
+            name: format!("tiled, {rings} rings, exact up to {small_radius_px} px"),
+            mode: BokehMode::Tiled,
+            adjust: Box::new(move |p: &mut Plan| {
+                if let Some(t) = p.tiled.as_mut() {
+                    t.rings = rings;
+                    t.small_radius_px = small_radius_px;
+                }
+            }),
+        });
+    }
+    list
+}
+
+fn dof_ms(profile: &Profile) -> f64 {
+    let skip = ["upload", "download", "vignette", "film", "coc"];
+    profile.passes.iter().filter(|p| !skip.contains(&p.name.as_str())).map(|p| p.gpu_ms).sum()
+}
+
+/// sRGB 8-bit of linear RGBA, for FLIP (its LDR form).
+fn srgb8(rgba: &[f32]) -> Vec<u8> {
+    rgba.chunks_exact(4)
+        .flat_map(|p| {
+            [p[0], p[1], p[2]].map(|v| {
+                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+                let s = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+                (s * 255.0 + 0.5) as u8
+            })
+        })
+        .collect()
+}
+
+/// Mean FLIP of `test` against `reference` (both linear RGBA of width x height).
+pub fn flip_mean(test: &[f32], reference: &[f32], width: u32, height: u32) -> f64 {
+    let r = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(test));
+    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&map).mean() as f64
+}
+
+/// Run every method on `frame` with `camera` (its bokeh mode is replaced per method; exposure,
+/// vignetting and film stay as set, so use a linear, unexposed camera to compare the blur alone).
+pub fn run(gpu: &Gpu, frame: &Frame, camera: &Camera, mut progress: impl FnMut(&str)) -> GpuResult<Vec<MethodResult>> {
+    let mut outputs = Vec::new();
+    for m in methods() {
+        progress(&m.name);
+        let mut camera = camera.clone();
+        camera.bokeh = m.mode;
+        let mut p = plan(frame, &camera);
+        (m.adjust)(&mut p);
+        let renderer = Renderer::new(gpu, &p)?;
+        // A warm-up run, so pipeline creation and first-touch costs are not timed.
+        renderer.render(frame, &p, false)?;
+        let out = renderer.render(frame, &p, false)?;
+        outputs.push((m.name, out));
+    }
+    let reference = outputs[0].1.rgba.clone();
+    Ok(outputs
+        .into_iter()
+        .map(|(method, out)| MethodResult {
+            method,
+            dof_ms: dof_ms(&out.profile),
+            error: compare_rgba(&out.rgba, &reference),
+            flip_mean: flip_mean(&out.rgba, &reference, frame.width, frame.height),
+            profile: out.profile,
+        })
+        .collect())
+}
+
+pub fn markdown(device: &str, command: &str, results: &[MethodResult]) -> String {
+    let mut out = format!(
+        "Device: {device}\n\nCommand: `{command}`\n\nErrors against the diffraction reference (RGB; the display RMSE clamps values to [0,1]; FLIP on the sRGB previews, 0 = identical). GPU ms of the depth-of-field passes, from timestamp queries.\n\n"
+    );
+    out += "| method | GPU ms | RMSE | display RMSE | PSNR dB | energy | FLIP |\n| --- | --- | --- | --- | --- | --- | --- |\n";
+    for r in results {
+        out += &format!(
+            "| {} | {:.1} | {:.5} | {:.5} | {:.1} | {:+.3}% | {:.4} |\n",
+            r.method,
+            r.dof_ms,
+            r.error.rmse,
+            r.error.rmse_display,
+            r.error.psnr_db,
+            100.0 * r.error.relative_energy_error,
+            r.flip_mean
+        );
+    }
+    out += "\nGPU ms per pass:\n\n";
+    for r in results {
+        let passes: Vec<String> = r
+            .profile
+            .passes
+            .iter()
+            .filter(|p| p.name != "upload" && p.name != "download")
+            .map(|p| format!("{} {:.2}", p.name, p.gpu_ms))
+            .collect();
+        out += &format!("- {}: {}\n", r.method, passes.join(", "));
+    }
+    out
+}
+
+pub fn csv(results: &[MethodResult]) -> String {
+    let mut out = String::from("method,gpu_ms,rmse,display_rmse,psnr_db,energy_error,flip_mean\n");
+    for r in results {
+        out += &format!(
+            "\"{}\",{:.4},{:.6},{:.6},{:.3},{:.6},{:.6}\n",
+            r.method.replace('"', "'"),
+            r.dof_ms,
+            r.error.rmse,
+            r.error.rmse_display,
+            r.error.psnr_db,
+            r.error.relative_energy_error,
+            r.flip_mean
+        );
+    }
+    out
+}
+
+/// Error (FLIP) against GPU time, log time axis, one labelled point per method.
+pub fn svg(device: &str, results: &[MethodResult]) -> String {
+    let (w, h, margin) = (720.0, 440.0, 70.0);
+    let times: Vec<f64> = results.iter().map(|r| r.dof_ms.max(1e-3).log10()).collect();
+    let (t0, t1) = times.iter().fold((f64::MAX, f64::MIN), |(a, b), &t| (a.min(t), b.max(t)));
+    let (t0, t1) = (t0.floor(), t1.ceil().max(t0.floor() + 1.0));
+    let e1 = results.iter().map(|r| r.flip_mean).fold(0.0, f64::max).max(1e-3) * 1.15;
+    let x = |t: f64| margin + (t - t0) / (t1 - t0) * (w - 2.0 * margin);
+    let y = |e: f64| h - margin - e / e1 * (h - 2.0 * margin);
+    let mut out = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    );
+    out += &format!("<text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"14\">Depth-of-field error against GPU time ({})</text>\n", w / 2.0, xml(device));
+    out += &format!(
+        "<line x1=\"{margin}\" y1=\"{0}\" x2=\"{1}\" y2=\"{0}\" stroke=\"black\"/>\n<line x1=\"{margin}\" y1=\"{margin}\" x2=\"{margin}\" y2=\"{0}\" stroke=\"black\"/>\n",
+        h - margin,
+        w - margin
+    );
+    let mut decade = t0;
+    while decade <= t1 + 1e-9 {
+        out += &format!(
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{} ms</text>\n",
+            x(decade),
+            h - margin + 18.0,
+            10f64.powf(decade)
+        );
+        decade += 1.0;
+    }
+    for i in 0..=4 {
+        let e = e1 * i as f64 / 4.0;
+        out += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{e:.3}</text>\n", margin - 6.0, y(e) + 4.0);
+    }
+    out += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">GPU time of the depth of field (log)</text>\n",
+        w / 2.0,
+        h - 20.0
+    );
+    out += &format!("<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">mean FLIP vs diffraction</text>\n", h / 2.0, h / 2.0);
+    for (r, t) in results.iter().zip(&times) {
+        out += &format!(
+            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"4\" fill=\"#2a6fdb\"/><text x=\"{:.1}\" y=\"{:.1}\">{}</text>\n",
+            x(*t),
+            y(r.flip_mean),
+            x(*t) + 7.0,
+            y(r.flip_mean) - 6.0,
+            xml(&r.method)
+        );
+    }
+    out + "</svg>\n"
+}
+
+fn xml(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
