@@ -68,8 +68,9 @@ void main() {
     float radius_p = 0.5 * abs(coc_here);
     // Pixels whose own CoC is small are gathered exactly, as in the small-CoC tiles (so nothing
     // changes across a tile border), with only the large-CoC foreground composited over them;
-    // blurred pixels take the half-resolution layers. A 2 px wide blend joins the two.
-    float blurred = smoothstep(pc.small_radius_px - 1.0, pc.small_radius_px + 1.0, radius_p);
+    // blurred pixels take the half-resolution layers. A blend over the last 1.5 px below the
+    // small-CoC radius joins the two, so a pixel at or above it costs only the half path.
+    float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
     vec4 base = bg;
     if (blurred < 1.0) {
         Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
