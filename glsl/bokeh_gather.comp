@@ -9,6 +9,7 @@
 //  - A sharp subject (tiny CoC) reaches only its own pixel, so it does not bleed into the background.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 3
+#include "aperture.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
@@ -18,14 +19,7 @@ layout(binding = 2, rgba32f) uniform writeonly image2D color_out;
 layout(push_constant) uniform Push {
     ivec2 size;
     int radius_px;              // largest CoC radius in the image (the gather extent)
-    int blades;
-    float rotation_rad;
-    float curvature;
-    float sa_amount;
-    float sa_max_coc_px;
-    float centre_x_px;
-    float centre_y_px;
-    float cats_eye_per_px;
+    Aperture ap;
     float layer_transition_px;  // CoC difference over which a sample moves from background to foreground
 } pc;
 
@@ -34,7 +28,6 @@ layout(push_constant) uniform Push {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+    Aperture ap = pc.ap;
     imageStore(color_out, p, gather_exact(p, pc.size, pc.radius_px, ap, pc.layer_transition_px));
 }

@@ -4,6 +4,7 @@
 // subject stays sharp at full resolution), with the half-resolution foreground composited over.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
+#include "aperture.glsl"
 #include "dof_tiles.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -22,14 +23,7 @@ layout(push_constant) uniform Push {
     ivec2 half_size;
     ivec2 tiles;
     float small_radius_px;
-    int blades;
-    float rotation_rad;
-    float curvature;
-    float sa_amount;
-    float sa_max_coc_px;
-    float centre_x_px;
-    float centre_y_px;
-    float cats_eye_per_px;
+    Aperture ap;
     float layer_transition_px;
 } pc;
 
@@ -73,8 +67,7 @@ void main() {
     float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
     vec4 base = bg;
     if (blurred < 1.0) {
-        Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                               vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+        Aperture ap = pc.ap;
         // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
         float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
         int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;

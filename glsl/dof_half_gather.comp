@@ -22,14 +22,7 @@ layout(push_constant) uniform Push {
     ivec2 half_size;
     ivec2 tiles;
     int rings;
-    int blades;
-    float rotation_rad;
-    float curvature;
-    float sa_amount;
-    float sa_max_coc_px;
-    float centre_x_px;
-    float centre_y_px;
-    float cats_eye_per_px;
+    Aperture ap;
     float layer_transition_px;
     float small_radius_px;      // in half-resolution px: larger CoC samples also go to fg_big
 } pc;
@@ -38,8 +31,7 @@ void main() {
     uint t = tile_list[CLASS_LARGE * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
     ivec2 ph = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * (TILE_SIZE / 2) + ivec2(gl_LocalInvocationID.xy);
     if (outside(ph, pc.half_size)) return;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+    Aperture ap = pc.ap;
     // Half-resolution units: CoC diameters and distances halve.
     float coc_p = 0.5 * imageLoad(coc_half, ph).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);

@@ -21,14 +21,7 @@ layout(binding = 4, std430) readonly buffer TileLists { uint tile_list[]; };
 layout(push_constant) uniform Push {
     ivec2 size;
     ivec2 tiles;
-    int blades;
-    float rotation_rad;
-    float curvature;
-    float sa_amount;
-    float sa_max_coc_px;
-    float centre_x_px;
-    float centre_y_px;
-    float cats_eye_per_px;
+    Aperture ap;
     int sprite_capacity;
 } pc;
 
@@ -40,8 +33,7 @@ void main() {
     ivec2 tile_origin = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * TILE_SIZE;
     ivec2 p = tile_origin + ivec2(gl_LocalInvocationID.xy);
     bool inside = !outside(p, pc.size);
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+    Aperture ap = pc.ap;
     float coc_p = inside ? imageLoad(coc_px, p).r : 0.0;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
     uint total = min(args[ARGS_SPRITE_COUNT], uint(pc.sprite_capacity));

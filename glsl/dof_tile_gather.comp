@@ -4,6 +4,7 @@
 // indirectly, one workgroup per tile of the class's list.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 5
+#include "aperture.glsl"
 #include "dof_tiles.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -17,14 +18,7 @@ layout(push_constant) uniform Push {
     ivec2 size;
     ivec2 tiles;
     int tile_class;
-    int blades;
-    float rotation_rad;
-    float curvature;
-    float sa_amount;
-    float sa_max_coc_px;
-    float centre_x_px;
-    float centre_y_px;
-    float cats_eye_per_px;
+    Aperture ap;
     float layer_transition_px;
 } pc;
 
@@ -43,7 +37,6 @@ void main() {
     float radius_p = 0.5 * abs(imageLoad(coc_px, p).r);
     float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
     int r = int(ceil(min(tile_radius_px[t], max(radius_p, fg_radius)))) + 1;
-    Aperture ap = Aperture(pc.blades, pc.rotation_rad, pc.curvature, pc.sa_amount, pc.sa_max_coc_px,
-                           vec2(pc.centre_x_px, pc.centre_y_px), pc.cats_eye_per_px);
+    Aperture ap = pc.ap;
     imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));
 }

@@ -5,7 +5,7 @@ use crate::lens_file::LensFile;
 use crate::optics::film::FilmCurve;
 use crate::optics::sensor::SensorFit;
 use crate::optics::{OpticsError, Sensor, ThinLens};
-use crate::passes::bokeh_gather::ApertureShape;
+use crate::passes::aperture::ApertureShape;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {

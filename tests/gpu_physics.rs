@@ -4,7 +4,8 @@
 mod support;
 
 use realcam::camera::{BokehMode, FilmMode};
-use realcam::passes::bokeh_gather::{ApertureShape, GatherParams};
+use realcam::passes::aperture::ApertureShape;
+use realcam::passes::bokeh_gather::GatherParams;
 use realcam::passes::coc::CocParams;
 use realcam::passes::tiled_dof::TiledDofParams;
 use realcam::planner;

@@ -4,13 +4,15 @@
 #define REALCAM_APERTURE_GLSL
 #include "common.glsl"
 
+// Part of every bokeh pass's push constants (src/passes/aperture.rs mirrors it: 4-byte fields).
 struct Aperture {
-    int blades;        // < 3: circular
-    float rotation;    // radians; 0 puts a corner straight up (y up), as Blender/Cycles does
-    float curvature;   // 0: straight blades, 1: circular
-    float sa_amount;   // spherical aberration: > 0 under-corrected, < 0 over-corrected, 0 uniform
-    float sa_max_coc_px; // the CoC at which the aberration reaches its full amount
-    vec2 centre_px;      // optical centre, in the shader's pixel units
+    int blades;            // < 3: circular
+    float rotation;        // radians; 0 puts a corner straight up (y up), as Blender/Cycles does
+    float curvature;       // 0: straight blades, 1: circular
+    float sa_amount;       // spherical aberration: > 0 under-corrected, < 0 over-corrected, 0 uniform
+    float sa_max_coc_px;   // the CoC at which the aberration reaches its full amount
+    float centre_x_px;     // optical centre, in the shader's pixel units
+    float centre_y_px;
     float cats_eye_per_px; // cat's-eye amount / distance from the centre to the farthest corner
 };
 
@@ -115,7 +117,7 @@ float aperture_weight(vec2 o, float r, Aperture ap, vec2 sample_px, float flip, 
         area = aperture_area(r, ap);
     }
     if (ap.cats_eye_per_px > 0.0 && cov > 0.0) {
-        vec2 c = (ap.centre_px - sample_px) * ap.cats_eye_per_px * r * flip;
+        vec2 c = (vec2(ap.centre_x_px, ap.centre_y_px) - sample_px) * ap.cats_eye_per_px * r * flip;
         float d = min(length(c), 2.0 * r);
         cov = min(cov, clamp(0.5 - (length(o - c) - r) / ramp, 0.0, 1.0));
         // Overlap of two circles of radius r at distance d, relative to one circle.

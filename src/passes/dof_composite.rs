@@ -1,6 +1,7 @@
 //! Tiled depth of field: the large-CoC tiles at full resolution (upsampled half-resolution layers,
 //! the exact gather for nearly sharp pixels). Shader: glsl/dof_composite.comp.
 
+use super::aperture::ApertureConstants;
 use super::push_bytes;
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
 use ash::vk;
@@ -14,14 +15,7 @@ pub struct CompositeParams {
     pub half_size: [i32; 2],
     pub tiles: [i32; 2],
     pub small_radius_px: f32,
-    pub blades: i32,
-    pub rotation_rad: f32,
-    pub curvature: f32,
-    pub sa_amount: f32,
-    pub sa_max_coc_px: f32,
-    pub centre_x_px: f32,
-    pub centre_y_px: f32,
-    pub cats_eye_per_px: f32,
+    pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
 }
 

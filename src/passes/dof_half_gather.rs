@@ -1,6 +1,7 @@
 //! Tiled depth of field: the fixed-cost half-resolution gather of large-CoC tiles.
 //! Shader: glsl/dof_half_gather.comp.
 
+use super::aperture::ApertureConstants;
 use super::push_bytes;
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
 use ash::vk;
@@ -13,14 +14,7 @@ pub struct HalfGatherParams {
     pub half_size: [i32; 2],
     pub tiles: [i32; 2],
     pub rings: i32,
-    pub blades: i32,
-    pub rotation_rad: f32,
-    pub curvature: f32,
-    pub sa_amount: f32,
-    pub sa_max_coc_px: f32,
-    pub centre_x_px: f32,
-    pub centre_y_px: f32,
-    pub cats_eye_per_px: f32,
+    pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
     /// In half-resolution px: samples with a larger CoC radius also go to the large-CoC
     /// foreground layer.

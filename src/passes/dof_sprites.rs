@@ -1,6 +1,7 @@
 //! Tiled depth of field: highlight sprites with the exact aperture shape, binned per tile and
 //! added to the large-CoC tiles. Shader: glsl/dof_sprites.comp.
 
+use super::aperture::ApertureConstants;
 use super::push_bytes;
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
 use ash::vk;
@@ -12,14 +13,7 @@ pub const NAME: &str = "dof_sprites";
 pub struct SpritesParams {
     pub size: [i32; 2],
     pub tiles: [i32; 2],
-    pub blades: i32,
-    pub rotation_rad: f32,
-    pub curvature: f32,
-    pub sa_amount: f32,
-    pub sa_max_coc_px: f32,
-    pub centre_x_px: f32,
-    pub centre_y_px: f32,
-    pub cats_eye_per_px: f32,
+    pub aperture: ApertureConstants,
     pub sprite_capacity: i32,
 }
 

@@ -2,6 +2,7 @@
 //! gather with the tile's own radius where the CoC is small. Dispatched indirectly over the
 //! tile lists of dof_classify. Shader: glsl/dof_tile_gather.comp.
 
+use super::aperture::ApertureConstants;
 use super::push_bytes;
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
 use ash::vk;
@@ -14,14 +15,7 @@ pub struct TileGatherParams {
     pub size: [i32; 2],
     pub tiles: [i32; 2],
     pub tile_class: i32,
-    pub blades: i32,
-    pub rotation_rad: f32,
-    pub curvature: f32,
-    pub sa_amount: f32,
-    pub sa_max_coc_px: f32,
-    pub centre_x_px: f32,
-    pub centre_y_px: f32,
-    pub cats_eye_per_px: f32,
+    pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
 }
 

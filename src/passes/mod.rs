@@ -2,6 +2,7 @@
 //! records its dispatch with the barriers it needs (written out by hand, with the reason), and
 //! has a CPU twin used as its test oracle on small images.
 
+pub mod aperture;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod diffraction;

@@ -5,7 +5,7 @@
 //! only highlights are scattered. Each step is its own pass module; this file only owns the
 //! buffers they share and the barriers between the classification and its indirect dispatches.
 
-use super::bokeh_gather::ApertureShape;
+use super::aperture::{ApertureConstants, ApertureShape};
 use super::dof_classify::{ClassifyParams, DofClassifyPass};
 use super::dof_composite::{CompositeBindings, CompositeParams, DofCompositePass};
 use super::dof_downsample::{DofDownsamplePass, DownsampleParams};
@@ -42,12 +42,8 @@ pub struct TiledDofParams {
     pub sprite_visibility: f32,
     /// Largest |CoC| diameter in the frame (after the clamp), for the dilation search.
     pub max_abs_coc_px: f32,
-    pub aperture: ApertureShape,
-    /// CoC diameter at which spherical aberration reaches its full amount.
-    pub sa_max_coc_px: f32,
-    /// Optical centre in pixels and the cat's-eye amount per pixel from it.
-    pub centre_px: [f32; 2],
-    pub cats_eye_per_px: f32,
+    /// The aperture, in full-resolution pixel units.
+    pub aperture: ApertureConstants,
 }
 
 impl TiledDofParams {
@@ -69,10 +65,7 @@ impl TiledDofParams {
             sprite_capacity: 16384,
             sprite_visibility: 0.05,
             max_abs_coc_px: max_abs_coc_px as f32,
-            aperture: *aperture,
-            sa_max_coc_px: sa_max_coc_px as f32,
-            centre_px: [centre_px[0] as f32, centre_px[1] as f32],
-            cats_eye_per_px: aperture.cats_eye_per_px(width, height, centre_px) as f32,
+            aperture: ApertureConstants::new(aperture, sa_max_coc_px, centre_px, width, height),
         }
     }
 
@@ -82,12 +75,6 @@ impl TiledDofParams {
 
     fn half_size(&self) -> [i32; 2] {
         [self.width.div_ceil(2) as i32, self.height.div_ceil(2) as i32]
-    }
-
-    fn aperture_fields(&self) -> (i32, f32, f32, f32) {
-        let a = &self.aperture;
-        let curvature = if a.blades < 3 { 1.0 } else { a.curvature.clamp(0.0, 1.0) as f32 };
-        (a.blades as i32, a.rotation_deg.to_radians() as f32, curvature, a.spherical_aberration as f32)
     }
 }
 
@@ -159,10 +146,7 @@ impl TiledDof {
         let fg_half = gpu.create_image("dof foreground (half)", hw as u32, hh as u32, rgba)?;
         let fg_big_half = gpu.create_image("dof large-CoC foreground (half)", hw as u32, hh as u32, rgba)?;
         let color_base = gpu.create_image("dof colour less sprites", p.width, p.height, rgba)?;
-        let (blades, rotation_rad, curvature, sa_amount) = p.aperture_fields();
-        let sa_max_coc_px = p.sa_max_coc_px;
-        let [centre_x_px, centre_y_px] = p.centre_px;
-        let cats_eye_per_px = p.cats_eye_per_px;
+        let aperture = p.aperture;
         let size = [p.width as i32, p.height as i32];
 
         self.tiles.record(rec, coc, &tile_coc, &TilesParams { size, tiles })?;
@@ -206,20 +190,7 @@ impl TiledDof {
                 args: &args,
                 aperture_mask,
             },
-            &TileGatherParams {
-                size,
-                tiles,
-                tile_class: 0,
-                blades,
-                rotation_rad,
-                curvature,
-                sa_amount,
-                sa_max_coc_px,
-                centre_x_px,
-                centre_y_px,
-                cats_eye_per_px,
-                layer_transition_px,
-            },
+            &TileGatherParams { size, tiles, tile_class: 0, aperture, layer_transition_px },
         )?;
         let downsample = DownsampleParams {
             size,
@@ -235,15 +206,8 @@ impl TiledDof {
             half_size: [hw, hh],
             tiles,
             rings: p.rings,
-            blades,
-            rotation_rad,
-            curvature,
-            // The half-resolution gather works in half-size CoC units.
-            sa_amount,
-            sa_max_coc_px: 0.5 * sa_max_coc_px,
-            centre_x_px: 0.5 * centre_x_px,
-            centre_y_px: 0.5 * centre_y_px,
-            cats_eye_per_px: 2.0 * cats_eye_per_px,
+            // The half-resolution gather works in half-size pixel units.
+            aperture: aperture.half_resolution(),
             layer_transition_px,
             small_radius_px: 0.5 * p.small_radius_px,
         };
@@ -265,14 +229,7 @@ impl TiledDof {
             half_size: [hw, hh],
             tiles,
             small_radius_px: p.small_radius_px,
-            blades,
-            rotation_rad,
-            curvature,
-            sa_amount,
-            sa_max_coc_px,
-            centre_x_px,
-            centre_y_px,
-            cats_eye_per_px,
+            aperture,
             layer_transition_px,
         };
         self.composite.record(
@@ -293,19 +250,7 @@ impl TiledDof {
             },
             &composite,
         )?;
-        let sprites_params = SpritesParams {
-            size,
-            tiles,
-            blades,
-            rotation_rad,
-            curvature,
-            sa_amount,
-            sa_max_coc_px,
-            centre_x_px,
-            centre_y_px,
-            cats_eye_per_px,
-            sprite_capacity: p.sprite_capacity as i32,
-        };
+        let sprites_params = SpritesParams { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
         self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, aperture_mask, &sprites_params)?;
         Ok(TiledFrame {
             args,
