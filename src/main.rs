@@ -385,13 +385,7 @@ fn render(args: RenderArgs) -> Result<()> {
         eprintln!("{}", plan.explain());
     }
 
-    let mut options = GpuOptions::from_env();
-    options.validation |= args.gpu.validate;
-    if args.gpu.device.is_some() {
-        options.device = args.gpu.device.clone();
-    }
-    let gpu = Gpu::new(&options)?;
-    eprintln!("device: {}", gpu.info());
+    let gpu = open_gpu(&args.gpu)?;
     let renderer = Renderer::new(&gpu, &plan)?;
     let rendered = renderer.render(&frame, &plan, false)?;
     if args.profile {
@@ -419,6 +413,18 @@ fn render(args: RenderArgs) -> Result<()> {
         eprintln!("wrote {}", png.display());
     }
     Ok(())
+}
+
+/// The GPU, with validation and the device as the flags and the environment ask; prints it.
+fn open_gpu(args: &GpuArgs) -> Result<Gpu> {
+    let mut options = GpuOptions::from_env();
+    options.validation |= args.validate;
+    if args.device.is_some() {
+        options.device = args.device.clone();
+    }
+    let gpu = Gpu::new(&options)?;
+    eprintln!("device: {}", gpu.info());
+    Ok(gpu)
 }
 
 fn indent(text: &str) -> String {
@@ -499,13 +505,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             _ => bail!("--resolutions: {r:?} is not WIDTHxHEIGHT"),
         }
     }
-    let mut options = GpuOptions::from_env();
-    options.validation |= args.gpu.validate;
-    if args.gpu.device.is_some() {
-        options.device = args.gpu.device.clone();
-    }
-    let gpu = Gpu::new(&options)?;
-    eprintln!("device: {}", gpu.info());
+    let gpu = open_gpu(&args.gpu)?;
     let bench_options = realcam::bench::BenchOptions {
         resolutions,
         radii_px: args.radii_px.clone(),
@@ -564,13 +564,7 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
         ..Default::default()
     };
     let frame = Frame::from_passes(io::load_passes(&sources)?, &camera, DepthKind::Planar);
-    let mut options = GpuOptions::from_env();
-    options.validation |= args.gpu.validate;
-    if args.gpu.device.is_some() {
-        options.device = args.gpu.device.clone();
-    }
-    let gpu = Gpu::new(&options)?;
-    eprintln!("device: {}", gpu.info());
+    let gpu = open_gpu(&args.gpu)?;
     let bar = indicatif::ProgressBar::new(7);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")

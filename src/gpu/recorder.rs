@@ -380,45 +380,6 @@ impl Recorder {
         Ok(Download(id))
     }
 
-    /// Read a small device buffer back (e.g. tile statistics) after the submission.
-    pub fn download_buffer(&mut self, source: &GpuBuffer) -> GpuResult<Download> {
-        let buffer = self.gpu.create_buffer(
-            &format!("{} readback", source.name),
-            source.size_bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        // Compute writes -> copy reads.
-        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
-            .buffer(source.buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE)]);
-        unsafe {
-            self.gpu.device().cmd_copy_buffer(
-                self.cb,
-                source.buffer,
-                buffer.buffer,
-                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: source.size_bytes }],
-            )
-        };
-        // Copy writes -> host reads after the fence.
-        self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-            .dst_access_mask(vk::AccessFlags2::HOST_READ)
-            .buffer(buffer.buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE)]);
-        let id = self.downloads.len();
-        self.downloads.push((buffer, id));
-        Ok(Download(id))
-    }
-
     /// Submit, wait, and return the per-pass GPU times and the read-back data (indexed by the
     /// [`Download`] handles, in order).
     pub fn submit(mut self) -> GpuResult<(Profile, Vec<Vec<f32>>)> {
