@@ -46,22 +46,25 @@ impl Renderer {
     }
 
     pub fn render(&self, frame: &Frame, plan: &Plan, keep_coc: bool) -> GpuResult<Rendered> {
+        let dof = self.gather.is_some() || self.tiled.is_some() || self.diffraction.is_some();
+        if !dof && self.coc.is_none() && self.vignette.is_none() && self.film.is_none() {
+            // Nothing to simulate: the pinhole image is the camera image; the GPU is not touched.
+            let profile = Profile { device: self.gpu.info().to_string(), ..Default::default() };
+            return Ok(Rendered { rgba: frame.color.clone(), coc_px: None, profile });
+        }
         let (w, h) = (frame.width, frame.height);
         let gpu = &self.gpu;
         let mut rec = Recorder::new(gpu, "realcam frame")?;
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
         let color_in = gpu.create_image("color (input)", w, h, rgba)?;
         rec.begin_pass("upload");
-        let depth = match plan.coc.is_some() || plan.diffraction.is_some() {
-            true => {
-                let depth = gpu.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?;
-                rec.upload_images(&[(&color_in, &frame.color), (&depth, &frame.depth_m)])?;
-                Some(depth)
-            }
-            false => {
-                rec.upload_images(&[(&color_in, &frame.color)])?;
-                None
-            }
+        let depth = if plan.coc.is_some() || plan.diffraction.is_some() {
+            let depth = gpu.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?;
+            rec.upload_images(&[(&color_in, &frame.color), (&depth, &frame.depth_m)])?;
+            Some(depth)
+        } else {
+            rec.upload_images(&[(&color_in, &frame.color)])?;
+            None
         };
         rec.end_pass();
 
@@ -69,11 +72,7 @@ impl Renderer {
         // passes); `current` is the latest color.
         let image = |name: &str, format, needed: bool| needed.then(|| gpu.create_image(name, w, h, format)).transpose();
         let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
-        let dof_out = image(
-            "color (depth of field)",
-            rgba,
-            self.gather.is_some() || self.tiled.is_some() || self.diffraction.is_some(),
-        )?;
+        let dof_out = image("color (depth of field)", rgba, dof)?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -116,10 +115,6 @@ impl Renderer {
             current = out;
         }
 
-        if std::ptr::eq(current, &color_in) {
-            // Nothing to simulate: the pinhole image is the camera image.
-            return Ok(Rendered { rgba: frame.color.clone(), coc_px: None, profile: rec.submit()?.0 });
-        }
         rec.begin_pass("download");
         let out_id = rec.download_image(current, 4)?;
         let coc_id = match (&coc_image, keep_coc) {
