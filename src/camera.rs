@@ -62,6 +62,8 @@ pub struct Camera {
     pub bokeh: BokehMode,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::aperture_mask::ApertureMask>,
+    /// Distortion and lateral colour against image height, from the lens file's tables.
+    pub distortion: Option<crate::optics::distortion::DistortionTables>,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -167,6 +169,7 @@ impl Camera {
             max_coc_px: req.max_coc_px,
             bokeh: req.bokeh,
             aperture_mask: None,
+            distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
         })
     }
 

@@ -78,6 +78,41 @@ pub struct LensFile {
     #[serde(default)]
     pub spherical_aberration: f64,
     pub aperture: ApertureSpec,
+    /// Quantities against image height (Kyaw 2013 sec 7.2: tables of off-axis distance).
+    #[serde(default)]
+    pub tables: Option<LensTables>,
+}
+
+/// Tables against image height on the film, all of the length of `image_height_mm`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LensTables {
+    /// Heights in mm from the optical centre, increasing, from 0.
+    pub image_height_mm: Vec<f64>,
+    /// Distortion in percent at each ideal height (Kyaw 2013 eq 6.8; < 0 barrel, > 0 pincushion).
+    #[serde(default)]
+    pub distortion_percent: Option<Vec<f64>>,
+    /// Lateral colour: the extra distortion of the red and of the blue image relative to green.
+    #[serde(default)]
+    pub lateral_color_red_percent: Option<Vec<f64>>,
+    #[serde(default)]
+    pub lateral_color_blue_percent: Option<Vec<f64>>,
+}
+
+impl LensTables {
+    /// The distortion tables for the camera (zeros where a table is absent).
+    pub fn distortion(&self) -> crate::optics::distortion::DistortionTables {
+        use crate::optics::distortion::{DistortionTables, HeightTable};
+        let table = |v: &Option<Vec<f64>>| HeightTable {
+            image_height_mm: self.image_height_mm.clone(),
+            values: v.clone().unwrap_or_else(|| vec![0.0; self.image_height_mm.len()]),
+        };
+        DistortionTables {
+            green_percent: table(&self.distortion_percent),
+            red_extra_percent: table(&self.lateral_color_red_percent),
+            blue_extra_percent: table(&self.lateral_color_blue_percent),
+        }
+    }
 }
 
 fn one() -> f64 {
@@ -104,12 +139,52 @@ impl LensFile {
             let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].matches('\n').count() + 1);
             LensFileError::Parse { path: path.to_path_buf(), line, message: e.message().to_string() }
         })?;
-        lens.validate(path)?;
+        lens.validate(path, text)?;
         Ok(lens)
     }
 
-    fn validate(&self, path: &Path) -> Result<(), LensFileError> {
+    fn validate(&self, path: &Path, text: &str) -> Result<(), LensFileError> {
         let bad = |message: String| Err(LensFileError::Invalid { path: path.to_path_buf(), message });
+        if let Some(t) = &self.tables {
+            // The line of a key, for messages about its value.
+            let line_of = |key: &str| text.lines().position(|l| l.trim_start().starts_with(key)).map_or(0, |i| i + 1);
+            let at = |key: &str, message: String| {
+                Err(LensFileError::Parse { path: path.to_path_buf(), line: line_of(key), message })
+            };
+            let h = &t.image_height_mm;
+            if h.is_empty() || h[0] < 0.0 || h.iter().any(|v| !v.is_finite()) {
+                return at("image_height_mm", "tables.image_height_mm must be finite heights from 0 up".into());
+            }
+            if let Some(i) = (1..h.len()).find(|&i| h[i] <= h[i - 1]) {
+                return at(
+                    "image_height_mm",
+                    format!(
+                        "tables.image_height_mm is not increasing: {} then {} (entries {} and {})",
+                        h[i - 1],
+                        h[i],
+                        i,
+                        i + 1
+                    ),
+                );
+            }
+            for (key, table) in [
+                ("distortion_percent", &t.distortion_percent),
+                ("lateral_color_red_percent", &t.lateral_color_red_percent),
+                ("lateral_color_blue_percent", &t.lateral_color_blue_percent),
+            ] {
+                if let Some(v) = table {
+                    if v.len() != h.len() {
+                        return at(
+                            key,
+                            format!("tables.{key} has {} values but image_height_mm has {}", v.len(), h.len()),
+                        );
+                    }
+                    if let Some(x) = v.iter().find(|x| !(x.is_finite() && x.abs() < 50.0)) {
+                        return at(key, format!("tables.{key} value {x} is out of range (-50..50 percent)"));
+                    }
+                }
+            }
+        }
         let positive = [
             ("focal_length_mm", self.focal_length_mm),
             ("f_number_min", self.f_number_min),
@@ -191,6 +266,26 @@ mod tests {
         assert_eq!(a.curvature_at(8.0, 1.4), 0.2);
         // f/2.8 is one of the two stops between f/1.4 and f/5.6: halfway.
         assert!((a.curvature_at(2.8, 1.4) - 0.6).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tables_must_increase_and_match_in_length() {
+        let head = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n[aperture]\nblades = 9\n[tables]\n";
+        let text = format!("{head}image_height_mm = [0, 10, 5]\ndistortion_percent = [0, -1, -2]\n");
+        let err = LensFile::parse(&text, Path::new("t.toml")).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "lens file t.toml, line 10: tables.image_height_mm is not increasing: 10 then 5 (entries 2 and 3)"
+        );
+        let text = format!("{head}image_height_mm = [0, 10, 20]\ndistortion_percent = [0, -1]\n");
+        let err = LensFile::parse(&text, Path::new("t.toml")).unwrap_err().to_string();
+        assert_eq!(err, "lens file t.toml, line 11: tables.distortion_percent has 2 values but image_height_mm has 3");
+        let text = format!("{head}image_height_mm = [0, 10]\ndistortion = [0, -1]\n");
+        let err = LensFile::parse(&text, Path::new("t.toml")).unwrap_err().to_string();
+        assert!(err.contains("line 11") && err.contains("distortion"), "{err}");
+        let text = format!("{head}image_height_mm = [0, 10, 20]\ndistortion_percent = [0, -1, -2.5]\n");
+        let lens = LensFile::parse(&text, Path::new("t.toml")).unwrap();
+        assert_eq!(lens.tables.unwrap().distortion().green_percent.at(15.0), -1.75);
     }
 
     #[test]

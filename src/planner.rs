@@ -37,6 +37,8 @@ pub struct Plan {
     /// The diffraction focus processor (`--bokeh diffraction`): its tables and push constants.
     pub diffraction:
         Option<(std::sync::Arc<crate::focus_processor::PsfTables>, crate::passes::diffraction::DiffractionParams)>,
+    /// Distortion and lateral colour: push constants and the table buffer's data.
+    pub distortion: Option<(crate::passes::distortion::DistortionParams, Vec<f32>)>,
     pub vignette: Option<VignetteParams>,
     pub film: Option<FilmParams>,
     /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
@@ -175,6 +177,37 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         }
     });
 
+    let distortion = match &camera.distortion {
+        Some(tables) if !tables.is_zero() => {
+            steps.push(Step {
+                pass: crate::passes::distortion::NAME,
+                run: true,
+                why: format!(
+                    "the lens's tables: distortion up to {:.2}%, lateral colour up to {:.3}% (red) and {:.3}% (blue)",
+                    tables.green_percent.max_abs(),
+                    tables.red_extra_percent.max_abs(),
+                    tables.blue_extra_percent.max_abs()
+                ),
+            });
+            let params = crate::passes::distortion::DistortionParams {
+                size: [w as i32, h as i32],
+                centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+                pixel_pitch_mm: pitch_mm as f32,
+                entries: tables.green_percent.image_height_mm.len() as i32,
+            };
+            Some((params, crate::passes::distortion::table_data(tables)))
+        }
+        _ => {
+            let why = if camera.distortion.is_some() {
+                "the lens's tables are all zero"
+            } else {
+                "the lens file has no distortion or lateral-colour tables"
+            };
+            steps.push(Step { pass: crate::passes::distortion::NAME, run: false, why: why.into() });
+            None
+        }
+    };
+
     let vignette_params = VignetteParams {
         size: [w as i32, h as i32],
         centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
@@ -238,5 +271,5 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
 
     let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
-    Plan { steps, coc, gather, tiled, diffraction, vignette, film, aperture_mask, coc_range_px }
+    Plan { steps, coc, gather, tiled, diffraction, distortion, vignette, film, aperture_mask, coc_range_px }
 }

@@ -15,6 +15,7 @@ pub struct Renderer {
     gather: Option<BokehGatherPass>,
     tiled: Option<TiledDof>,
     diffraction: Option<crate::passes::diffraction::DiffractionPass>,
+    distortion: Option<crate::passes::distortion::DistortionPass>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -40,6 +41,11 @@ impl Renderer {
                 .as_ref()
                 .map(|_| crate::passes::diffraction::DiffractionPass::new(gpu))
                 .transpose()?,
+            distortion: plan
+                .distortion
+                .as_ref()
+                .map(|_| crate::passes::distortion::DistortionPass::new(gpu))
+                .transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -47,7 +53,7 @@ impl Renderer {
 
     pub fn render(&self, frame: &Frame, plan: &Plan, keep_coc: bool) -> GpuResult<Rendered> {
         let dof = self.gather.is_some() || self.tiled.is_some() || self.diffraction.is_some();
-        if !dof && self.coc.is_none() && self.vignette.is_none() && self.film.is_none() {
+        if !dof && self.coc.is_none() && self.distortion.is_none() && self.vignette.is_none() && self.film.is_none() {
             // Nothing to simulate: the pinhole image is the camera image; the GPU is not touched.
             let profile = Profile { device: self.gpu.info().to_string(), ..Default::default() };
             return Ok(Rendered { rgba: frame.color.clone(), coc_px: None, profile });
@@ -73,6 +79,7 @@ impl Renderer {
         let image = |name: &str, format, needed: bool| needed.then(|| gpu.create_image(name, w, h, format)).transpose();
         let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
         let dof_out = image("color (depth of field)", rgba, dof)?;
+        let distortion_out = image("color (distortion)", rgba, self.distortion.is_some())?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -105,6 +112,13 @@ impl Renderer {
             pass.record(&mut rec, current, depth, &table, out, params)?;
             current = out;
             _tables = Some(table);
+        }
+        let mut _distortion_tables = None;
+        if let (Some(pass), Some((params, data)), Some(out)) = (&self.distortion, &plan.distortion, &distortion_out) {
+            let tables = rec.upload_buffer("distortion tables", data)?;
+            pass.record(&mut rec, current, out, &tables, params)?;
+            current = out;
+            _distortion_tables = Some(tables);
         }
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {
             pass.record(&mut rec, current, out, params)?;

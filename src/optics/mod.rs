@@ -16,6 +16,7 @@
 //! (positive behind the focus plane, negative in front).
 
 pub mod diffraction;
+pub mod distortion;
 pub mod dof;
 pub mod exposure;
 pub mod film;

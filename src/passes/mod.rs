@@ -6,6 +6,7 @@ pub mod aperture;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod diffraction;
+pub mod distortion;
 pub mod dof_classify;
 pub mod dof_composite;
 pub mod dof_downsample;

@@ -1,0 +1,64 @@
+#version 450
+// Distortion and lateral colour (Kyaw 2013 eq 6.8, sec 6.4): every output pixel, at real height
+// R on the film, reads the input at the ideal height r with r (1 + D(r)/100) = R, per channel
+// (red and blue carry their extra lateral-colour distortion), bilinearly; so barrel and
+// pincushion are exact inverse mappings with no holes.
+#include "common.glsl"
+
+layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
+layout(binding = 0, rgba32f) uniform readonly image2D color_in;
+layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
+// [heights (n), green %, red extra %, blue extra %], n each.
+layout(binding = 2, std430) readonly buffer Tables { float table[]; };
+
+layout(push_constant) uniform Push {
+    ivec2 size;
+    vec2 centre_px;
+    float pixel_pitch_mm;
+    int entries;
+} pc;
+
+float lookup(int column, float h_mm) {
+    int n = pc.entries;
+    if (h_mm <= table[0]) return table[column * n];
+    for (int i = 1; i < n; ++i) {
+        if (h_mm <= table[i]) {
+            float t = (h_mm - table[i - 1]) / (table[i] - table[i - 1]);
+            return mix(table[column * n + i - 1], table[column * n + i], t);
+        }
+    }
+    return table[column * n + n - 1];
+}
+
+float percent(int channel, float r_mm) {
+    float g = lookup(1, r_mm);
+    if (channel == 0) return g + lookup(2, r_mm);
+    if (channel == 2) return g + lookup(3, r_mm);
+    return g;
+}
+
+vec4 load_clamped(ivec2 q) { return imageLoad(color_in, clamp(q, ivec2(0), pc.size - 1)); }
+
+vec4 bilinear(vec2 x) {
+    vec2 t = x - 0.5;
+    ivec2 i = ivec2(floor(t));
+    vec2 f = t - vec2(i);
+    return mix(mix(load_clamped(i), load_clamped(i + ivec2(1, 0)), f.x),
+               mix(load_clamped(i + ivec2(0, 1)), load_clamped(i + ivec2(1, 1)), f.x), f.y);
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (outside(p, pc.size)) return;
+    vec2 d = vec2(p) + 0.5 - pc.centre_px;
+    float real_mm = length(d) * pc.pixel_pitch_mm;
+    vec4 out_color = imageLoad(color_in, p);
+    for (int c = 0; c < 3; ++c) {
+        // Fixed-point inverse of eq 6.8 (src/optics/distortion.rs).
+        float r = real_mm;
+        for (int k = 0; k < 12; ++k) r = real_mm / (1.0 + percent(c, r) / 100.0);
+        float scale = real_mm > 0.0 ? r / real_mm : 1.0;
+        out_color[c] = bilinear(pc.centre_px + d * scale)[c];
+    }
+    imageStore(color_out, p, finite_or_zero(out_color));
+}

@@ -1,0 +1,166 @@
+//! The aberration passes on the GPU (lavapipe) with validation on: distortion and lateral colour
+//! against the lens tables (Kyaw 2013 eq 6.8).
+
+mod support;
+
+use realcam::optics::distortion::{DistortionTables, HeightTable};
+use realcam::passes::distortion::distortion_cpu;
+use realcam::scene::Frame;
+use support::*;
+
+const W: u32 = 256;
+const H: u32 = 144;
+
+/// Distortion growing with the square of the height: `edge_percent` at 4.8 mm (the 9.6 mm wide
+/// test sensor's half width).
+fn quadratic(edge_percent: f64, red_extra: f64, blue_extra: f64) -> DistortionTables {
+    let heights: Vec<f64> = (0..=12).map(|i| i as f64 * 0.5).collect();
+    let table = |k: f64| HeightTable {
+        image_height_mm: heights.clone(),
+        values: heights.iter().map(|h| k * (h / 4.8) * (h / 4.8)).collect(),
+    };
+    DistortionTables {
+        green_percent: table(edge_percent),
+        red_extra_percent: table(red_extra),
+        blue_extra_percent: table(blue_extra),
+    }
+}
+
+/// Thin bright horizontal lines (2 px, value 1 on 0) at the given rows, at depth 2 m (in focus).
+fn lines_frame(rows: &[u32]) -> Frame {
+    let mut color = vec![0.0f32; (W * H * 4) as usize];
+    for y in 0..H {
+        for x in 0..W {
+            let i = ((y * W + x) * 4) as usize;
+            color[i + 3] = 1.0;
+            if rows.iter().any(|&r| y == r || y == r + 1) {
+                color[i..i + 3].copy_from_slice(&[1.0; 3]);
+            }
+        }
+    }
+    Frame::new(W, H, color, vec![2.0; (W * H) as usize])
+}
+
+fn camera_with(tables: DistortionTables) -> realcam::camera::Camera {
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    camera.distortion = Some(tables);
+    camera
+}
+
+/// Centroid row of channel `c` in column x, over rows lo..hi.
+fn column_centroid(rgba: &[f32], x: u32, lo: u32, hi: u32, c: usize) -> f64 {
+    let (mut m, mut s) = (0.0, 0.0);
+    for y in lo..hi {
+        let v = at(rgba, W, x, y, c) as f64;
+        m += v * (y as f64 + 0.5);
+        s += v;
+    }
+    m / s
+}
+
+#[test]
+fn straight_lines_bow_as_the_distortion_table_says() {
+    let gpu = gpu();
+    let pitch_mm = 9.6 / W as f64;
+    // Lines centred at y = 72 (through the centre: stays straight), 30 and 114.
+    let rows = [71u32, 29, 113];
+    for edge_percent in [-4.0, 4.0] {
+        let tables = quadratic(edge_percent, 0.0, 0.0);
+        let camera = camera_with(tables.clone());
+        let frame = lines_frame(&rows);
+        let (rgba, plan, _) = render(&gpu, &frame, &camera);
+        assert!(plan.runs("distortion"), "{}", plan.explain());
+        for &row in &rows {
+            let ideal_y = row as f64 + 1.0; // the 2 px line's centre
+            let mut worst = 0.0f64;
+            let (mut end_offset, mut mid_offset) = (0.0, 0.0);
+            for x in (8..W - 8).step_by(8) {
+                // Expected: trace the ideal line's points through eq 6.8 and read the row at x.
+                let xc = x as f64 + 0.5 - 128.0;
+                let mut best = (f64::MAX, 0.0);
+                for k in 0..4000 {
+                    let xi = -140.0 + k as f64 * 0.07;
+                    let yi = ideal_y - 72.0;
+                    let r_mm = (xi * xi + yi * yi).sqrt() * pitch_mm;
+                    let s = 1.0 + tables.percent(1, r_mm) / 100.0;
+                    let (xr, yr) = (xi * s, yi * s);
+                    if (xr - xc).abs() < best.0 {
+                        best = ((xr - xc).abs(), yr + 72.0);
+                    }
+                }
+                let expected = best.1;
+                let lo = (expected - 8.0).max(0.0) as u32;
+                let hi = ((expected + 8.0) as u32).min(H);
+                let measured = column_centroid(&rgba, x, lo, hi, 1);
+                worst = worst.max((measured - expected).abs());
+                if x == 8 {
+                    end_offset = measured - 72.0;
+                }
+                if x == 128 {
+                    mid_offset = measured - 72.0;
+                }
+            }
+            println!("D {edge_percent}% line at {ideal_y}: worst deviation from eq 6.8 {worst:.3} px");
+            assert!(worst < 0.5, "D {edge_percent}%: line at {ideal_y} off by {worst:.3} px");
+            if row == 71 {
+                assert!(end_offset.abs() < 0.1 && mid_offset.abs() < 0.1, "the centre line must stay straight");
+            } else {
+                // Barrel pulls the line's ends toward the centre, pincushion pushes them away.
+                let bow = end_offset.abs() - mid_offset.abs();
+                assert!(if edge_percent < 0.0 { bow < -0.3 } else { bow > 0.3 }, "D {edge_percent}%: bow {bow}");
+            }
+        }
+    }
+}
+
+#[test]
+fn lateral_colour_displaces_red_and_blue_by_the_tabled_amounts() {
+    let gpu = gpu();
+    // A small white square (4x4 px) around (224, 72): 96 px right of the centre = 3.6 mm.
+    let mut color = vec![0.0f32; (W * H * 4) as usize];
+    for y in 70..74 {
+        for x in 222..226 {
+            let i = ((y * W + x) * 4) as usize;
+            color[i..i + 3].copy_from_slice(&[1.0; 3]);
+        }
+    }
+    let frame = Frame::new(W, H, color, vec![2.0; (W * H) as usize]);
+    let tables = quadratic(0.0, 1.5, -1.5);
+    let camera = camera_with(tables.clone());
+    let (rgba, _, _) = render(&gpu, &frame, &camera);
+    let centroid_x = |c: usize| {
+        let (mut m, mut s) = (0.0, 0.0);
+        for y in 60..84 {
+            for x in 200..250 {
+                let v = at(&rgba, W, x, y, c) as f64;
+                m += v * (x as f64 + 0.5);
+                s += v;
+            }
+        }
+        m / s
+    };
+    let (r, g, b) = (centroid_x(0), centroid_x(1), centroid_x(2));
+    let pitch_mm = 9.6 / W as f64;
+    let ideal_px = 224.0 - 128.0;
+    let expect = |c: usize| tables.real_height_mm(c, ideal_px * pitch_mm) / pitch_mm - ideal_px;
+    println!("red {:+.3} px (table {:+.3}), blue {:+.3} px (table {:+.3})", r - g, expect(0), b - g, expect(2));
+    assert!((g - 224.0).abs() < 0.05, "green stays: {g}");
+    assert!((r - g - expect(0)).abs() < 0.2, "red shift {} vs table {}", r - g, expect(0));
+    assert!((b - g - expect(2)).abs() < 0.2, "blue shift {} vs table {}", b - g, expect(2));
+}
+
+#[test]
+fn distortion_pass_matches_its_cpu_twin() {
+    let gpu = gpu();
+    let tables = quadratic(-3.0, 0.4, -0.3);
+    let camera = camera_with(tables.clone());
+    let frame = lines_frame(&[20, 50, 90, 130]);
+    let (rgba, plan, _) = render(&gpu, &frame, &camera);
+    let (params, _) = plan.distortion.as_ref().unwrap();
+    let cpu = distortion_cpu(&frame.color, params, &tables);
+    let worst = rgba.iter().zip(&cpu).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(worst < 2e-3, "GPU vs CPU distortion differ by {worst}");
+    // Tables that are all zero: the pass is not recorded.
+    let (_, plan, profile) = render(&gpu, &frame, &camera_with(quadratic(0.0, 0.0, 0.0)));
+    assert!(!plan.runs("distortion") && profile.pass_ms("distortion").is_none());
+}
