@@ -64,6 +64,8 @@ pub struct Camera {
     pub aperture_mask: Option<crate::aperture_mask::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
     pub distortion: Option<crate::optics::distortion::DistortionTables>,
+    /// Relative illumination against image height, from the lens file (else cos^4).
+    pub relative_illumination: Option<crate::optics::distortion::HeightTable>,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -170,6 +172,7 @@ impl Camera {
             bokeh: req.bokeh,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
+            relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination()),
         })
     }
 

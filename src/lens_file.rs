@@ -97,9 +97,20 @@ pub struct LensTables {
     pub lateral_color_red_percent: Option<Vec<f64>>,
     #[serde(default)]
     pub lateral_color_blue_percent: Option<Vec<f64>>,
+    /// Relative illumination (1 at the centre): natural and optical vignetting as measured.
+    #[serde(default)]
+    pub relative_illumination: Option<Vec<f64>>,
 }
 
 impl LensTables {
+    /// The relative-illumination table, if the lens file has one.
+    pub fn relative_illumination(&self) -> Option<crate::optics::distortion::HeightTable> {
+        self.relative_illumination.as_ref().map(|v| crate::optics::distortion::HeightTable {
+            image_height_mm: self.image_height_mm.clone(),
+            values: v.clone(),
+        })
+    }
+
     /// The distortion tables for the camera (zeros where a table is absent).
     pub fn distortion(&self) -> crate::optics::distortion::DistortionTables {
         use crate::optics::distortion::{DistortionTables, HeightTable};
@@ -171,6 +182,7 @@ impl LensFile {
                 ("distortion_percent", &t.distortion_percent),
                 ("lateral_color_red_percent", &t.lateral_color_red_percent),
                 ("lateral_color_blue_percent", &t.lateral_color_blue_percent),
+                ("relative_illumination", &t.relative_illumination),
             ] {
                 if let Some(v) = table {
                     if v.len() != h.len() {

@@ -40,6 +40,8 @@ pub struct Plan {
     /// Distortion and lateral colour: push constants and the table buffer's data.
     pub distortion: Option<(crate::passes::distortion::DistortionParams, Vec<f32>)>,
     pub vignette: Option<VignetteParams>,
+    /// The vignette pass's table buffer (crate::passes::vignette::table_data).
+    pub vignette_table: Vec<f32>,
     pub film: Option<FilmParams>,
     /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
     pub aperture_mask: Vec<f32>,
@@ -213,8 +215,15 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
         pixel_pitch_mm: pitch_mm as f32,
         image_distance_mm: camera.lens.image_distance_mm() as f32,
+        entries: camera.relative_illumination.as_ref().map_or(0, |t| t.image_height_mm.len() as i32),
     };
-    let corner = vignette_params.corner_falloff() as f64;
+    let vignette_table = crate::passes::vignette::table_data(camera.relative_illumination.as_ref());
+    let falloff_name = if camera.relative_illumination.is_some() {
+        "the lens's relative illumination"
+    } else {
+        "cos^4 natural vignetting"
+    };
+    let corner = vignette_params.corner_falloff(&vignette_table) as f64;
     let vignette = if !camera.vignetting {
         steps.push(Step {
             pass: crate::passes::vignette::NAME,
@@ -226,17 +235,14 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         steps.push(Step {
             pass: crate::passes::vignette::NAME,
             run: false,
-            why: format!("cos^4 falloff at the corners is {corner:.6}: invisible"),
+            why: format!("{falloff_name} at the corners is {corner:.6}: invisible"),
         });
         None
     } else {
         steps.push(Step {
             pass: crate::passes::vignette::NAME,
             run: true,
-            why: format!(
-                "cos^4 natural vignetting: {:.1}% of the centre's light at the farthest corner",
-                corner * 100.0
-            ),
+            why: format!("{falloff_name}: {:.1}% of the centre's light at the farthest corner", corner * 100.0),
         });
         Some(vignette_params)
     };
@@ -271,5 +277,17 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
 
     let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
-    Plan { steps, coc, gather, tiled, diffraction, distortion, vignette, film, aperture_mask, coc_range_px }
+    Plan {
+        steps,
+        coc,
+        gather,
+        tiled,
+        diffraction,
+        distortion,
+        vignette,
+        vignette_table,
+        film,
+        aperture_mask,
+        coc_range_px,
+    }
 }

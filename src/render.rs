@@ -120,8 +120,11 @@ impl Renderer {
             current = out;
             _distortion_tables = Some(tables);
         }
+        let mut _vignette_table = None;
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {
-            pass.record(&mut rec, current, out, params)?;
+            let table = rec.upload_buffer("relative illumination", &plan.vignette_table)?;
+            pass.record(&mut rec, current, out, &table, params)?;
+            _vignette_table = Some(table);
             current = out;
         }
         if let (Some(pass), Some(params), Some(out)) = (&self.film, &plan.film, &film_out) {

@@ -164,3 +164,40 @@ fn distortion_pass_matches_its_cpu_twin() {
     let (_, plan, profile) = render(&gpu, &frame, &camera_with(quadratic(0.0, 0.0, 0.0)));
     assert!(!plan.runs("distortion") && profile.pass_ms("distortion").is_none());
 }
+
+#[test]
+fn vignetting_follows_the_relative_illumination_table() {
+    // A uniform frame through a lens whose relative illumination falls to 55% at 5.4 mm: the
+    // output at each image height equals the table within 1%.
+    let gpu = gpu();
+    let table = HeightTable { image_height_mm: vec![0.0, 2.0, 4.0, 5.5], values: vec![1.0, 0.95, 0.75, 0.55] };
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    camera.vignetting = true;
+    camera.relative_illumination = Some(table.clone());
+    let mut color = vec![0.5f32; (W * H * 4) as usize];
+    for a in color.chunks_exact_mut(4) {
+        a[3] = 1.0;
+    }
+    let frame = Frame::new(W, H, color, vec![2.0; (W * H) as usize]);
+    let (rgba, plan, _) = render(&gpu, &frame, &camera);
+    assert!(plan.runs("vignette"), "{}", plan.explain());
+    let pitch_mm = 9.6 / W as f64;
+    let mut worst = 0.0f64;
+    for y in (0..H).step_by(7) {
+        for x in (0..W).step_by(7) {
+            let h_mm = ((x as f64 + 0.5 - 128.0).powi(2) + (y as f64 + 0.5 - 72.0).powi(2)).sqrt() * pitch_mm;
+            let expected = 0.5 * table.at(h_mm);
+            let got = at(&rgba, W, x, y, 1) as f64;
+            worst = worst.max((got / expected - 1.0).abs());
+        }
+    }
+    assert!(worst < 0.01, "vignetting off the table by {:.3}%", worst * 100.0);
+    // Without the table: cos^4 of the field angle (Kyaw 2013 eq 4.14) at the corner.
+    camera.relative_illumination = None;
+    let (rgba, _, _) = render(&gpu, &frame, &camera);
+    let corner_mm = ((0.5f64 - 128.0).powi(2) + (0.5f64 - 72.0).powi(2)).sqrt() * pitch_mm;
+    let v = camera.lens.image_distance_mm();
+    let cos4 = realcam::optics::exposure::natural_vignetting(corner_mm, v);
+    let got = at(&rgba, W, 0, 0, 1) as f64 / 0.5;
+    assert!((got / cos4 - 1.0).abs() < 1e-4, "corner {got} vs cos^4 {cos4}");
+}

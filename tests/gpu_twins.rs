@@ -78,7 +78,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
         let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap());
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap(), &plan.aperture_mask);
-        let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap());
+        let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap(), &plan.vignette_table);
         let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap());
         assert_close(&out.rgba, &cpu, &format!("pipeline with {blades} blades"), 1e-4);
     }
