@@ -66,6 +66,8 @@ pub struct Camera {
     pub distortion: Option<crate::optics::distortion::DistortionTables>,
     /// Relative illumination against image height, from the lens file (else cos^4).
     pub relative_illumination: Option<crate::optics::distortion::HeightTable>,
+    /// Astigmatism: tangential and sagittal blur length (mm) against image height.
+    pub astigmatism: Option<(crate::optics::distortion::HeightTable, crate::optics::distortion::HeightTable)>,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -173,6 +175,7 @@ impl Camera {
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination()),
+            astigmatism: lens_file.tables.as_ref().and_then(|t| t.astigmatism()),
         })
     }
 

@@ -100,9 +100,29 @@ pub struct LensTables {
     /// Relative illumination (1 at the centre): natural and optical vignetting as measured.
     #[serde(default)]
     pub relative_illumination: Option<Vec<f64>>,
+    /// Astigmatism: the length in mm on the film of the blur along the tangential direction
+    /// (perpendicular to the radius) and along the sagittal one (the radius).
+    #[serde(default)]
+    pub tangential_blur_mm: Option<Vec<f64>>,
+    #[serde(default)]
+    pub sagittal_blur_mm: Option<Vec<f64>>,
 }
 
 impl LensTables {
+    /// The astigmatism tables (tangential, sagittal blur in mm), if the lens file has either.
+    pub fn astigmatism(
+        &self,
+    ) -> Option<(crate::optics::distortion::HeightTable, crate::optics::distortion::HeightTable)> {
+        if self.tangential_blur_mm.is_none() && self.sagittal_blur_mm.is_none() {
+            return None;
+        }
+        let table = |v: &Option<Vec<f64>>| crate::optics::distortion::HeightTable {
+            image_height_mm: self.image_height_mm.clone(),
+            values: v.clone().unwrap_or_else(|| vec![0.0; self.image_height_mm.len()]),
+        };
+        Some((table(&self.tangential_blur_mm), table(&self.sagittal_blur_mm)))
+    }
+
     /// The relative-illumination table, if the lens file has one.
     pub fn relative_illumination(&self) -> Option<crate::optics::distortion::HeightTable> {
         self.relative_illumination.as_ref().map(|v| crate::optics::distortion::HeightTable {
@@ -183,6 +203,8 @@ impl LensFile {
                 ("lateral_color_red_percent", &t.lateral_color_red_percent),
                 ("lateral_color_blue_percent", &t.lateral_color_blue_percent),
                 ("relative_illumination", &t.relative_illumination),
+                ("tangential_blur_mm", &t.tangential_blur_mm),
+                ("sagittal_blur_mm", &t.sagittal_blur_mm),
             ] {
                 if let Some(v) = table {
                     if v.len() != h.len() {

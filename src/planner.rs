@@ -40,6 +40,8 @@ pub struct Plan {
     /// Distortion and lateral colour: push constants and the table buffer's data.
     pub distortion: Option<(crate::passes::distortion::DistortionParams, Vec<f32>)>,
     pub vignette: Option<VignetteParams>,
+    /// Astigmatism: push constants and the table buffer's data.
+    pub astigmatism: Option<(crate::passes::astigmatism::AstigmatismParams, Vec<f32>)>,
     /// The vignette pass's table buffer (crate::passes::vignette::table_data).
     pub vignette_table: Vec<f32>,
     pub film: Option<FilmParams>,
@@ -210,6 +212,36 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         }
     };
 
+    let astigmatism = match &camera.astigmatism {
+        Some((t, s)) if !(t.is_zero() && s.is_zero()) => {
+            steps.push(Step {
+                pass: crate::passes::astigmatism::NAME,
+                run: true,
+                why: format!(
+                    "the lens's tables: tangential blur up to {:.1} px, sagittal up to {:.1} px",
+                    t.max_abs() / pitch_mm,
+                    s.max_abs() / pitch_mm
+                ),
+            });
+            let params = crate::passes::astigmatism::AstigmatismParams {
+                size: [w as i32, h as i32],
+                centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+                pixel_pitch_mm: pitch_mm as f32,
+                entries: t.image_height_mm.len() as i32,
+                direction: 0,
+            };
+            Some((params, crate::passes::astigmatism::table_data(t, s)))
+        }
+        _ => {
+            steps.push(Step {
+                pass: crate::passes::astigmatism::NAME,
+                run: false,
+                why: "the lens has no (non-zero) tangential or sagittal blur tables".into(),
+            });
+            None
+        }
+    };
+
     let vignette_params = VignetteParams {
         size: [w as i32, h as i32],
         centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
@@ -284,6 +316,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         tiled,
         diffraction,
         distortion,
+        astigmatism,
         vignette,
         vignette_table,
         film,

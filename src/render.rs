@@ -16,6 +16,7 @@ pub struct Renderer {
     tiled: Option<TiledDof>,
     diffraction: Option<crate::passes::diffraction::DiffractionPass>,
     distortion: Option<crate::passes::distortion::DistortionPass>,
+    astigmatism: Option<crate::passes::astigmatism::AstigmatismPass>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -46,6 +47,11 @@ impl Renderer {
                 .as_ref()
                 .map(|_| crate::passes::distortion::DistortionPass::new(gpu))
                 .transpose()?,
+            astigmatism: plan
+                .astigmatism
+                .as_ref()
+                .map(|_| crate::passes::astigmatism::AstigmatismPass::new(gpu))
+                .transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -53,7 +59,13 @@ impl Renderer {
 
     pub fn render(&self, frame: &Frame, plan: &Plan, keep_coc: bool) -> GpuResult<Rendered> {
         let dof = self.gather.is_some() || self.tiled.is_some() || self.diffraction.is_some();
-        if !dof && self.coc.is_none() && self.distortion.is_none() && self.vignette.is_none() && self.film.is_none() {
+        if !dof
+            && self.coc.is_none()
+            && self.distortion.is_none()
+            && self.astigmatism.is_none()
+            && self.vignette.is_none()
+            && self.film.is_none()
+        {
             // Nothing to simulate: the pinhole image is the camera image; the GPU is not touched.
             let profile = Profile { device: self.gpu.info().to_string(), ..Default::default() };
             return Ok(Rendered { rgba: frame.color.clone(), coc_px: None, profile });
@@ -80,6 +92,8 @@ impl Renderer {
         let coc_image = image("coc (px)", vk::Format::R32_SFLOAT, self.coc.is_some())?;
         let dof_out = image("color (depth of field)", rgba, dof)?;
         let distortion_out = image("color (distortion)", rgba, self.distortion.is_some())?;
+        let astigmatism_between = image("color (tangential blur)", rgba, self.astigmatism.is_some())?;
+        let astigmatism_out = image("color (astigmatism)", rgba, self.astigmatism.is_some())?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -119,6 +133,15 @@ impl Renderer {
             pass.record(&mut rec, current, out, &tables, params)?;
             current = out;
             _distortion_tables = Some(tables);
+        }
+        let mut _astigmatism_tables = None;
+        if let (Some(pass), Some((params, data)), Some(between), Some(out)) =
+            (&self.astigmatism, &plan.astigmatism, &astigmatism_between, &astigmatism_out)
+        {
+            let tables = rec.upload_buffer("astigmatism tables", data)?;
+            pass.record(&mut rec, current, between, out, &tables, params)?;
+            current = out;
+            _astigmatism_tables = Some(tables);
         }
         let mut _vignette_table = None;
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {

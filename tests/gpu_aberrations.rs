@@ -201,3 +201,51 @@ fn vignetting_follows_the_relative_illumination_table() {
     let got = at(&rgba, W, 0, 0, 1) as f64 / 0.5;
     assert!((got / cos4 - 1.0).abs() < 1e-4, "corner {got} vs cos^4 {cos4}");
 }
+
+#[test]
+fn astigmatism_smears_points_along_the_tabled_direction_only() {
+    // A point 72 px right of the centre (the radius is horizontal there). A tangential-only
+    // table smears it vertically by the tabled length (a box of L px has variance L^2/12), not
+    // horizontally; a sagittal-only table the other way round.
+    let gpu = gpu();
+    let pitch_mm = 9.6 / W as f64;
+    let length_px = 9.0;
+    let heights = vec![0.0, 2.0, 6.0];
+    let zero = HeightTable { image_height_mm: heights.clone(), values: vec![0.0; 3] };
+    let blur = HeightTable { image_height_mm: heights.clone(), values: vec![length_px * pitch_mm; 3] };
+    let mut color = vec![0.0f32; (W * H * 4) as usize];
+    let (px, py) = (200u32, 72u32);
+    let i = ((py * W + px) * 4) as usize;
+    color[i..i + 3].copy_from_slice(&[100.0; 3]);
+    let frame = Frame::new(W, H, color, vec![2.0; (W * H) as usize]);
+    for (tangential, sagittal, name) in
+        [(blur.clone(), zero.clone(), "tangential"), (zero.clone(), blur.clone(), "sagittal")]
+    {
+        let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+        camera.astigmatism = Some((tangential, sagittal));
+        let (rgba, plan, profile) = render(&gpu, &frame, &camera);
+        assert!(plan.runs("astigmatism") && profile.pass_ms("astigmatism_sagittal").is_some());
+        let (mut e, mut mx, mut my, mut vx, mut vy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for y in 40..104 {
+            for x in 170..230 {
+                let v = at(&rgba, W, x, y, 1) as f64;
+                let (dx, dy) = (x as f64 - px as f64, y as f64 - py as f64);
+                e += v;
+                mx += v * dx;
+                my += v * dy;
+                vx += v * dx * dx;
+                vy += v * dy * dy;
+            }
+        }
+        let (var_radial, var_tangential) = (vx / e - (mx / e).powi(2), vy / e - (my / e).powi(2));
+        println!("{name}: radial variance {var_radial:.2} px^2, tangential {var_tangential:.2} px^2, energy {e:.2}");
+        let expected = length_px * length_px / 12.0;
+        let (along, across) =
+            if name == "tangential" { (var_tangential, var_radial) } else { (var_radial, var_tangential) };
+        assert!((along / expected - 1.0).abs() < 0.2, "{name}: variance along {along:.2} vs box {expected:.2}");
+        assert!(across < 0.35, "{name}: variance across {across:.2} should stay a pixel's");
+        // A gather along each pixel's own radius is a scatter only to first order: the radii fan
+        // out, so a point sees slightly more pixels outside than inside (O(L / r), 1.5% here).
+        assert!((e / 100.0 - 1.0).abs() < 0.02, "{name}: energy {e}");
+    }
+}

@@ -3,6 +3,7 @@
 //! has a CPU twin used as its test oracle on small images.
 
 pub mod aperture;
+pub mod astigmatism;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod diffraction;
