@@ -2,7 +2,9 @@
 // Exposure and film response. The sensor value is H / H_sat (Kyaw 2013 eq 4.1 and 4.9, with the
 // saturation-based ISO speed), computed on the CPU as one gain. Then either the film's
 // characteristic curve on log exposure (toe, straight part, shoulder; Kyaw 2013 sec 4.5) or,
-// for compositing, the scene-referred linear value.
+// for compositing, the scene-referred linear value. Optional sensor noise, before the curve:
+// shot-noise-like (standard deviation sigma * sqrt(value)), sigma growing with the square root of
+// the ISO speed, from a hash of the pixel, the channel and a seed: deterministic.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -20,7 +22,25 @@ layout(push_constant) uniform Push {
     float shoulder_softness_decades;
     float log10_black_out;
     float log10_white_out;
+    float noise_sigma;              // at sensor value 1; 0: no noise
+    uint seed;
 } pc;
+
+uint hash(uint x) {
+    x ^= x >> 16; x *= 0x7feb352du;
+    x ^= x >> 15; x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+// A standard normal value for (pixel, channel), Box-Muller on two hashed uniforms.
+float gaussian(ivec2 p, int c) {
+    uint h1 = hash(uint(p.x) * 73856093u ^ uint(p.y) * 19349663u ^ uint(c) * 83492791u ^ pc.seed);
+    uint h2 = hash(h1 ^ 0x9e3779b9u);
+    float u1 = (float(h1 >> 8) + 0.5) / 16777216.0;
+    float u2 = float(h2 >> 8) / 16777216.0;
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * PI * u2);
+}
 
 // Smooth maximum in decades: max(a, b) + k*log10(1 + 10^(-|a-b|/k)); k > 0.
 float smooth_max(float a, float b, float k) {
@@ -45,6 +65,9 @@ void main() {
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));
     vec3 h = c.rgb * pc.exposure_gain;
+    if (pc.noise_sigma > 0.0) {
+        for (int k = 0; k < 3; ++k) h[k] += pc.noise_sigma * sqrt(max(h[k], 0.0)) * gaussian(p, k);
+    }
     if (pc.use_curve != 0) {
         h = vec3(characteristic_curve(h.r), characteristic_curve(h.g), characteristic_curve(h.b));
     }

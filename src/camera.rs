@@ -66,6 +66,11 @@ pub struct Camera {
     pub distortion: Option<crate::optics::distortion::DistortionTables>,
     /// Relative illumination against image height, from the lens file (else cos^4).
     pub relative_illumination: Option<crate::optics::distortion::HeightTable>,
+    /// Sensor noise at ISO 100 (standard deviation at sensor value 1); it grows with the square
+    /// root of the ISO speed. 0: none.
+    pub grain: f64,
+    /// Seed of the noise (deterministic).
+    pub seed: u32,
     /// Astigmatism: tangential and sagittal blur length (mm) against image height.
     pub astigmatism: Option<(crate::optics::distortion::HeightTable, crate::optics::distortion::HeightTable)>,
 }
@@ -174,6 +179,8 @@ impl Camera {
             bokeh: req.bokeh,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
+            grain: 0.0,
+            seed: 0,
             relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination()),
             astigmatism: lens_file.tables.as_ref().and_then(|t| t.astigmatism()),
         })
@@ -182,6 +189,11 @@ impl Camera {
     /// Pixel pitch on the film for an image of this size.
     pub fn pixel_pitch_mm(&self, width_px: u32, height_px: u32) -> f64 {
         self.sensor.pixel_pitch_mm(width_px, height_px, self.sensor_fit)
+    }
+
+    /// Standard deviation of the sensor noise at sensor value 1 for this ISO speed.
+    pub fn noise_sigma(&self) -> f64 {
+        self.grain.max(0.0) * (self.iso / 100.0).sqrt()
     }
 
     /// Linear gain from scene value to sensor value (1 = saturation); 1 with exposure off.

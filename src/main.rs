@@ -56,6 +56,10 @@ enum Command {
 enum FilmArg {
     /// The characteristic curve (toe, straight part, shoulder): display-referred.
     Filmic,
+    /// A steeper curve with a harder shoulder (slide-film-like).
+    Contrast,
+    /// A flatter curve with a long toe and shoulder.
+    Soft,
     /// Scene-referred linear sensor values, for compositing.
     Linear,
 }
@@ -156,6 +160,12 @@ struct RenderArgs {
     /// Film response.
     #[arg(long, value_enum, default_value = "filmic")]
     film: FilmArg,
+    /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO)); 0: none.
+    #[arg(long, default_value_t = 0.0)]
+    grain: f64,
+    /// Seed of the sensor noise (the same seed gives the same noise).
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
     /// Do not apply the exposure gain (ISO, shutter, f-number): sensor value = scene value.
     #[arg(long = "no-exposure")]
     no_exposure: bool,
@@ -334,6 +344,10 @@ fn render(args: RenderArgs) -> Result<()> {
         vignetting: !args.no_vignetting,
         film: Some(match args.film {
             FilmArg::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
+            FilmArg::Contrast => {
+                FilmMode::Curve(FilmCurve::preset("contrast").unwrap_or_else(FilmCurve::default_filmic))
+            }
+            FilmArg::Soft => FilmMode::Curve(FilmCurve::preset("soft").unwrap_or_else(FilmCurve::default_filmic)),
             FilmArg::Linear => FilmMode::Linear,
         }),
         max_coc_px: args.max_coc_px,
@@ -355,6 +369,11 @@ fn render(args: RenderArgs) -> Result<()> {
         ),
     };
     let mut camera = Camera::new(&lens_file, &request)?;
+    if !(args.grain.is_finite() && args.grain >= 0.0) {
+        bail!("--grain must be a non-negative number, got {}", args.grain);
+    }
+    camera.grain = args.grain;
+    camera.seed = args.seed;
     if let Some(path) = &args.aperture_image {
         camera.aperture_mask = Some(realcam::aperture_mask::ApertureMask::load(path)?);
     }

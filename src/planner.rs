@@ -284,11 +284,12 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         FilmMode::Curve(c) => Some(c),
         FilmMode::Linear => None,
     };
-    let film = if curve.is_none() && gain == 1.0 {
+    let noise_sigma = camera.noise_sigma();
+    let film = if curve.is_none() && gain == 1.0 && noise_sigma == 0.0 {
         steps.push(Step {
             pass: crate::passes::film::NAME,
             run: false,
-            why: "linear film with exposure off: the sensor value is the scene value".into(),
+            why: "linear film with exposure off and no grain: the sensor value is the scene value".into(),
         });
         None
     } else {
@@ -304,8 +305,16 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
             "exposure off".into()
         };
         let response = if curve.is_some() { "characteristic curve" } else { "linear (scene-referred)" };
-        steps.push(Step { pass: crate::passes::film::NAME, run: true, why: format!("{exposure}, {response}") });
-        Some(FilmParams::new(w, h, gain, curve.as_ref()))
+        let grain = if noise_sigma > 0.0 {
+            format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
+        } else {
+            String::new()
+        };
+        steps.push(Step { pass: crate::passes::film::NAME, run: true, why: format!("{exposure}, {response}{grain}") });
+        let mut params = FilmParams::new(w, h, gain, curve.as_ref());
+        params.noise_sigma = noise_sigma as f32;
+        params.seed = camera.seed;
+        Some(params)
     };
 
     let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());

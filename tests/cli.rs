@@ -623,7 +623,7 @@ fn planner_skips_invisible_effects_and_output_equals_input() {
     }
     assert_contains(err, "depth of field is invisible");
     assert_contains(err, "turned off (--no-vignetting)");
-    assert_contains(err, "linear film with exposure off: the sensor value is the scene value");
+    assert_contains(err, "linear film with exposure off and no grain: the sensor value is the scene value");
 
     let input = read_exr_rgba(&dir.join("p_color.exr")).unwrap();
     let out = read_exr_rgba(&dir.join("out.exr")).unwrap();

@@ -104,3 +104,37 @@ fn film_pass_matches_the_f64_characteristic_curve() {
         assert!((got - reference).abs() <= 1e-4 * reference.max(1e-3), "H = {v}: gpu {got}, f64 {reference}");
     }
 }
+
+#[test]
+fn sensor_noise_is_deterministic_and_grows_with_the_square_root_of_iso() {
+    // A flat grey frame through a linear film with exposure off: the noise alone. Its standard
+    // deviation is grain * sqrt(ISO / 100) * sqrt(value); the same seed gives the same image, the
+    // GPU matches the CPU twin, and the mean stays.
+    let gpu = gpu();
+    let (w, h) = (128u32, 128u32);
+    let value = 0.25f32;
+    let color: Vec<f32> = (0..w * h).flat_map(|_| [value, value, value, 1.0]).collect();
+    let frame = Frame::new(w, h, color, vec![2.0; (w * h) as usize]);
+    let mut stds = Vec::new();
+    for (iso, seed) in [(100.0, 7u32), (1600.0, 7), (1600.0, 7), (1600.0, 8)] {
+        let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+        camera.iso = iso;
+        camera.grain = 0.02;
+        camera.seed = seed;
+        let plan = planner::plan(&frame, &camera);
+        assert!(plan.runs("film"));
+        let (rgba, _) = render_plan(&gpu, &frame, &plan);
+        let cpu = film::film_cpu(&frame.color, plan.film.as_ref().unwrap());
+        assert_close(&rgba, &cpu, "noise GPU vs CPU", 1e-4);
+        let greens: Vec<f64> = rgba.chunks_exact(4).map(|p| p[1] as f64).collect();
+        let mean = greens.iter().sum::<f64>() / greens.len() as f64;
+        let std = (greens.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / greens.len() as f64).sqrt();
+        let expected = 0.02 * (iso / 100.0f64).sqrt() * (value as f64).sqrt();
+        assert!((mean / value as f64 - 1.0).abs() < 0.01, "mean {mean}");
+        assert!((std / expected - 1.0).abs() < 0.05, "ISO {iso}: std {std}, expected {expected}");
+        stds.push((std, rgba));
+    }
+    assert_eq!(stds[1].1, stds[2].1, "the same seed gives the same noise");
+    assert_ne!(stds[2].1, stds[3].1, "another seed gives other noise");
+    assert!((stds[1].0 / stds[0].0 - 4.0).abs() < 0.2, "ISO 1600 / ISO 100 noise: {}", stds[1].0 / stds[0].0);
+}

@@ -84,6 +84,29 @@ impl FilmCurve {
 
     /// Checks the parameters: everything finite, grey levels and contrast positive, softness
     /// not negative, 0 < black_out < middle_grey_out < white_out.
+    /// The named presets: "neutral" (the default filmic curve), "contrast" (steeper, harder
+    /// shoulder, like a slide film), "soft" (flatter, long toe and shoulder, like a negative
+    /// printed soft). None for an unknown name.
+    pub fn preset(name: &str) -> Option<Self> {
+        let neutral = Self::default_filmic();
+        match name {
+            "neutral" | "filmic" => Some(neutral),
+            "contrast" => Some(FilmCurve {
+                contrast: 1.6,
+                shoulder_softness_decades: 0.15,
+                toe_softness_decades: 0.12,
+                ..neutral
+            }),
+            "soft" => Some(FilmCurve {
+                contrast: 0.95,
+                shoulder_softness_decades: 0.4,
+                toe_softness_decades: 0.35,
+                ..neutral
+            }),
+            _ => None,
+        }
+    }
+
     pub fn validate(self) -> Result<Self, OpticsError> {
         let c = self;
         let in_range = c.black_out < c.middle_grey_out && c.middle_grey_out < c.white_out;

@@ -24,6 +24,28 @@ pub struct FilmParams {
     pub shoulder_softness_decades: f32,
     pub log10_black_out: f32,
     pub log10_white_out: f32,
+    /// Sensor noise: standard deviation at sensor value 1 (scaled by sqrt(value)); 0: none.
+    pub noise_sigma: f32,
+    pub seed: u32,
+}
+
+/// The shader's integer hash (glsl/film.comp).
+fn hash(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^= x >> 16;
+    x
+}
+
+/// The shader's standard normal value for (pixel, channel, seed).
+pub fn gaussian(x: u32, y: u32, c: u32, seed: u32) -> f32 {
+    let h1 = hash(x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663) ^ c.wrapping_mul(83_492_791) ^ seed);
+    let h2 = hash(h1 ^ 0x9e37_79b9);
+    let u1 = ((h1 >> 8) as f32 + 0.5) / 16_777_216.0;
+    let u2 = (h2 >> 8) as f32 / 16_777_216.0;
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f32::consts::PI * u2).cos()
 }
 
 impl FilmParams {
@@ -40,13 +62,28 @@ impl FilmParams {
             shoulder_softness_decades: c.shoulder_softness_decades.max(1e-6) as f32,
             log10_black_out: c.black_out.log10() as f32,
             log10_white_out: c.white_out.log10() as f32,
+            noise_sigma: 0.0,
+            seed: 0,
         }
     }
 
-    /// CPU twin of the shader for one channel value, in f32 like the shader.
+    /// CPU twin of the shader for channel `c` of pixel (x, y), in f32 like the shader.
+    pub fn apply_at(&self, value: f32, x: u32, y: u32, c: u32) -> f32 {
+        let v = if value.is_finite() { value } else { 0.0 };
+        let mut h = v * self.exposure_gain;
+        if self.noise_sigma > 0.0 {
+            h += self.noise_sigma * h.max(0.0).sqrt() * gaussian(x, y, c, self.seed);
+        }
+        self.response(h)
+    }
+
+    /// CPU twin without noise.
     pub fn apply(&self, value: f32) -> f32 {
         let v = if value.is_finite() { value } else { 0.0 };
-        let h = v * self.exposure_gain;
+        self.response(v * self.exposure_gain)
+    }
+
+    fn response(&self, h: f32) -> f32 {
         if self.use_curve == 0 {
             return h;
         }
@@ -66,10 +103,13 @@ impl FilmParams {
 
 /// CPU twin on an RGBA image.
 pub fn film_cpu(rgba: &[f32], params: &FilmParams) -> Vec<f32> {
+    let w = params.size[0].max(1) as u32;
     rgba.chunks_exact(4)
-        .flat_map(|px| {
+        .enumerate()
+        .flat_map(|(i, px)| {
+            let (x, y) = (i as u32 % w, i as u32 / w);
             let a = if px[3].is_finite() { px[3] } else { 0.0 };
-            [params.apply(px[0]), params.apply(px[1]), params.apply(px[2]), a]
+            [params.apply_at(px[0], x, y, 0), params.apply_at(px[1], x, y, 1), params.apply_at(px[2], x, y, 2), a]
         })
         .collect()
 }
