@@ -6,6 +6,8 @@
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, r32f) uniform readonly image2D depth_m;
 layout(binding = 1, r32f) uniform writeonly image2D coc_px;
+// Field curvature: [heights mm (entries), film-plane offset mm of the sharp image surface].
+layout(binding = 2, std430) readonly buffer FieldCurvature { float table[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -14,7 +16,22 @@ layout(push_constant) uniform Push {
     float inv_focus_distance_per_mm;
     float max_coc_px;          // user clamp on |C|
     float mm_per_depth_unit;   // 1000 for metres
+    vec2 centre_px;
+    float pixel_pitch_mm;
+    float image_distance_mm;   // v
+    float inv_focal_length_per_mm;
+    float aperture_px;         // v / (N' P) / pixel pitch
+    int entries;               // field-curvature table entries; 0: none
 } pc;
+
+float surface_offset_mm(float h_mm) {
+    int n = pc.entries;
+    if (h_mm <= table[0]) return table[n];
+    for (int i = 1; i < n; ++i) {
+        if (h_mm <= table[i]) return mix(table[n + i - 1], table[n + i], (h_mm - table[i - 1]) / (table[i] - table[i - 1]));
+    }
+    return table[2 * n - 1];
+}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -24,6 +41,15 @@ void main() {
     // (1/inf = 0), and -inf (then clamped) at u = 0. Depth was validated (no NaN, >= 0) on load.
     float inv_u = 1.0 / max(u_mm, 1.0e-30);
     float coc = pc.coc_scale_px_mm * (pc.inv_focus_distance_per_mm - inv_u);
+    if (pc.entries > 0) {
+        // Field curvature (Kyaw 2013 sec 6.3.4, 7.6): at image height h the sharp image surface
+        // lies delta(h) behind the film, so the point focuses at v_u + delta instead of v_u.
+        // Eq 5.3 in the same terms: C = D' (v w / (1 + delta w) - 1), w = 1/v_u = 1/f - 1/u.
+        float h_mm = length(vec2(p) + 0.5 - pc.centre_px) * pc.pixel_pitch_mm;
+        float w = pc.inv_focal_length_per_mm - inv_u;
+        float delta = surface_offset_mm(h_mm);
+        coc = pc.aperture_px * (pc.image_distance_mm * w / (1.0 + delta * w) - 1.0);
+    }
     coc = clamp(coc, -pc.max_coc_px, pc.max_coc_px);
     imageStore(coc_px, p, vec4(coc, 0.0, 0.0, 0.0));
 }

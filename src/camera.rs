@@ -64,6 +64,8 @@ pub struct Camera {
     pub aperture_mask: Option<crate::aperture_mask::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
     pub distortion: Option<crate::optics::distortion::DistortionTables>,
+    /// Field curvature: the sharp image surface's offset behind the film (mm) against height.
+    pub field_curvature: Option<crate::optics::distortion::HeightTable>,
     /// Relative illumination against image height, from the lens file (else cos^4).
     pub relative_illumination: Option<crate::optics::distortion::HeightTable>,
     /// Sensor noise at ISO 100 (standard deviation at sensor value 1); it grows with the square
@@ -182,6 +184,7 @@ impl Camera {
             grain: 0.0,
             seed: 0,
             relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination()),
+            field_curvature: lens_file.tables.as_ref().and_then(|t| t.field_curvature()),
             astigmatism: lens_file.tables.as_ref().and_then(|t| t.astigmatism()),
         })
     }

@@ -106,6 +106,9 @@ pub struct LensTables {
     pub tangential_blur_mm: Option<Vec<f64>>,
     #[serde(default)]
     pub sagittal_blur_mm: Option<Vec<f64>>,
+    /// Field curvature: how far (mm) behind the film the sharp image surface lies at each height.
+    #[serde(default)]
+    pub field_curvature_mm: Option<Vec<f64>>,
 }
 
 impl LensTables {
@@ -121,6 +124,14 @@ impl LensTables {
             values: v.clone().unwrap_or_else(|| vec![0.0; self.image_height_mm.len()]),
         };
         Some((table(&self.tangential_blur_mm), table(&self.sagittal_blur_mm)))
+    }
+
+    /// The field-curvature table, if the lens file has one.
+    pub fn field_curvature(&self) -> Option<crate::optics::distortion::HeightTable> {
+        self.field_curvature_mm.as_ref().map(|v| crate::optics::distortion::HeightTable {
+            image_height_mm: self.image_height_mm.clone(),
+            values: v.clone(),
+        })
     }
 
     /// The relative-illumination table, if the lens file has one.
@@ -205,6 +216,7 @@ impl LensFile {
                 ("relative_illumination", &t.relative_illumination),
                 ("tangential_blur_mm", &t.tangential_blur_mm),
                 ("sagittal_blur_mm", &t.sagittal_blur_mm),
+                ("field_curvature_mm", &t.field_curvature_mm),
             ] {
                 if let Some(v) = table {
                     if v.len() != h.len() {

@@ -42,6 +42,8 @@ pub struct Plan {
     pub vignette: Option<VignetteParams>,
     /// Astigmatism: push constants and the table buffer's data.
     pub astigmatism: Option<(crate::passes::astigmatism::AstigmatismParams, Vec<f32>)>,
+    /// The CoC pass's field-curvature buffer (crate::passes::coc::table_data).
+    pub coc_table: Vec<f32>,
     /// The vignette pass's table buffer (crate::passes::vignette::table_data).
     pub vignette_table: Vec<f32>,
     pub film: Option<FilmParams>,
@@ -78,7 +80,24 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         let c = camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
         c.clamp(-camera.max_coc_px, camera.max_coc_px)
     };
-    let coc_range_px = if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(near_m), coc_px(far_m)) };
+    let mut coc_range_px = if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(near_m), coc_px(far_m)) };
+    // With field curvature the CoC also depends on the image height: evaluate every pixel with
+    // the CoC pass's CPU twin.
+    let coc_table = crate::passes::coc::table_data(camera.field_curvature.as_ref());
+    let coc_params = CocParams::new(
+        &camera.lens,
+        pitch_mm,
+        camera.max_coc_px,
+        w,
+        h,
+        frame.centre_px,
+        camera.field_curvature.as_ref(),
+    );
+    if camera.field_curvature.is_some() {
+        coc_range_px = crate::passes::coc::coc_cpu(&frame.depth_m, &coc_params, &coc_table)
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c as f64), hi.max(c as f64)));
+    }
     let max_abs_coc_px = coc_range_px.0.abs().max(coc_range_px.1.abs());
     let dof = max_abs_coc_px > VISIBLE_COC_PX;
     let coc_why = format!(
@@ -100,7 +119,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let (mut coc, mut gather, mut tiled, mut diffraction) = (None, None, None, None);
     if dof {
         steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
-        coc = Some(CocParams::new(&camera.lens, pitch_mm, camera.max_coc_px, w, h));
+        coc = Some(coc_params);
         match camera.bokeh {
             BokehMode::Reference => {
                 let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
@@ -326,6 +345,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         diffraction,
         distortion,
         astigmatism,
+        coc_table,
         vignette,
         vignette_table,
         film,

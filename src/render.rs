@@ -98,8 +98,11 @@ impl Renderer {
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
 
+        let mut _coc_table = None;
         if let (Some(pass), Some(params), Some(depth), Some(coc)) = (&self.coc, &plan.coc, &depth, &coc_image) {
-            pass.record(&mut rec, depth, coc, params)?;
+            let table = rec.upload_buffer("field curvature", &plan.coc_table)?;
+            pass.record(&mut rec, depth, coc, &table, params)?;
+            _coc_table = Some(table);
         }
         let aperture_mask = match (&self.gather, &self.tiled) {
             (None, None) => None,

@@ -120,7 +120,7 @@ fn in_focus_plane_passes_through_the_gather_unchanged() {
     // test them on an in-focus plane, with a gather radius as if the frame held a 20 px CoC.
     let mut plan = planner::plan(&frame, &camera);
     assert!(!plan.runs("coc") && !runs_dof(&plan));
-    plan.coc = Some(CocParams::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144));
+    plan.coc = Some(CocParams::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144, [128.0, 72.0], None));
     plan.gather = Some(GatherParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("bokeh_gather").is_some());

@@ -62,6 +62,10 @@ fn whole_pipeline_matches_the_cpu_twins() {
         camera.aperture_mask = with_mask.then(|| mask.clone());
         camera.aperture.spherical_aberration = 0.5;
         camera.aperture.cats_eye = 0.3;
+        camera.field_curvature = Some(realcam::optics::distortion::HeightTable {
+            image_height_mm: vec![0.0, 1.0, 3.0],
+            values: vec![0.0, 0.05, 0.3],
+        });
         camera.bokeh = realcam::camera::BokehMode::Reference;
         camera.vignetting = true;
         camera.exposure = true;
@@ -75,7 +79,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
         let out = renderer.render(&frame, &plan, true).expect("render");
         assert_validation_clean(&gpu);
 
-        let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap());
+        let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap(), &plan.coc_table);
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap(), &plan.aperture_mask);
         let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap(), &plan.vignette_table);
