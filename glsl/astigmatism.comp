@@ -19,16 +19,9 @@ layout(push_constant) uniform Push {
     int direction;   // 0: tangential, 1: sagittal
 } pc;
 
-float blur_mm(float h_mm) {
-    int n = pc.entries, column = 1 + pc.direction;
-    if (h_mm <= table[0]) return table[column * n];
-    for (int i = 1; i < n; ++i) {
-        if (h_mm <= table[i]) {
-            return mix(table[column * n + i - 1], table[column * n + i], (h_mm - table[i - 1]) / (table[i] - table[i - 1]));
-        }
-    }
-    return table[column * n + n - 1];
-}
+#include "height_table.glsl"
+
+float blur_mm(float h_mm) { return height_table_lookup(1 + pc.direction, pc.entries, h_mm); }
 
 vec4 load_clamped(ivec2 q) { return imageLoad(color_in, clamp(q, ivec2(0), pc.size - 1)); }
 

@@ -24,14 +24,7 @@ layout(push_constant) uniform Push {
     int entries;               // field-curvature table entries; 0: none
 } pc;
 
-float surface_offset_mm(float h_mm) {
-    int n = pc.entries;
-    if (h_mm <= table[0]) return table[n];
-    for (int i = 1; i < n; ++i) {
-        if (h_mm <= table[i]) return mix(table[n + i - 1], table[n + i], (h_mm - table[i - 1]) / (table[i] - table[i - 1]));
-    }
-    return table[2 * n - 1];
-}
+#include "height_table.glsl"
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -47,7 +40,7 @@ void main() {
         // Eq 5.3 in the same terms: C = D' (v w / (1 + delta w) - 1), w = 1/v_u = 1/f - 1/u.
         float h_mm = length(vec2(p) + 0.5 - pc.centre_px) * pc.pixel_pitch_mm;
         float w = pc.inv_focal_length_per_mm - inv_u;
-        float delta = surface_offset_mm(h_mm);
+        float delta = height_table_lookup(1, pc.entries, h_mm);
         coc = pc.aperture_px * (pc.image_distance_mm * w / (1.0 + delta * w) - 1.0);
     }
     coc = clamp(coc, -pc.max_coc_px, pc.max_coc_px);

@@ -18,22 +18,12 @@ layout(push_constant) uniform Push {
     int entries;
 } pc;
 
-float lookup(int column, float h_mm) {
-    int n = pc.entries;
-    if (h_mm <= table[0]) return table[column * n];
-    for (int i = 1; i < n; ++i) {
-        if (h_mm <= table[i]) {
-            float t = (h_mm - table[i - 1]) / (table[i] - table[i - 1]);
-            return mix(table[column * n + i - 1], table[column * n + i], t);
-        }
-    }
-    return table[column * n + n - 1];
-}
+#include "height_table.glsl"
 
 float percent(int channel, float r_mm) {
-    float g = lookup(1, r_mm);
-    if (channel == 0) return g + lookup(2, r_mm);
-    if (channel == 2) return g + lookup(3, r_mm);
+    float g = height_table_lookup(1, pc.entries, r_mm);
+    if (channel == 0) return g + height_table_lookup(2, pc.entries, r_mm);
+    if (channel == 2) return g + height_table_lookup(3, pc.entries, r_mm);
     return g;
 }
 

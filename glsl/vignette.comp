@@ -19,14 +19,7 @@ layout(push_constant) uniform Push {
     int entries;
 } pc;
 
-float relative_illumination(float h_mm) {
-    int n = pc.entries;
-    if (h_mm <= table[0]) return table[n];
-    for (int i = 1; i < n; ++i) {
-        if (h_mm <= table[i]) return mix(table[n + i - 1], table[n + i], (h_mm - table[i - 1]) / (table[i] - table[i - 1]));
-    }
-    return table[2 * n - 1];
-}
+#include "height_table.glsl"
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -34,7 +27,7 @@ void main() {
     vec2 r_mm = (vec2(p) + 0.5 - pc.centre_px) * pc.pixel_pitch_mm;
     float t2 = dot(r_mm, r_mm) / (pc.image_distance_mm * pc.image_distance_mm);
     // cos^4(atan(t)) = 1 / (1 + t^2)^2, without trigonometry.
-    float falloff = pc.entries > 0 ? relative_illumination(length(r_mm)) : 1.0 / ((1.0 + t2) * (1.0 + t2));
+    float falloff = pc.entries > 0 ? height_table_lookup(1, pc.entries, length(r_mm)) : 1.0 / ((1.0 + t2) * (1.0 + t2));
     vec4 c = imageLoad(color_in, p);
     imageStore(color_out, p, vec4(c.rgb * falloff, c.a));
 }

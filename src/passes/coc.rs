@@ -76,17 +76,7 @@ impl CocParams {
         let inv_u = 1.0 / u_mm.max(1.0e-30);
         let (dx, dy) = (x as f32 + 0.5 - self.centre_px[0], y as f32 + 0.5 - self.centre_px[1]);
         let h = (dx * dx + dy * dy).sqrt() * self.pixel_pitch_mm;
-        let delta = if h <= table[0] {
-            table[n]
-        } else {
-            (1..n)
-                .find(|&i| h <= table[i])
-                .map(|i| {
-                    table[n + i - 1]
-                        + (table[n + i] - table[n + i - 1]) * (h - table[i - 1]) / (table[i] - table[i - 1])
-                })
-                .unwrap_or(table[2 * n - 1])
-        };
+        let delta = super::height_table_lookup(table, 1, n, h);
         let w = self.inv_focal_length_per_mm - inv_u;
         let coc = self.aperture_px * (self.image_distance_mm * w / (1.0 + delta * w) - 1.0);
         coc.clamp(-self.max_coc_px, self.max_coc_px)

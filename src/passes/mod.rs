@@ -22,6 +22,21 @@ pub mod vignette;
 use crate::gpu::GpuImage;
 use ash::vk;
 
+/// Linear lookup in a height-table buffer (`n` heights, then columns of `n` values), the twin of
+/// glsl/include/height_table.glsl.
+pub fn height_table_lookup(table: &[f32], column: usize, n: usize, h_mm: f32) -> f32 {
+    if h_mm <= table[0] {
+        return table[column * n];
+    }
+    for i in 1..n {
+        if h_mm <= table[i] {
+            let t = (h_mm - table[i - 1]) / (table[i] - table[i - 1]);
+            return table[column * n + i - 1] + (table[column * n + i] - table[column * n + i - 1]) * t;
+        }
+    }
+    table[column * n + n - 1]
+}
+
 /// Workgroup edge of every 2D pass (TILE_SIZE in glsl/include/common.glsl).
 pub const TILE_SIZE: u32 = 16;
 

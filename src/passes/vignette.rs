@@ -36,17 +36,7 @@ impl VignetteParams {
         let ry = (y as f32 + 0.5 - self.centre_px[1]) * self.pixel_pitch_mm;
         let n = self.entries as usize;
         if n > 0 {
-            let h = (rx * rx + ry * ry).sqrt();
-            if h <= table[0] {
-                return table[n];
-            }
-            for i in 1..n {
-                if h <= table[i] {
-                    let t = (h - table[i - 1]) / (table[i] - table[i - 1]);
-                    return table[n + i - 1] + (table[n + i] - table[n + i - 1]) * t;
-                }
-            }
-            return table[2 * n - 1];
+            return super::height_table_lookup(table, 1, n, (rx * rx + ry * ry).sqrt());
         }
         let t2 = (rx * rx + ry * ry) / (self.image_distance_mm * self.image_distance_mm);
         1.0 / ((1.0 + t2) * (1.0 + t2))
