@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs the system packages realcam needs on Debian 12 (as root), only those missing:
 # the Vulkan loader and headers, lavapipe (Mesa's CPU Vulkan driver), the Khronos validation
-# layer, and shaderc with the glslang/SPIRV-Tools static libraries it links against.
+# layer, shaderc with the glslang/SPIRV-Tools static libraries it links against, and the C/C++
+# compilers the FLIP metric (nv-flip) builds with.
 set -euo pipefail
-packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools gcc)
+packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools gcc g++)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
