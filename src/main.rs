@@ -30,6 +30,12 @@ enum Command {
     Dof(DofArgs),
     /// List the Vulkan devices.
     Devices,
+    /// Lens prescriptions (surfaces, glasses, stop): paraxial data, distortion, field curves,
+    /// spherical aberration, relative illumination and colour by real ray tracing.
+    Lens {
+        #[command(subcommand)]
+        command: LensCommand,
+    },
     /// Every depth-of-field method on your frame against the diffraction reference: GPU time,
     /// RMSE, PSNR, energy and FLIP, as Markdown, CSV and an SVG plot of error against time.
     Accuracy(AccuracyArgs),
@@ -49,6 +55,20 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "testdata")]
         out: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum LensCommand {
+    /// Analyze a prescription file (e.g. lenses/tessar-walch.toml).
+    Analyze {
+        file: PathBuf,
+        /// f-number to analyze at; default: the prescription's own stop.
+        #[arg(long = "fstop")]
+        f_number: Option<f64>,
+        /// Field angles in degrees.
+        #[arg(long = "field", default_value = "0,5,10,15,20", value_delimiter = ',')]
+        field_deg: Vec<f64>,
     },
 }
 
@@ -284,6 +304,9 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
+        Command::Lens { command: LensCommand::Analyze { file, f_number, field_deg } } => {
+            lens_analyze(&file, f_number, &field_deg)
+        }
         Command::Bench(args) => bench(args),
         Command::Accuracy(args) => accuracy(args),
         Command::Compare { test, reference } => compare(&test, &reference),
@@ -608,5 +631,19 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
         write_text_atomically(&path, &text).with_context(|| format!("writing {}", path.display()))?;
     }
     eprintln!("wrote {}/accuracy.{{md,csv,svg}}", args.out_dir.display());
+    Ok(())
+}
+
+fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64]) -> Result<()> {
+    use realcam::optics::prescription::Prescription;
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("lens file {}: cannot read it", file.display()))?;
+    let prescription = Prescription::parse_toml(&text, &file.display().to_string())?;
+    let f_number = match f_number {
+        Some(n) if n.is_finite() && n > 0.0 => n,
+        Some(n) => bail!("--fstop must be a positive number, got {n}"),
+        None => prescription.f_number_at_table_stop(),
+    };
+    print!("{}", prescription.analyze(f_number, field_deg));
     Ok(())
 }

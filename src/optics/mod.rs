@@ -21,6 +21,7 @@ pub mod dof;
 pub mod exposure;
 pub mod film;
 pub mod lens;
+pub mod prescription;
 pub mod sensor;
 pub mod spherical;
 
