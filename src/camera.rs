@@ -75,6 +75,10 @@ pub struct Camera {
     pub seed: u32,
     /// Astigmatism: tangential and sagittal blur length (mm) against image height.
     pub astigmatism: Option<(crate::optics::distortion::HeightTable, crate::optics::distortion::HeightTable)>,
+    /// Coma: the comet's length (mm, tangential coma) against image height, at this f-number.
+    pub coma: Option<crate::optics::distortion::HeightTable>,
+    /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
+    pub longitudinal_color_mm: Option<[f64; 2]>,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default.
@@ -183,9 +187,17 @@ impl Camera {
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             grain: 0.0,
             seed: 0,
-            relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination()),
+            relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination(f_number)),
             field_curvature: lens_file.tables.as_ref().and_then(|t| t.field_curvature()),
-            astigmatism: lens_file.tables.as_ref().and_then(|t| t.astigmatism()),
+            astigmatism: lens_file.tables.as_ref().and_then(|t| {
+                let s = t.blur_scale(f_number);
+                t.astigmatism().map(|(mut tan, mut sag)| {
+                    tan.values.iter_mut().chain(sag.values.iter_mut()).for_each(|v| *v *= s);
+                    (tan, sag)
+                })
+            }),
+            coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
+            longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
         })
     }
 
@@ -206,6 +218,22 @@ impl Camera {
         } else {
             1.0
         }
+    }
+
+    /// Longitudinal colour as an offset of the signed CoC of the red and blue channels (px),
+    /// for a lens focused at `focus`. A channel whose image surface lies delta behind green's
+    /// sees, in the form of src/passes/coc.rs (Kyaw 2013 eq 5.3 with a film offset),
+    /// C_c = D' (v w / (1 + delta w) - 1) with w = 1/f - 1/u, i.e. C_c - C_g = -D' delta w / (1 + delta w);
+    /// w is taken at the focus distance (w = 1/v), which is exact at the focus plane and off by
+    /// at most the magnification's fraction elsewhere.
+    pub fn longitudinal_color_coc_px(&self, pixel_pitch_mm: f64) -> Option<[f64; 2]> {
+        let [red_mm, blue_mm] = self.longitudinal_color_mm?;
+        let l = &self.lens;
+        let v_mm = l.image_distance_mm();
+        let aperture_px = v_mm / (l.effective_f_number() * l.pupil_magnification) / pixel_pitch_mm;
+        let w = 1.0 / v_mm;
+        let offset = |delta: f64| -aperture_px * delta * w / (1.0 + delta * w);
+        Some([offset(red_mm), offset(blue_mm)])
     }
 
     /// Settings recorded as EXR attributes on the output.

@@ -17,6 +17,9 @@ pub enum LensFileError {
     Parse { path: PathBuf, line: usize, message: String },
     #[error("lens file {path}: {message}")]
     Invalid { path: PathBuf, message: String },
+    /// The file's `[[surface]]` prescription is invalid (the message names file and line).
+    #[error("lens file {0}")]
+    Prescription(#[from] crate::optics::prescription::PrescriptionError),
 }
 
 /// The iris of a lens.
@@ -81,6 +84,32 @@ pub struct LensFile {
     /// Quantities against image height (Kyaw 2013 sec 7.2: tables of off-axis distance).
     #[serde(default)]
     pub tables: Option<LensTables>,
+    /// Longitudinal (axial) colour: where the red and the blue image of an object focus
+    /// relative to the green one, along the axis.
+    #[serde(default)]
+    pub longitudinal_color: Option<LongitudinalColorSpec>,
+    /// The optical prescription, front surface first, if the file carries one
+    /// (`realcam lens analyze` traces it; its keys are those of src/optics/prescription.rs).
+    #[serde(default, rename = "surface")]
+    pub surfaces: Vec<crate::optics::prescription::SurfaceSpec>,
+}
+
+/// Longitudinal colour in mm on the image side: + = the channel focuses behind green.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LongitudinalColorSpec {
+    /// Red (C line, 656 nm) focus minus green (d line, 588 nm) focus.
+    pub red_mm: f64,
+    /// Blue (F line, 486 nm) focus minus green focus.
+    pub blue_mm: f64,
+}
+
+/// Relative illumination measured at one f-number (vignetting changes as the lens stops down).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct IlluminationAt {
+    pub f_number: f64,
+    pub relative_illumination: Vec<f64>,
 }
 
 /// Tables against image height on the film, all of the length of `image_height_mm`.
@@ -109,6 +138,20 @@ pub struct LensTables {
     /// Field curvature: how far (mm) behind the film the sharp image surface lies at each height.
     #[serde(default)]
     pub field_curvature_mm: Option<Vec<f64>>,
+    /// Coma: the length in mm of the comet (tangential coma, three times the sagittal coma)
+    /// from the chief ray's image; > 0 when its flare points away from the centre.
+    #[serde(default)]
+    pub coma_mm: Option<Vec<f64>>,
+    /// The f-number at which the blur tables (tangential, sagittal, coma) hold. When given, the
+    /// blurs scale with the aperture at other f-numbers: astigmatic blur with the pupil
+    /// diameter (N0/N), coma with its square ((N0/N)^2), as third-order aberrations do. When
+    /// absent the blurs are the same at every f-number (as in Kyaw 2013).
+    #[serde(default)]
+    pub at_f_number: Option<f64>,
+    /// Relative illumination at several f-numbers (`[[tables.vignetting]]`), interpolated in
+    /// stops; instead of the single `relative_illumination` table.
+    #[serde(default)]
+    pub vignetting: Vec<IlluminationAt>,
 }
 
 impl LensTables {
@@ -134,11 +177,44 @@ impl LensTables {
         })
     }
 
-    /// The relative-illumination table, if the lens file has one.
-    pub fn relative_illumination(&self) -> Option<crate::optics::distortion::HeightTable> {
-        self.relative_illumination.as_ref().map(|v| crate::optics::distortion::HeightTable {
+    /// The relative-illumination table at f-number `n`: the single table, or the
+    /// `[[tables.vignetting]]` entries interpolated linearly in stops (clamped at the ends).
+    pub fn relative_illumination(&self, n: f64) -> Option<crate::optics::distortion::HeightTable> {
+        let table = |values: Vec<f64>| crate::optics::distortion::HeightTable {
             image_height_mm: self.image_height_mm.clone(),
-            values: v.clone(),
+            values,
+        };
+        if let Some(v) = &self.relative_illumination {
+            return Some(table(v.clone()));
+        }
+        let entries = &self.vignetting;
+        let first = entries.first()?;
+        let stops = |f: f64| 2.0 * f.max(1e-9).log2();
+        let i = entries.iter().position(|e| e.f_number >= n).unwrap_or(entries.len());
+        let values = if i == 0 {
+            first.relative_illumination.clone()
+        } else if i == entries.len() {
+            entries[i - 1].relative_illumination.clone()
+        } else {
+            let (a, b) = (&entries[i - 1], &entries[i]);
+            let t = (stops(n) - stops(a.f_number)) / (stops(b.f_number) - stops(a.f_number));
+            a.relative_illumination.iter().zip(&b.relative_illumination).map(|(x, y)| x + (y - x) * t).collect()
+        };
+        Some(table(values))
+    }
+
+    /// How a blur that grows with the pupil diameter scales at f-number `n` (1 when the
+    /// tables give no `at_f_number`).
+    pub fn blur_scale(&self, n: f64) -> f64 {
+        self.at_f_number.map_or(1.0, |n0| n0 / n)
+    }
+
+    /// The coma table at f-number `n` (scaled with the square of the pupil diameter).
+    pub fn coma(&self, n: f64) -> Option<crate::optics::distortion::HeightTable> {
+        let s = self.blur_scale(n);
+        self.coma_mm.as_ref().map(|v| crate::optics::distortion::HeightTable {
+            image_height_mm: self.image_height_mm.clone(),
+            values: v.iter().map(|x| x * s * s).collect(),
         })
     }
 
@@ -165,6 +241,21 @@ fn one() -> f64 {
 pub const DEFAULT_LENS_TOML: &str = include_str!("../lenses/default.toml");
 
 impl LensFile {
+    /// The prescription the file carries (its `[[surface]]` tables), checked as
+    /// `realcam lens analyze` would.
+    pub fn prescription(
+        &self,
+        path: &Path,
+        text: &str,
+    ) -> Result<crate::optics::prescription::Prescription, crate::optics::prescription::PrescriptionError> {
+        crate::optics::prescription::Prescription::from_specs(
+            &self.name,
+            &self.surfaces,
+            text,
+            &path.display().to_string(),
+        )
+    }
+
     pub fn load(path: &Path) -> Result<LensFile, LensFileError> {
         let text =
             std::fs::read_to_string(path).map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
@@ -217,6 +308,7 @@ impl LensFile {
                 ("tangential_blur_mm", &t.tangential_blur_mm),
                 ("sagittal_blur_mm", &t.sagittal_blur_mm),
                 ("field_curvature_mm", &t.field_curvature_mm),
+                ("coma_mm", &t.coma_mm),
             ] {
                 if let Some(v) = table {
                     if v.len() != h.len() {
@@ -228,6 +320,51 @@ impl LensFile {
                     if let Some(x) = v.iter().find(|x| !(x.is_finite() && x.abs() < 50.0)) {
                         return at(key, format!("tables.{key} value {x} is out of range (-50..50 percent)"));
                     }
+                }
+            }
+            if t.relative_illumination.is_some() && !t.vignetting.is_empty() {
+                return at(
+                    "[[tables.vignetting]]",
+                    "give either tables.relative_illumination or [[tables.vignetting]] entries, not both".into(),
+                );
+            }
+            for (i, e) in t.vignetting.iter().enumerate() {
+                // The line of the i-th [[tables.vignetting]] header.
+                let line = text
+                    .lines()
+                    .enumerate()
+                    .filter(|(_, l)| l.trim_start().starts_with("[[tables.vignetting]]"))
+                    .nth(i)
+                    .map_or(0, |(n, _)| n + 1);
+                let err = |message: String| Err(LensFileError::Parse { path: path.to_path_buf(), line, message });
+                if !(e.f_number.is_finite() && e.f_number > 0.0) {
+                    return err(format!("tables.vignetting f_number = {} must be a positive number", e.f_number));
+                }
+                if i > 0 && e.f_number <= t.vignetting[i - 1].f_number {
+                    return err(format!(
+                        "tables.vignetting entries must have increasing f-numbers: f/{} after f/{}",
+                        e.f_number,
+                        t.vignetting[i - 1].f_number
+                    ));
+                }
+                if e.relative_illumination.len() != h.len() {
+                    return err(format!(
+                        "tables.vignetting at f/{} has {} values but image_height_mm has {}",
+                        e.f_number,
+                        e.relative_illumination.len(),
+                        h.len()
+                    ));
+                }
+                if let Some(x) = e.relative_illumination.iter().find(|x| !(x.is_finite() && **x > 0.0 && **x <= 2.0)) {
+                    return err(format!(
+                        "tables.vignetting at f/{}: relative illumination {x} is not in (0, 2]",
+                        e.f_number
+                    ));
+                }
+            }
+            if let Some(n0) = t.at_f_number {
+                if !(n0.is_finite() && n0 > 0.0) {
+                    return at("at_f_number", format!("tables.at_f_number = {n0} must be a positive f-number"));
                 }
             }
         }
@@ -267,6 +404,18 @@ impl LensFile {
                 }
             }
         }
+        if let Some(lc) = &self.longitudinal_color {
+            for (key, v) in [("red_mm", lc.red_mm), ("blue_mm", lc.blue_mm)] {
+                if !(v.is_finite() && v.abs() < 0.1 * self.focal_length_mm) {
+                    return bad(format!(
+                        "longitudinal_color.{key} = {v} must be a finite focus shift smaller than a tenth of the focal length"
+                    ));
+                }
+            }
+        }
+        if !self.surfaces.is_empty() {
+            self.prescription(path, text)?;
+        }
         if let Some(n) = a.polygonal_from_f_number {
             if !(n.is_finite() && n >= self.f_number_min) {
                 return bad(format!(
@@ -277,6 +426,55 @@ impl LensFile {
         }
         Ok(())
     }
+}
+
+/// A lens file's text with the `[tables]` and `[longitudinal_color]` a prescription implies.
+///
+/// `text` is a lens file (`is_lens_file`; its other settings and comments are kept, its
+/// tables replaced) or a bare prescription (then the settings are derived from the trace:
+/// focal length = EFL, widest aperture = the analysed f-number, P from the pupils; closest
+/// focus and blades are not in a prescription and are marked as assumptions).
+pub fn with_derived_tables(
+    text: &str,
+    is_lens_file: bool,
+    analysis: &crate::optics::prescription::LensAnalysis,
+    derived: &crate::optics::prescription::DerivedTables,
+    source: &str,
+) -> Result<String, toml_edit::TomlError> {
+    let mut doc: toml_edit::DocumentMut = if is_lens_file {
+        text.parse()?
+    } else {
+        let p = &analysis.paraxial;
+        let efl = p.efl_mm;
+        let mut head = format!(
+            "# Lens file derived by realcam lens analyze from the prescription {source}.\n\
+             # focus_min_m (10 focal lengths) and the circular aperture are assumptions: a\n\
+             # prescription does not give them. Everything else is traced.\n\
+             name = {name:?}\n\
+             source = {src:?}\n\
+             focal_length_mm = {efl:.3}\n\
+             f_number_min = {n:.3}\n\
+             f_number_max = 22.0\n\
+             focus_min_m = {focus:.3}\n\
+             pupil_magnification = {pm:.4}\n\n\
+             [aperture]\n\
+             blades = 0\n\n",
+            name = analysis.name,
+            src = format!("realcam lens analyze of {source}"),
+            n = analysis.f_number,
+            focus = 10.0 * efl / 1000.0,
+            pm = p.pupil_magnification,
+        );
+        // The surfaces, as written (from the first [[surface]] on).
+        if let Some(at) = text.find("[[surface]]") {
+            head.push_str(&text[at..]);
+        }
+        head.parse()?
+    };
+    doc.remove("tables");
+    doc.remove("longitudinal_color");
+    // Appended as text, after everything else: tables keep the order written here.
+    Ok(format!("{}\n{}", doc.to_string().trim_end(), derived.to_toml(source)))
 }
 
 #[cfg(test)]
@@ -332,6 +530,60 @@ mod tests {
         let text = format!("{head}image_height_mm = [0, 10, 20]\ndistortion_percent = [0, -1, -2.5]\n");
         let lens = LensFile::parse(&text, Path::new("t.toml")).unwrap();
         assert_eq!(lens.tables.unwrap().distortion().green_percent.at(15.0), -1.75);
+    }
+
+    const HEAD: &str = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n[aperture]\nblades = 9\n[tables]\nimage_height_mm = [0, 10, 20]\n";
+
+    #[test]
+    fn vignetting_per_f_number_interpolates_in_stops() {
+        let text = format!(
+            "{HEAD}[[tables.vignetting]]\nf_number = 1.4\nrelative_illumination = [1, 0.7, 0.4]\n\
+             [[tables.vignetting]]\nf_number = 5.6\nrelative_illumination = [1, 0.9, 0.8]\n"
+        );
+        let t = LensFile::parse(&text, Path::new("v.toml")).unwrap().tables.unwrap();
+        // f/2.8 is one of two stops from f/1.4 to f/5.6: halfway.
+        assert!((t.relative_illumination(2.8).unwrap().at(20.0) - 0.6).abs() < 1e-12);
+        assert_eq!(t.relative_illumination(1.0).unwrap().at(10.0), 0.7);
+        assert_eq!(t.relative_illumination(11.0).unwrap().at(10.0), 0.9);
+        let bad = format!(
+            "{HEAD}[[tables.vignetting]]\nf_number = 4\nrelative_illumination = [1, 0.7, 0.4]\n\
+             [[tables.vignetting]]\nf_number = 2\nrelative_illumination = [1, 0.9, 0.8]\n"
+        );
+        let err = LensFile::parse(&bad, Path::new("v.toml")).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "lens file v.toml, line 14: tables.vignetting entries must have increasing f-numbers: f/2 after f/4"
+        );
+        let bad = format!("{HEAD}[[tables.vignetting]]\nf_number = 4\nrelative_illumination = [1, 0.7]\n");
+        let err = LensFile::parse(&bad, Path::new("v.toml")).unwrap_err().to_string();
+        assert_eq!(err, "lens file v.toml, line 11: tables.vignetting at f/4 has 2 values but image_height_mm has 3");
+    }
+
+    #[test]
+    fn blur_tables_scale_with_the_aperture() {
+        let text = format!("{HEAD}at_f_number = 2.8\ncoma_mm = [0, 0.02, 0.04]\n");
+        let t = LensFile::parse(&text, Path::new("c.toml")).unwrap().tables.unwrap();
+        // coma grows with the square of the pupil diameter: f/5.6 has a quarter of f/2.8's
+        assert!((t.coma(5.6).unwrap().at(20.0) - 0.01).abs() < 1e-15);
+        assert_eq!(t.blur_scale(1.4), 2.0);
+    }
+
+    #[test]
+    fn lens_file_carries_a_prescription() {
+        let text = format!(
+            "{}[[surface]]\nradius_mm = 50\nthickness_mm = 5\nn_d = 1.5\nsemi_diameter_mm = 10\nstop = true\n\
+             [[surface]]\nradius_mm = -50\nthickness_mm = 48\nsemi_diameter_mm = 10\n",
+            HEAD.replace("[tables]\nimage_height_mm = [0, 10, 20]\n", "")
+        );
+        let lens = LensFile::parse(&text, Path::new("p.toml")).unwrap();
+        let p = lens.prescription(Path::new("p.toml"), &text).unwrap();
+        assert_eq!(p.surfaces.len(), 2);
+        let bad = text.replace("n_d = 1.5", "n_d = 0.5");
+        let err = LensFile::parse(&bad, Path::new("p.toml")).unwrap_err().to_string();
+        assert_eq!(err, "lens file p.toml:9: surface 0: n_d = 0.5 must be >= 1");
+        let bad = format!("{text}[longitudinal_color]\nred_mm = 20\nblue_mm = 0\n");
+        let err = LensFile::parse(&bad, Path::new("p.toml")).unwrap_err().to_string();
+        assert!(err.contains("longitudinal_color.red_mm = 20"), "{err}");
     }
 
     #[test]

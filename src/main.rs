@@ -1,6 +1,6 @@
 //! The realcam command line. Only argument handling lives here; the work is in the library.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use realcam::camera::{Camera, CameraRequest, FilmMode};
 use realcam::gpu::{Gpu, GpuOptions};
@@ -60,15 +60,21 @@ enum Command {
 
 #[derive(Subcommand)]
 enum LensCommand {
-    /// Analyze a prescription file (e.g. lenses/tessar-walch.toml).
+    /// Analyze a prescription (a prescription file such as lenses/tessar-walch.toml, or a lens
+    /// file with [[surface]] tables) by real ray tracing.
     Analyze {
         file: PathBuf,
         /// f-number to analyze at; default: the prescription's own stop.
         #[arg(long = "fstop")]
         f_number: Option<f64>,
-        /// Field angles in degrees.
+        /// Field angles in degrees (the first must be 0 for --write-tables).
         #[arg(long = "field", default_value = "0,5,10,15,20", value_delimiter = ',')]
         field_deg: Vec<f64>,
+        /// Write a lens file with the derived tables: FILE's own settings (or, for a bare
+        /// prescription, ones derived from it) plus its surfaces, [tables] and
+        /// [longitudinal_color] replaced by the traced values.
+        #[arg(long = "write-tables", value_name = "LENS_FILE")]
+        write_tables: Option<PathBuf>,
     },
 }
 
@@ -304,8 +310,8 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
-        Command::Lens { command: LensCommand::Analyze { file, f_number, field_deg } } => {
-            lens_analyze(&file, f_number, &field_deg)
+        Command::Lens { command: LensCommand::Analyze { file, f_number, field_deg, write_tables } } => {
+            lens_analyze(&file, f_number, &field_deg, write_tables.as_deref())
         }
         Command::Bench(args) => bench(args),
         Command::Accuracy(args) => accuracy(args),
@@ -634,16 +640,44 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
     Ok(())
 }
 
-fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64]) -> Result<()> {
+fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64], write_tables: Option<&Path>) -> Result<()> {
+    use realcam::lens_file::LensFile;
     use realcam::optics::prescription::Prescription;
     let text =
         std::fs::read_to_string(file).with_context(|| format!("lens file {}: cannot read it", file.display()))?;
-    let prescription = Prescription::parse_toml(&text, &file.display().to_string())?;
+    // A lens file has a focal length; a bare prescription only a name, a source and surfaces.
+    let is_lens_file = text.parse::<toml::Table>().is_ok_and(|t| t.contains_key("focal_length_mm"));
+    let (prescription, lens) = if is_lens_file {
+        let lens = LensFile::parse(&text, file)?;
+        if lens.surfaces.is_empty() {
+            bail!("lens file {}: it has no [[surface]] tables to analyze", file.display());
+        }
+        (lens.prescription(file, &text)?, Some(lens))
+    } else {
+        (Prescription::parse_toml(&text, &file.display().to_string())?, None)
+    };
     let f_number = match f_number {
         Some(n) if n.is_finite() && n > 0.0 => n,
         Some(n) => bail!("--fstop must be a positive number, got {n}"),
-        None => prescription.f_number_at_table_stop(),
+        None => lens.as_ref().map_or_else(|| prescription.f_number_at_table_stop(), |l| l.f_number_min),
     };
-    print!("{}", prescription.analyze(f_number, field_deg));
+    let analysis = prescription.analyze(f_number, field_deg);
+    print!("{analysis}");
+    if let Some(out) = write_tables {
+        let derived = analysis.derived_tables().map_err(|e| anyhow!("--write-tables: {e}"))?;
+        let new_text = realcam::lens_file::with_derived_tables(
+            &text,
+            lens.is_some(),
+            &analysis,
+            &derived,
+            &file.display().to_string(),
+        )
+        .with_context(|| format!("--write-tables {}", out.display()))?;
+        // Check what we write parses as a lens file before it replaces anything.
+        LensFile::parse(&new_text, out)
+            .with_context(|| format!("--write-tables {}: the derived file", out.display()))?;
+        write_text_atomically(out, &new_text).with_context(|| format!("writing {}", out.display()))?;
+        eprintln!("wrote {}", out.display());
+    }
     Ok(())
 }

@@ -103,25 +103,26 @@ struct RawFile {
     #[serde(default)]
     source: Option<String>,
     #[serde(rename = "surface", default)]
-    surfaces: Vec<RawSurface>,
+    surfaces: Vec<SurfaceSpec>,
 }
 
 fn one() -> f64 {
     1.0
 }
 
-#[derive(Deserialize)]
+/// One `[[surface]]` table as written in a prescription or lens file (not yet validated).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-struct RawSurface {
-    radius_mm: f64,
-    thickness_mm: f64,
+pub struct SurfaceSpec {
+    pub radius_mm: f64,
+    pub thickness_mm: f64,
     #[serde(default = "one")]
-    n_d: f64,
+    pub n_d: f64,
     #[serde(default)]
-    v_d: f64,
-    semi_diameter_mm: f64,
+    pub v_d: f64,
+    pub semi_diameter_mm: f64,
     #[serde(default)]
-    stop: bool,
+    pub stop: bool,
 }
 
 /// 1-based line of byte offset `pos` in `text`.
@@ -154,7 +155,17 @@ impl Prescription {
             line: e.span().map(|s| line_of(text, s.start)).unwrap_or(0),
             message: e.message().trim().to_string(),
         })?;
-        if raw.surfaces.is_empty() {
+        Self::from_specs(&raw.name, &raw.surfaces, text, path)
+    }
+
+    /// Validate `[[surface]]` tables read from `text` (used for the lines in messages).
+    pub fn from_specs(
+        name: &str,
+        specs: &[SurfaceSpec],
+        text: &str,
+        path: &str,
+    ) -> Result<Prescription, PrescriptionError> {
+        if specs.is_empty() {
             return Err(PrescriptionError::NoSurfaces { path: path.to_string() });
         }
         let invalid = |index: usize, message: String| PrescriptionError::InvalidSurface {
@@ -163,8 +174,8 @@ impl Prescription {
             index,
             message,
         };
-        let mut surfaces = Vec::with_capacity(raw.surfaces.len());
-        for (i, s) in raw.surfaces.into_iter().enumerate() {
+        let mut surfaces = Vec::with_capacity(specs.len());
+        for (i, s) in specs.iter().enumerate() {
             if s.radius_mm.is_nan() {
                 return Err(invalid(i, "radius_mm is NaN".into()));
             }
@@ -207,7 +218,7 @@ impl Prescription {
         if stops.len() != 1 {
             return Err(PrescriptionError::StopCount { path: path.to_string(), indices: stops });
         }
-        Ok(Prescription { name: raw.name, surfaces })
+        Ok(Prescription { name: name.to_string(), surfaces })
     }
 }
 
@@ -669,6 +680,30 @@ impl Prescription {
                 };
                 if let (Some(hf), Some(hc)) = (h_at(LAMBDA_F_NM), h_at(LAMBDA_C_NM)) {
                     fs.lateral_color_f_minus_c_mm = Some(hf - hc);
+                    if let Some(hd) = fs.image_height_mm {
+                        fs.lateral_color_c_minus_d_mm = Some(hc - hd);
+                        fs.lateral_color_f_minus_d_mm = Some(hf - hd);
+                    }
+                }
+                // Coma: the rim rays of the meridional fan (upper and lower edge of the pupil)
+                // and a sagittal rim ray, on the paraxial image plane, against the chief ray.
+                // Defocus, astigmatism and spherical aberration move the two meridional rim
+                // rays by equal and opposite amounts, so their mean minus the chief ray is the
+                // tangential coma; the sagittal rim ray's height minus the chief ray is the
+                // sagittal coma (a third of it in third-order theory). Unclipped rays: the
+                // aberration of the design, not of the vignetted pupil.
+                if let Some(h) = fs.image_height_mm {
+                    let y_at = |x: f64, y: f64| -> Option<f64> {
+                        let r = lens.trace(&Self::field_ray(theta, x, y, ep_z), LAMBDA_D_NM, false).ok()?;
+                        Some(r.at_z(z_img).p[1])
+                    };
+                    let outward = if h < 0.0 { -1.0 } else { 1.0 };
+                    if let (Some(a), Some(b)) = (y_at(0.0, yc + ep_sd), y_at(0.0, yc - ep_sd)) {
+                        fs.tangential_coma_mm = Some(outward * (0.5 * (a + b) - h));
+                    }
+                    if let Some(a) = y_at(ep_sd, yc) {
+                        fs.sagittal_coma_mm = Some(outward * (a - h));
+                    }
                 }
                 fs
             })
@@ -736,6 +771,14 @@ pub struct FieldSample {
     pub relative_illumination: f64,
     /// Chief-ray height F minus C on the d image plane.
     pub lateral_color_f_minus_c_mm: Option<f64>,
+    /// Chief-ray height C (red) minus d, and F (blue) minus d, on the d image plane.
+    pub lateral_color_c_minus_d_mm: Option<f64>,
+    pub lateral_color_f_minus_d_mm: Option<f64>,
+    /// Tangential coma: mean of the meridional rim rays minus the chief ray (mm, + = the
+    /// flare points away from the axis).
+    pub tangential_coma_mm: Option<f64>,
+    /// Sagittal coma: a sagittal rim ray minus the chief ray, along the radius.
+    pub sagittal_coma_mm: Option<f64>,
     /// Where the chief ray is vignetted, if it is.
     pub chief_ray_clipped: Option<RayFailure>,
 }
@@ -766,6 +809,120 @@ pub struct LensAnalysis {
     pub lsa_h4_coefficient_per_mm3: f64,
     pub longitudinal_color: LongitudinalColor,
     pub fields: Vec<FieldSample>,
+}
+
+/// The lens-file tables a prescription implies (see [`LensAnalysis::derived_tables`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DerivedTables {
+    pub f_number: f64,
+    pub image_height_mm: Vec<f64>,
+    pub distortion_percent: Vec<f64>,
+    pub lateral_color_red_percent: Vec<f64>,
+    pub lateral_color_blue_percent: Vec<f64>,
+    pub relative_illumination: Vec<f64>,
+    pub field_curvature_mm: Vec<f64>,
+    pub tangential_blur_mm: Vec<f64>,
+    pub sagittal_blur_mm: Vec<f64>,
+    pub coma_mm: Vec<f64>,
+    /// Red (C) and blue (F) paraxial focus minus green (d), mm.
+    pub longitudinal_color_mm: [f64; 2],
+}
+
+impl LensAnalysis {
+    /// The tables of a lens file, from the traced field samples (which must start on axis and
+    /// all trace). Against the ideal height f tan(theta):
+    /// - distortion and lateral colour in percent of the ideal height (Kyaw 2013 eq 6.8);
+    /// - field curvature = the medial surface (T + S) / 2, which the CoC pass uses as the film
+    ///   offset, so a point on it is in focus in the mean;
+    /// - what is left at the medial surface is the astigmatic circle of least confusion, of
+    ///   diameter |T - S| / (2 N) (the tangential and sagittal fans each defocused by
+    ///   |T - S| / 2, each spreading over defocus / N): both blur tables get that length;
+    /// - coma = the tangential coma (the comet's length);
+    /// - relative illumination = pupil transmission * cos^4.
+    pub fn derived_tables(&self) -> Result<DerivedTables, String> {
+        if self.fields.first().is_none_or(|f| f.angle_deg != 0.0) {
+            return Err("the field angles must start at 0 degrees".into());
+        }
+        let n = self.f_number;
+        let mut t = DerivedTables {
+            f_number: n,
+            image_height_mm: vec![],
+            distortion_percent: vec![],
+            lateral_color_red_percent: vec![],
+            lateral_color_blue_percent: vec![],
+            relative_illumination: vec![],
+            field_curvature_mm: vec![],
+            tangential_blur_mm: vec![],
+            sagittal_blur_mm: vec![],
+            coma_mm: vec![],
+            longitudinal_color_mm: [
+                self.longitudinal_color.focus_c_minus_d_mm,
+                self.longitudinal_color.focus_f_minus_d_mm,
+            ],
+        };
+        for f in &self.fields {
+            let missing = || format!("the rays at {} degrees could not be traced", f.angle_deg);
+            let percent = |d: Option<f64>| -> Result<f64, String> {
+                let d = d.ok_or_else(missing)?;
+                Ok(if f.ideal_height_mm.abs() < 1e-12 { 0.0 } else { 100.0 * d / f.ideal_height_mm })
+            };
+            let (tf, sf) = (f.tangential_focus_mm.ok_or_else(missing)?, f.sagittal_focus_mm.ok_or_else(missing)?);
+            t.image_height_mm.push(f.ideal_height_mm);
+            t.distortion_percent.push(f.distortion_percent.ok_or_else(missing)?);
+            t.lateral_color_red_percent.push(percent(f.lateral_color_c_minus_d_mm)?);
+            t.lateral_color_blue_percent.push(percent(f.lateral_color_f_minus_d_mm)?);
+            t.relative_illumination.push(f.relative_illumination);
+            t.field_curvature_mm.push(0.5 * (tf + sf));
+            let least_confusion_mm = (tf - sf).abs() / (2.0 * n);
+            t.tangential_blur_mm.push(least_confusion_mm);
+            t.sagittal_blur_mm.push(least_confusion_mm);
+            t.coma_mm.push(f.tangential_coma_mm.ok_or_else(missing)?);
+        }
+        // On axis the real heights are 0 and the ratios 0/0: take the first off-axis value's
+        // limit as 0 (distortion and lateral colour vanish on axis to first order).
+        t.distortion_percent[0] = 0.0;
+        t.lateral_color_red_percent[0] = 0.0;
+        t.lateral_color_blue_percent[0] = 0.0;
+        t.coma_mm[0] = 0.0;
+        if let Some(i) = (1..t.image_height_mm.len()).find(|&i| t.image_height_mm[i] <= t.image_height_mm[i - 1]) {
+            return Err(format!("the image heights do not increase at field {} degrees", self.fields[i].angle_deg));
+        }
+        Ok(t)
+    }
+}
+
+impl DerivedTables {
+    /// The `[tables]` section and `longitudinal_color` of a lens file, as TOML text.
+    pub fn to_toml(&self, source: &str) -> String {
+        let row = |v: &[f64], prec: usize| -> String {
+            let items: Vec<String> = v.iter().map(|x| format!("{x:.prec$}")).collect();
+            format!("[{}]", items.join(", "))
+        };
+        let mut s = String::new();
+        s.push_str(&format!("# Derived by realcam lens analyze from {source} at f/{:.3}:\n", self.f_number));
+        s.push_str("# real ray tracing in f64, d line (587.6 nm) with C (656.3) and F (486.1 nm) for colour.\n");
+        s.push_str("[longitudinal_color]\n");
+        s.push_str(&format!(
+            "red_mm = {:.6}\nblue_mm = {:.6}\n\n",
+            self.longitudinal_color_mm[0], self.longitudinal_color_mm[1]
+        ));
+        s.push_str("[tables]\n");
+        s.push_str(&format!("at_f_number = {:.4}\n", self.f_number));
+        for (key, v, prec) in [
+            ("image_height_mm", &self.image_height_mm, 4),
+            ("distortion_percent", &self.distortion_percent, 5),
+            ("lateral_color_red_percent", &self.lateral_color_red_percent, 5),
+            ("lateral_color_blue_percent", &self.lateral_color_blue_percent, 5),
+            ("relative_illumination", &self.relative_illumination, 5),
+            ("field_curvature_mm", &self.field_curvature_mm, 5),
+            ("tangential_blur_mm", &self.tangential_blur_mm, 5),
+            ("sagittal_blur_mm", &self.sagittal_blur_mm, 5),
+            ("coma_mm", &self.coma_mm, 5),
+        ] {
+            s.push_str(&format!("{key} = {}\n", row(v, prec)));
+        }
+        s
+    }
 }
 
 fn opt(v: Option<f64>, prec: usize) -> String {
@@ -833,12 +990,12 @@ impl fmt::Display for LensAnalysis {
         )?;
         writeln!(
             f,
-            "Field:  angle   height    ideal  dist(%)   T-focus   S-focus     astig  pupil  RI     lat.col(F-C)"
+            "Field:  angle   height    ideal  dist(%)   T-focus   S-focus     astig  pupil  RI     lat.col(F-C)  coma T/S (mm)"
         )?;
         for s in &self.fields {
             writeln!(
                 f,
-                "  {:6.2} {:>8} {:8.3} {:>8} {:>9} {:>9} {:>9} {:6.3} {:6.3} {:>9}{}",
+                "  {:6.2} {:>8} {:8.3} {:>8} {:>9} {:>9} {:>9} {:6.3} {:6.3} {:>9}  {:>8} {:>8}{}",
                 s.angle_deg,
                 opt(s.image_height_mm, 3),
                 s.ideal_height_mm,
@@ -849,6 +1006,8 @@ impl fmt::Display for LensAnalysis {
                 s.pupil_transmission,
                 s.relative_illumination,
                 opt(s.lateral_color_f_minus_c_mm, 5),
+                opt(s.tangential_coma_mm, 4),
+                opt(s.sagittal_coma_mm, 4),
                 match s.chief_ray_clipped {
                     Some(c) => format!("  chief ray vignetted: {c:?}"),
                     None => String::new(),
@@ -1038,6 +1197,48 @@ mod tests {
         // no vignetting by other apertures: RI ~ cos^4 (the pupil grows slightly off-axis)
         let c4 = f64::to_radians(10.0).cos().powi(4);
         assert!((f10.relative_illumination - c4).abs() < 0.03, "{}", f10.relative_illumination);
+    }
+
+    #[test]
+    fn coma_follows_third_order_theory_at_small_aperture_and_field() {
+        // A singlet with the stop in contact has coma (a bending that is not the coma-free
+        // one). Third-order (Seidel) coma: tangential = 3 x sagittal, both grow linearly with
+        // the field and with the square of the aperture.
+        let lens = Prescription {
+            name: "singlet".into(),
+            surfaces: vec![surf(60.0, 3.0, 1.5168, 12.0, true), surf(-400.0, 100.0, 1.0, 12.0, false)],
+        };
+        let coma = |n: f64, deg: f64| {
+            let a = lens.analyze(n, &[deg]);
+            (a.fields[0].tangential_coma_mm.unwrap(), a.fields[0].sagittal_coma_mm.unwrap())
+        };
+        let (t, s) = coma(16.0, 1.0);
+        assert!(t.abs() > 1e-7, "no coma: {t}");
+        assert!((t / s - 3.0).abs() < 0.03, "T/S = {}", t / s);
+        let (t2, _) = coma(16.0, 2.0);
+        assert!((t2 / t - 2.0).abs() < 0.02, "field ratio {}", t2 / t);
+        let (t_half, _) = coma(32.0, 1.0);
+        assert!((t / t_half - 4.0).abs() < 0.05, "aperture ratio {}", t / t_half);
+    }
+
+    #[test]
+    fn derived_tables_follow_the_trace() {
+        let a = walch().analyze(2.8, &[0.0, 5.0, 10.0, 15.0]);
+        let t = a.derived_tables().unwrap();
+        assert_eq!(t.image_height_mm.len(), 4);
+        assert_eq!(t.distortion_percent[0], 0.0);
+        let f = &a.fields[2];
+        assert_eq!(t.distortion_percent[2], f.distortion_percent.unwrap());
+        let medial = 0.5 * (f.tangential_focus_mm.unwrap() + f.sagittal_focus_mm.unwrap());
+        assert_eq!(t.field_curvature_mm[2], medial);
+        // circle of least confusion at the medial surface: |T - S| / (2N)
+        assert!((t.tangential_blur_mm[2] - f.astigmatism_mm.unwrap().abs() / 5.6).abs() < 1e-12);
+        assert_eq!(t.longitudinal_color_mm[0], a.longitudinal_color.focus_c_minus_d_mm);
+        // red minus blue lateral colour in percent = (C - F) heights over the ideal height
+        let lat = t.lateral_color_red_percent[2] - t.lateral_color_blue_percent[2];
+        assert!((lat + 100.0 * f.lateral_color_f_minus_c_mm.unwrap() / f.ideal_height_mm).abs() < 1e-9);
+        let err = walch().analyze(2.8, &[5.0, 10.0]).derived_tables().unwrap_err();
+        assert_eq!(err, "the field angles must start at 0 degrees");
     }
 
     #[test]
