@@ -42,6 +42,8 @@ pub struct Plan {
     pub vignette: Option<VignetteParams>,
     /// Astigmatism: push constants and the table buffer's data.
     pub astigmatism: Option<(crate::passes::astigmatism::AstigmatismParams, Vec<f32>)>,
+    /// Coma: push constants and the table buffer's data.
+    pub coma: Option<(crate::passes::coma::ComaParams, Vec<f32>)>,
     /// The CoC pass's field-curvature buffer (crate::passes::coc::table_data).
     pub coc_table: Vec<f32>,
     /// The vignette pass's table buffer (crate::passes::vignette::table_data).
@@ -261,6 +263,39 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         }
     };
 
+    let coma = match &camera.coma {
+        // A comet shorter than a tenth of a pixel is invisible.
+        Some(t) if t.max_abs() / pitch_mm >= 0.1 => {
+            steps.push(Step {
+                pass: crate::passes::coma::NAME,
+                run: true,
+                why: format!(
+                    "the lens's coma table: comets up to {:.1} px long at f/{}",
+                    t.max_abs() / pitch_mm,
+                    camera.lens.f_number
+                ),
+            });
+            let params = crate::passes::coma::ComaParams::new([w, h], frame.centre_px, pitch_mm, t);
+            Some((params, crate::passes::coma::table_data(t)))
+        }
+        Some(t) => {
+            steps.push(Step {
+                pass: crate::passes::coma::NAME,
+                run: false,
+                why: format!("the lens's comets are at most {:.3} px long here (< 0.1 px)", t.max_abs() / pitch_mm),
+            });
+            None
+        }
+        None => {
+            steps.push(Step {
+                pass: crate::passes::coma::NAME,
+                run: false,
+                why: "the lens file has no coma table".into(),
+            });
+            None
+        }
+    };
+
     let vignette_params = VignetteParams {
         size: [w as i32, h as i32],
         centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
@@ -345,6 +380,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         diffraction,
         distortion,
         astigmatism,
+        coma,
         coc_table,
         vignette,
         vignette_table,

@@ -17,6 +17,7 @@ pub struct Renderer {
     diffraction: Option<crate::passes::diffraction::DiffractionPass>,
     distortion: Option<crate::passes::distortion::DistortionPass>,
     astigmatism: Option<crate::passes::astigmatism::AstigmatismPass>,
+    coma: Option<crate::passes::coma::ComaPass>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -52,6 +53,7 @@ impl Renderer {
                 .as_ref()
                 .map(|_| crate::passes::astigmatism::AstigmatismPass::new(gpu))
                 .transpose()?,
+            coma: plan.coma.as_ref().map(|_| crate::passes::coma::ComaPass::new(gpu)).transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -63,6 +65,7 @@ impl Renderer {
             && self.coc.is_none()
             && self.distortion.is_none()
             && self.astigmatism.is_none()
+            && self.coma.is_none()
             && self.vignette.is_none()
             && self.film.is_none()
         {
@@ -94,6 +97,7 @@ impl Renderer {
         let distortion_out = image("color (distortion)", rgba, self.distortion.is_some())?;
         let astigmatism_between = image("color (tangential blur)", rgba, self.astigmatism.is_some())?;
         let astigmatism_out = image("color (astigmatism)", rgba, self.astigmatism.is_some())?;
+        let coma_out = image("color (coma)", rgba, self.coma.is_some())?;
         let vignette_out = image("color (vignetting)", rgba, self.vignette.is_some())?;
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
@@ -145,6 +149,13 @@ impl Renderer {
             pass.record(&mut rec, current, between, out, &tables, params)?;
             current = out;
             _astigmatism_tables = Some(tables);
+        }
+        let mut _coma_table = None;
+        if let (Some(pass), Some((params, data)), Some(out)) = (&self.coma, &plan.coma, &coma_out) {
+            let table = rec.upload_buffer("coma table", data)?;
+            pass.record(&mut rec, current, out, &table, params)?;
+            current = out;
+            _coma_table = Some(table);
         }
         let mut _vignette_table = None;
         if let (Some(pass), Some(params), Some(out)) = (&self.vignette, &plan.vignette, &vignette_out) {

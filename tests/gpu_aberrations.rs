@@ -249,3 +249,85 @@ fn astigmatism_smears_points_along_the_tabled_direction_only() {
         assert!((e / 100.0 - 1.0).abs() < 0.02, "{name}: energy {e}");
     }
 }
+
+/// Second moments of channel 1 around (px, py) over a window: (energy, mean dx, mean dy,
+/// variance x, variance y).
+fn moments(rgba: &[f32], px: u32, py: u32, win: i32) -> (f64, f64, f64, f64, f64) {
+    let (mut e, mut mx, mut my, mut vx, mut vy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for y in (py as i32 - win).max(0)..(py as i32 + win).min(H as i32) {
+        for x in (px as i32 - win).max(0)..(px as i32 + win).min(W as i32) {
+            let v = at(rgba, W, x as u32, y as u32, 1) as f64;
+            let (dx, dy) = (x as f64 - px as f64, y as f64 - py as f64);
+            e += v;
+            mx += v * dx;
+            my += v * dy;
+            vx += v * dx * dx;
+            vy += v * dy * dy;
+        }
+    }
+    (e, mx / e, my / e, vx / e - (mx / e).powi(2), vy / e - (my / e).powi(2))
+}
+
+#[test]
+fn coma_draws_a_comet_of_the_tabled_size_pointing_along_the_radius() {
+    // Third-order coma sends pupil point (rho, theta) to C rho^2 (2 + cos 2theta, sin 2theta)
+    // (radial, tangential). Over a uniform pupil: mean radial shift C, radial variance C^2/2,
+    // tangential variance C^2/6, and nothing inside the chief ray's image. A point 72.5 px
+    // right of the centre with a tangential coma (3C) of 9 px in the table: C = 3 px. Bilinear
+    // reading adds 1/6 px^2 to each variance.
+    let gpu = gpu();
+    let (px, py) = (200u32, 72u32);
+    let h0_px = px as f64 + 0.5 - W as f64 / 2.0;
+    let mut color = vec![0.0f32; (W * H * 4) as usize];
+    let i = ((py * W + px) * 4) as usize;
+    color[i..i + 3].copy_from_slice(&[100.0; 3]);
+    let frame = Frame::new(W, H, color, vec![2.0; (W * H) as usize]);
+    for sign in [1.0, -1.0] {
+        // Coma proportional to height: 9 px (tangential) at the point.
+        let heights = vec![0.0, 3.0, 6.0];
+        let coma = HeightTable {
+            image_height_mm: heights.clone(),
+            values: heights.iter().map(|h| sign * 9.0 / h0_px * h).collect(),
+        };
+        let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+        camera.coma = Some(coma);
+        let (rgba, plan, profile) = render(&gpu, &frame, &camera);
+        assert!(plan.runs("coma") && profile.pass_ms("coma").is_some());
+        let (e, mx, my, vx, vy) = moments(&rgba, px, py, 20);
+        println!("coma {sign:+}: energy {e:.3}, mean ({mx:.3}, {my:.3}), variance radial {vx:.3} tangential {vy:.3}");
+        let c = 3.0;
+        assert!((e / 100.0 - 1.0).abs() < 0.01, "energy {e}");
+        // The point's centre is 0.5 px below the frame's centre row: its radius tilts by 0.5/72.5.
+        let tilt = (py as f64 + 0.5 - H as f64 / 2.0) / h0_px;
+        assert!((mx - sign * c).abs() < 0.1, "mean radial shift {mx} vs {}", sign * c);
+        assert!((my - sign * c * tilt).abs() < 0.005, "mean tangential shift {my}");
+        assert!((vx - (c * c / 2.0 + 1.0 / 6.0)).abs() < 0.25, "radial variance {vx}");
+        assert!((vy - (c * c / 6.0 + 1.0 / 6.0)).abs() < 0.15, "tangential variance {vy}");
+        // The comet lies on the outer (sign > 0) side of the chief ray's image.
+        let behind: f64 = (0..H)
+            .flat_map(|y| (0..W).map(move |x| (x, y)))
+            .filter(|&(x, _)| sign * (x as f64 - px as f64) < -1.0)
+            .map(|(x, y)| at(&rgba, W, x, y, 1) as f64)
+            .sum();
+        assert!(behind < 1e-3 * e, "{behind} on the wrong side");
+    }
+}
+
+#[test]
+fn coma_pass_matches_its_cpu_twin() {
+    use realcam::passes::coma::{coma_cpu, table_data, ComaParams};
+    let (w, h) = (48u32, 32u32);
+    let color: Vec<f32> = (0..w * h * 4).map(|i| ((i * 37 % 101) as f32 / 50.0).powi(2)).collect();
+    let frame = Frame::new(w, h, color.clone(), vec![2.0; (w * h) as usize]);
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    let coma = HeightTable { image_height_mm: vec![0.0, 1.0, 2.0, 8.0], values: vec![0.0, 0.05, 0.2, 0.4] };
+    camera.coma = Some(coma.clone());
+    let gpu = gpu();
+    let (rgba, plan, _) = render(&gpu, &frame, &camera);
+    let pitch_mm = camera.pixel_pitch_mm(w, h);
+    let params = ComaParams::new([w, h], [w as f64 / 2.0, h as f64 / 2.0], pitch_mm, &coma);
+    assert_eq!(plan.coma.as_ref().map(|(p, _)| *p), Some(params));
+    let cpu = coma_cpu(&color, &params, &table_data(&coma));
+    let worst = rgba.iter().zip(&cpu).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(worst < 1e-4, "GPU vs CPU twin: {worst}");
+}

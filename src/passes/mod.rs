@@ -6,6 +6,7 @@ pub mod aperture;
 pub mod astigmatism;
 pub mod bokeh_gather;
 pub mod coc;
+pub mod coma;
 pub mod diffraction;
 pub mod distortion;
 pub mod dof_classify;
