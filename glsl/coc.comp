@@ -22,6 +22,9 @@ layout(push_constant) uniform Push {
     float inv_focal_length_per_mm;
     float aperture_px;         // v / (N' P) / pixel pitch
     int entries;               // field-curvature table entries; 0: none
+    // Longitudinal colour: this run's channel focuses elsewhere than green, which shifts its
+    // signed CoC by a constant (Camera::longitudinal_color_coc_px); 0 for green.
+    float coc_offset_px;
 } pc;
 
 #include "height_table.glsl"
@@ -43,6 +46,6 @@ void main() {
         float delta = height_table_lookup(1, pc.entries, h_mm);
         coc = pc.aperture_px * (pc.image_distance_mm * w / (1.0 + delta * w) - 1.0);
     }
-    coc = clamp(coc, -pc.max_coc_px, pc.max_coc_px);
+    coc = clamp(coc + pc.coc_offset_px, -pc.max_coc_px, pc.max_coc_px);
     imageStore(coc_px, p, vec4(coc, 0.0, 0.0, 0.0));
 }

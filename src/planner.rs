@@ -42,6 +42,9 @@ pub struct Plan {
     pub vignette: Option<VignetteParams>,
     /// Astigmatism: push constants and the table buffer's data.
     pub astigmatism: Option<(crate::passes::astigmatism::AstigmatismParams, Vec<f32>)>,
+    /// Longitudinal colour: the red and blue channels' CoC offsets (px); the depth of field
+    /// then runs once per channel.
+    pub longitudinal_color_px: Option<[f32; 2]>,
     /// Coma: push constants and the table buffer's data.
     pub coma: Option<(crate::passes::coma::ComaParams, Vec<f32>)>,
     /// The CoC pass's field-curvature buffer (crate::passes::coc::table_data).
@@ -99,6 +102,14 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         coc_range_px = crate::passes::coc::coc_cpu(&frame.depth_m, &coc_params, &coc_table)
             .iter()
             .fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c as f64), hi.max(c as f64)));
+    }
+    // Longitudinal colour shifts the red and blue CoC by constants: an in-focus point gets
+    // red and blue disks of those diameters. Visible when one exceeds a pixel.
+    let lca_offsets_px = camera.longitudinal_color_coc_px(pitch_mm);
+    let lca_visible = lca_offsets_px.is_some_and(|[r, b]| r.abs().max(b.abs()) > VISIBLE_COC_PX);
+    if let (Some([r, b]), true) = (lca_offsets_px, lca_visible) {
+        let clamp = |c: f64| c.clamp(-camera.max_coc_px, camera.max_coc_px);
+        coc_range_px = (clamp(coc_range_px.0 + r.min(b).min(0.0)), clamp(coc_range_px.1 + r.max(b).max(0.0)));
     }
     let max_abs_coc_px = coc_range_px.0.abs().max(coc_range_px.1.abs());
     let dof = max_abs_coc_px > VISIBLE_COC_PX;
@@ -188,6 +199,25 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         steps.push(Step { pass: crate::passes::coc::NAME, run: false, why });
         let bokeh = if camera.bokeh == BokehMode::Tiled { BOKEH_TILED } else { crate::passes::bokeh_gather::NAME };
         steps.push(Step { pass: bokeh, run: false, why: "no pixel is defocused by more than a pixel".into() });
+    }
+
+    let mut longitudinal_color_px = None;
+    let lca_step = |run: bool, why: String| Step { pass: crate::passes::longitudinal_color::NAME, run, why };
+    match (camera.longitudinal_color_mm, lca_offsets_px) {
+        (Some([red_mm, blue_mm]), Some([r, b])) => {
+            let shifts = format!(
+                "red focuses {red_mm:+.4} mm and blue {blue_mm:+.4} mm from green: CoC offsets {r:+.2} / {b:+.2} px"
+            );
+            if !lca_visible {
+                steps.push(lca_step(false, format!("{shifts}, at most {VISIBLE_COC_PX} px: invisible")));
+            } else if camera.bokeh == BokehMode::Diffraction {
+                steps.push(lca_step(false, format!("{shifts}; the focus processor does not model it")));
+            } else if dof {
+                steps.push(lca_step(true, format!("{shifts}: the depth of field runs once per channel (3x its cost)")));
+                longitudinal_color_px = Some([r as f32, b as f32]);
+            }
+        }
+        _ => steps.push(lca_step(false, "the lens file has no longitudinal_color".into())),
     }
 
     steps.push(match &frame.velocity_px {
@@ -380,6 +410,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         diffraction,
         distortion,
         astigmatism,
+        longitudinal_color_px,
         coma,
         coc_table,
         vignette,

@@ -18,6 +18,7 @@ pub struct Renderer {
     distortion: Option<crate::passes::distortion::DistortionPass>,
     astigmatism: Option<crate::passes::astigmatism::AstigmatismPass>,
     coma: Option<crate::passes::coma::ComaPass>,
+    longitudinal_color: Option<crate::passes::longitudinal_color::LongitudinalColorPass>,
     vignette: Option<VignettePass>,
     film: Option<FilmPass>,
 }
@@ -54,6 +55,10 @@ impl Renderer {
                 .map(|_| crate::passes::astigmatism::AstigmatismPass::new(gpu))
                 .transpose()?,
             coma: plan.coma.as_ref().map(|_| crate::passes::coma::ComaPass::new(gpu)).transpose()?,
+            longitudinal_color: plan
+                .longitudinal_color_px
+                .map(|_| crate::passes::longitudinal_color::LongitudinalColorPass::new(gpu))
+                .transpose()?,
             vignette: plan.vignette.as_ref().map(|_| VignettePass::new(gpu)).transpose()?,
             film: plan.film.as_ref().map(|_| FilmPass::new(gpu)).transpose()?,
         })
@@ -102,30 +107,69 @@ impl Renderer {
         let film_out = image("color (film)", rgba, self.film.is_some())?;
         let mut current = &color_in;
 
-        let mut _coc_table = None;
-        if let (Some(pass), Some(params), Some(depth), Some(coc)) = (&self.coc, &plan.coc, &depth, &coc_image) {
-            let table = rec.upload_buffer("field curvature", &plan.coc_table)?;
-            pass.record(&mut rec, depth, coc, &table, params)?;
-            _coc_table = Some(table);
-        }
         let aperture_mask = match (&self.gather, &self.tiled) {
             (None, None) => None,
             _ => Some(rec.upload_buffer("aperture image", &plan.aperture_mask)?),
         };
-        if let (Some(pass), Some(params), Some(coc), Some(out), Some(mask)) =
-            (&self.gather, &plan.gather, &coc_image, &dof_out, &aperture_mask)
+        let coc_table = match &self.coc {
+            Some(_) => Some(rec.upload_buffer("field curvature", &plan.coc_table)?),
+            None => None,
+        };
+        // Longitudinal colour: the CoC pass and the depth of field once per channel, each with
+        // its channel's CoC offset, into images of their own, then joined into dof_out (green's
+        // run uses coc_image, which --keep-coc reads back). Otherwise one run into dof_out.
+        let per_channel = match (&self.longitudinal_color, plan.longitudinal_color_px) {
+            (Some(_), Some([red_px, blue_px])) => {
+                let mut per_channel = Vec::new();
+                for (channel, offset_px) in [("red", red_px), ("green", 0.0), ("blue", blue_px)] {
+                    let coc = if channel == "green" {
+                        None
+                    } else {
+                        Some(gpu.create_image(&format!("coc (px, {channel})"), w, h, vk::Format::R32_SFLOAT)?)
+                    };
+                    let out = gpu.create_image(&format!("color (depth of field, {channel})"), w, h, rgba)?;
+                    per_channel.push((offset_px, coc, out));
+                }
+                per_channel
+            }
+            _ => Vec::new(),
+        };
+        let runs: Vec<(f32, Option<&crate::gpu::GpuImage>, Option<&crate::gpu::GpuImage>)> = if per_channel.is_empty() {
+            vec![(0.0, coc_image.as_ref(), dof_out.as_ref())]
+        } else {
+            per_channel
+                .iter()
+                .map(|(offset_px, coc, out)| (*offset_px, coc.as_ref().or(coc_image.as_ref()), Some(out)))
+                .collect()
+        };
+        let mut _tiled_frames = Vec::new();
+        for (offset_px, coc, out) in runs {
+            if let (Some(pass), Some(params), Some(depth), Some(coc), Some(table)) =
+                (&self.coc, &plan.coc, &depth, coc, &coc_table)
+            {
+                let params = crate::passes::coc::CocParams { coc_offset_px: offset_px, ..*params };
+                pass.record(&mut rec, depth, coc, table, &params)?;
+            }
+            if let (Some(pass), Some(params), Some(coc), Some(out), Some(mask)) =
+                (&self.gather, &plan.gather, coc, out, &aperture_mask)
+            {
+                pass.record(&mut rec, current, coc, out, mask, params)?;
+            }
+            if let (Some(tiled), Some(params), Some(coc), Some(out), Some(mask)) =
+                (&self.tiled, &plan.tiled, coc, out, &aperture_mask)
+            {
+                _tiled_frames.push(tiled.record(&mut rec, current, coc, out, mask, params)?);
+            }
+        }
+        if let (Some(pass), [(_, _, red), (_, _, green), (_, _, blue)], Some(out)) =
+            (&self.longitudinal_color, &per_channel[..], &dof_out)
         {
-            pass.record(&mut rec, current, coc, out, mask, params)?;
+            pass.record(&mut rec, [red, green, blue], out)?;
+        }
+        if let (true, Some(out)) = (self.gather.is_some() || self.tiled.is_some(), &dof_out) {
             current = out;
         }
-        let mut _tiled_frame = None;
         let mut _tables = None;
-        if let (Some(tiled), Some(params), Some(coc), Some(out), Some(mask)) =
-            (&self.tiled, &plan.tiled, &coc_image, &dof_out, &aperture_mask)
-        {
-            _tiled_frame = Some(tiled.record(&mut rec, current, coc, out, mask, params)?);
-            current = out;
-        }
         if let (Some(pass), Some((tables, params)), Some(depth), Some(out)) =
             (&self.diffraction, &plan.diffraction, &depth, &dof_out)
         {

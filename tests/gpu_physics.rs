@@ -600,3 +600,49 @@ fn aperture_image_shapes_the_bokeh_upright_behind_and_inverted_in_front() {
         }
     }
 }
+
+#[test]
+fn longitudinal_colour_gives_each_channel_its_own_disk() {
+    // Red focusing 0.4 mm behind green and blue 0.3 mm in front: each channel's image of a point
+    // is the disk of its own CoC, C_c = D' (v w / (1 + delta w) - 1) with w = 1/f - 1/u (eq 5.3
+    // with the channel's film offset, as for field curvature). Behind focus red is the smaller
+    // disk, in front of focus the larger; in focus both become disks while green stays a point.
+    let gpu = gpu();
+    let disk_px = |rgba: &[f32], w: u32, h: u32, c: usize| {
+        let excess = |x: u32, y: u32| (at(rgba, w, x, y, c) - PLANE) as f64;
+        let total: f64 = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| excess(x, y)).sum();
+        2.0 * (total / excess(w / 2, h / 2) / std::f64::consts::PI).sqrt()
+    };
+    let (red_mm, blue_mm) = (0.4, -0.3);
+    for (scene, depth_m) in [("point_bg", 6.0), ("point_fg", 1.2), ("point_focus", 2.0)] {
+        for mode in [BokehMode::Tiled, BokehMode::Reference] {
+            let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+            camera.bokeh = mode;
+            camera.longitudinal_color_mm = Some([red_mm, blue_mm]);
+            let frame = testdata_frame(scene, &camera);
+            let (rgba, plan, profile) = render(&gpu, &frame, &camera);
+            assert!(plan.runs("longitudinal_color") && profile.pass_ms("longitudinal_color").is_some());
+            let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
+            let l = &camera.lens;
+            let v = l.image_distance_mm();
+            let aperture_px = v / (l.effective_f_number() * l.pupil_magnification) / pitch_mm;
+            let w = 1.0 / l.focal_length_mm - 1.0 / (depth_m * 1000.0);
+            let coc = |delta: f64| (aperture_px * (v * w / (1.0 + delta * w) - 1.0)).abs();
+            for (c, delta, name) in [(0, red_mm, "red"), (1, 0.0, "green"), (2, blue_mm, "blue")] {
+                let expected = coc(delta);
+                if expected < 1.0 {
+                    // An in-focus point stays (nearly) a point: its centre keeps most energy.
+                    let centre = (at(&rgba, frame.width, frame.width / 2, frame.height / 2, c) - PLANE) as f64;
+                    assert!(centre > 0.5 * (HIGHLIGHT - PLANE) as f64, "{scene} {mode:?} {name}: centre {centre}");
+                    continue;
+                }
+                let measured = disk_px(&rgba, frame.width, frame.height, c);
+                println!("{scene} {mode:?} {name}: disk {measured:.2} px, expected {expected:.2} px");
+                assert!(
+                    (measured - expected).abs() <= 1.0,
+                    "{scene} {mode:?} {name}: disk {measured:.2} px, expected {expected:.2} px"
+                );
+            }
+        }
+    }
+}

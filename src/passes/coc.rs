@@ -26,6 +26,9 @@ pub struct CocParams {
     pub aperture_px: f32,
     /// Entries of the field-curvature table; 0: none.
     pub entries: i32,
+    /// Added to the signed CoC (longitudinal colour: a channel focusing behind or in front of
+    /// green); 0 for green.
+    pub coc_offset_px: f32,
 }
 
 /// The field-curvature buffer: heights, then offsets in mm; `[0]` for none.
@@ -63,6 +66,7 @@ impl CocParams {
             inv_focal_length_per_mm: (1.0 / lens.focal_length_mm) as f32,
             aperture_px: (v_mm / (lens.effective_f_number() * lens.pupil_magnification) / pixel_pitch_mm) as f32,
             entries: field_curvature.map_or(0, |t| t.image_height_mm.len() as i32),
+            coc_offset_px: 0.0,
         }
     }
 
@@ -79,7 +83,7 @@ impl CocParams {
         let delta = super::height_table_lookup(table, 1, n, h);
         let w = self.inv_focal_length_per_mm - inv_u;
         let coc = self.aperture_px * (self.image_distance_mm * w / (1.0 + delta * w) - 1.0);
-        coc.clamp(-self.max_coc_px, self.max_coc_px)
+        (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
     }
 
     /// CPU twin of the shader for one depth value, in the same f32 arithmetic.
@@ -87,7 +91,7 @@ impl CocParams {
         let u_mm = depth_m * self.mm_per_depth_unit;
         let inv_u = 1.0 / u_mm.max(1.0e-30);
         let coc = self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - inv_u);
-        coc.clamp(-self.max_coc_px, self.max_coc_px)
+        (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
     }
 }
 

@@ -17,6 +17,7 @@ pub mod dof_sprites;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
+pub mod longitudinal_color;
 pub mod tiled_dof;
 pub mod vignette;
 
