@@ -4,17 +4,21 @@
 // characteristic curve on log exposure (toe, straight part, shoulder; Kyaw 2013 sec 4.5) or,
 // for compositing, the scene-referred linear value. Optional sensor noise, before the curve:
 // shot-noise-like (standard deviation sigma * sqrt(value)), sigma growing with the square root of
-// the ISO speed, from a hash of the pixel, the channel and a seed: deterministic.
+// the ISO speed, from a hash of the pixel, the channel and a seed: deterministic. A film file may
+// give the curve as a table instead (log10 sensor value against log10 output, linear between
+// entries, constant beyond the ends; src/film_file.rs).
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
 layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
+// [log10 sensor values (n), log10 outputs (n)] when use_curve == 2.
+layout(binding = 2, std430) readonly buffer Table { float table[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
     float exposure_gain;
-    int use_curve;                  // 0: linear (scene-referred), 1: characteristic curve
+    int use_curve;                  // 0: linear (scene-referred), 1: characteristic curve, 2: table
     float log10_mid_in;
     float log10_mid_out;
     float contrast;
@@ -24,6 +28,7 @@ layout(push_constant) uniform Push {
     float log10_white_out;
     float noise_sigma;              // at sensor value 1; 0: no noise
     uint seed;
+    int table_entries;
 } pc;
 
 uint hash(uint x) {
@@ -60,6 +65,23 @@ float characteristic_curve(float sensor_value) {
     return pow(10.0, clamp(y, lb, lw));
 }
 
+float table_curve(float sensor_value) {
+    int n = pc.table_entries;
+    float x = log(clamp(sensor_value, 1.0e-30, 1.0e30)) / log(10.0);
+    float y = table[2 * n - 1];
+    if (x <= table[0]) {
+        y = table[n];
+    } else {
+        for (int i = 1; i < n; ++i) {
+            if (x <= table[i]) {
+                y = mix(table[n + i - 1], table[n + i], (x - table[i - 1]) / (table[i] - table[i - 1]));
+                break;
+            }
+        }
+    }
+    return pow(10.0, y);
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
@@ -68,8 +90,10 @@ void main() {
     if (pc.noise_sigma > 0.0) {
         for (int k = 0; k < 3; ++k) h[k] += pc.noise_sigma * sqrt(max(h[k], 0.0)) * gaussian(p, k);
     }
-    if (pc.use_curve != 0) {
+    if (pc.use_curve == 1) {
         h = vec3(characteristic_curve(h.r), characteristic_curve(h.g), characteristic_curve(h.b));
+    } else if (pc.use_curve == 2) {
+        h = vec3(table_curve(h.r), table_curve(h.g), table_curve(h.b));
     }
     imageStore(color_out, p, vec4(h, c.a));
 }

@@ -34,12 +34,24 @@ pub enum BokehMode {
 }
 
 /// How sensor values become output values.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum FilmMode {
     /// Scene-referred linear sensor values (for compositing).
     Linear,
     /// Through the film's characteristic curve (display-referred).
     Curve(FilmCurve),
+    /// Through a characteristic curve given as a table (a film file's [table]).
+    Table(std::sync::Arc<crate::film_file::FilmTable>),
+}
+
+impl FilmMode {
+    /// A film file's response.
+    pub fn from_file(film: &crate::film_file::FilmFile) -> FilmMode {
+        match &film.response {
+            crate::film_file::FilmResponse::Curve(c) => FilmMode::Curve(*c),
+            crate::film_file::FilmResponse::Table(t) => FilmMode::Table(std::sync::Arc::new(t.clone())),
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -180,7 +192,7 @@ impl Camera {
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
             vignetting: req.vignetting,
-            film: req.film.unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
+            film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc_px: req.max_coc_px,
             bokeh: req.bokeh,
             aperture_mask: None,
@@ -254,6 +266,7 @@ impl Camera {
                 match self.film {
                     FilmMode::Linear => "linear (scene-referred)".into(),
                     FilmMode::Curve(_) => "characteristic curve".into(),
+                    FilmMode::Table(_) => "characteristic curve (table)".into(),
                 },
             ),
         ]

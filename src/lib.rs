@@ -11,6 +11,7 @@ pub mod accuracy;
 pub mod aperture_mask;
 pub mod bench;
 pub mod camera;
+pub mod film_file;
 pub mod focus_processor;
 pub mod gpu;
 pub mod io;

@@ -186,6 +186,10 @@ struct RenderArgs {
     /// Film response.
     #[arg(long, value_enum, default_value = "filmic")]
     film: FilmArg,
+    /// A film file (TOML, see films/): its characteristic curve, parametric or tabled,
+    /// instead of --film.
+    #[arg(long = "film-file", value_name = "FILE")]
+    film_file: Option<PathBuf>,
     /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO)); 0: none.
     #[arg(long, default_value_t = 0.0)]
     grain: f64,
@@ -371,13 +375,16 @@ fn render(args: RenderArgs) -> Result<()> {
         cats_eye: args.cats_eye,
         exposure: !args.no_exposure,
         vignetting: !args.no_vignetting,
-        film: Some(match args.film {
-            FilmArg::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
-            FilmArg::Contrast => {
-                FilmMode::Curve(FilmCurve::preset("contrast").unwrap_or_else(FilmCurve::default_filmic))
-            }
-            FilmArg::Soft => FilmMode::Curve(FilmCurve::preset("soft").unwrap_or_else(FilmCurve::default_filmic)),
-            FilmArg::Linear => FilmMode::Linear,
+        film: Some(match (&args.film_file, args.film) {
+            (Some(path), _) => FilmMode::from_file(&realcam::film_file::FilmFile::load(path)?),
+            (None, film) => match film {
+                FilmArg::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
+                FilmArg::Contrast => {
+                    FilmMode::Curve(FilmCurve::preset("contrast").unwrap_or_else(FilmCurve::default_filmic))
+                }
+                FilmArg::Soft => FilmMode::Curve(FilmCurve::preset("soft").unwrap_or_else(FilmCurve::default_filmic)),
+                FilmArg::Linear => FilmMode::Linear,
+            },
         }),
         max_coc_px: args.max_coc_px,
         force: args.lens.force,

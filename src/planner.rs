@@ -52,6 +52,8 @@ pub struct Plan {
     /// The vignette pass's table buffer (crate::passes::vignette::table_data).
     pub vignette_table: Vec<f32>,
     pub film: Option<FilmParams>,
+    /// The film pass's table buffer (crate::passes::film::table_data).
+    pub film_table: Vec<f32>,
     /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
     pub aperture_mask: Vec<f32>,
     /// Signed CoC range over the frame in pixels (after the user clamp).
@@ -263,15 +265,22 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         }
     };
 
+    // The farthest a pixel centre lies from the optical centre, on the film.
+    let corner_mm = {
+        let (cx, cy) = (frame.centre_px[0], frame.centre_px[1]);
+        let dx = cx.max(w as f64 - cx);
+        let dy = cy.max(h as f64 - cy);
+        (dx * dx + dy * dy).sqrt() * pitch_mm
+    };
     let astigmatism = match &camera.astigmatism {
         Some((t, s)) if !(t.is_zero() && s.is_zero()) => {
             steps.push(Step {
                 pass: crate::passes::astigmatism::NAME,
                 run: true,
                 why: format!(
-                    "the lens's tables: tangential blur up to {:.1} px, sagittal up to {:.1} px",
-                    t.max_abs() / pitch_mm,
-                    s.max_abs() / pitch_mm
+                    "the lens's tables: tangential blur up to {:.1} px, sagittal up to {:.1} px in the frame",
+                    t.max_abs_within(corner_mm) / pitch_mm,
+                    s.max_abs_within(corner_mm) / pitch_mm
                 ),
             });
             let params = crate::passes::astigmatism::AstigmatismParams {
@@ -295,13 +304,13 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
 
     let coma = match &camera.coma {
         // A comet shorter than a tenth of a pixel is invisible.
-        Some(t) if t.max_abs() / pitch_mm >= 0.1 => {
+        Some(t) if t.max_abs_within(corner_mm) / pitch_mm >= 0.1 => {
             steps.push(Step {
                 pass: crate::passes::coma::NAME,
                 run: true,
                 why: format!(
-                    "the lens's coma table: comets up to {:.1} px long at f/{}",
-                    t.max_abs() / pitch_mm,
+                    "the lens's coma table: comets up to {:.1} px long in the frame at f/{}",
+                    t.max_abs_within(corner_mm) / pitch_mm,
                     camera.lens.f_number
                 ),
             });
@@ -312,7 +321,10 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
             steps.push(Step {
                 pass: crate::passes::coma::NAME,
                 run: false,
-                why: format!("the lens's comets are at most {:.3} px long here (< 0.1 px)", t.max_abs() / pitch_mm),
+                why: format!(
+                    "the lens's comets are at most {:.3} px long in the frame (< 0.1 px)",
+                    t.max_abs_within(corner_mm) / pitch_mm
+                ),
             });
             None
         }
@@ -364,9 +376,10 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
 
     let gain = camera.exposure_gain();
-    let curve = match camera.film {
-        FilmMode::Curve(c) => Some(c),
-        FilmMode::Linear => None,
+    let (curve, film_table) = match &camera.film {
+        FilmMode::Curve(c) => (Some(*c), None),
+        FilmMode::Table(t) => (Some(crate::optics::FilmCurve::default_filmic()), Some(t.clone())),
+        FilmMode::Linear => (None, None),
     };
     let noise_sigma = camera.noise_sigma();
     let film = if curve.is_none() && gain == 1.0 && noise_sigma == 0.0 {
@@ -388,7 +401,11 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         } else {
             "exposure off".into()
         };
-        let response = if curve.is_some() { "characteristic curve" } else { "linear (scene-referred)" };
+        let response = match (&curve, &film_table) {
+            (_, Some(t)) => format!("characteristic curve from a table of {} entries", t.log10_sensor_value.len()),
+            (Some(_), None) => "characteristic curve".into(),
+            (None, None) => "linear (scene-referred)".into(),
+        };
         let grain = if noise_sigma > 0.0 {
             format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
         } else {
@@ -396,6 +413,9 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         };
         steps.push(Step { pass: crate::passes::film::NAME, run: true, why: format!("{exposure}, {response}{grain}") });
         let mut params = FilmParams::new(w, h, gain, curve.as_ref());
+        if let Some(t) = &film_table {
+            params = params.with_table(t);
+        }
         params.noise_sigma = noise_sigma as f32;
         params.seed = camera.seed;
         Some(params)
@@ -416,6 +436,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         vignette,
         vignette_table,
         film,
+        film_table: crate::passes::film::table_data(film_table.as_ref().map(|t| t.as_ref())),
         aperture_mask,
         coc_range_px,
     }

@@ -208,8 +208,11 @@ impl Renderer {
             _vignette_table = Some(table);
             current = out;
         }
+        let mut _film_table = None;
         if let (Some(pass), Some(params), Some(out)) = (&self.film, &plan.film, &film_out) {
-            pass.record(&mut rec, current, out, params)?;
+            let table = rec.upload_buffer("film table", &plan.film_table)?;
+            pass.record(&mut rec, current, out, &table, params)?;
+            _film_table = Some(table);
             current = out;
         }
 

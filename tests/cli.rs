@@ -684,3 +684,75 @@ fn devices_lists_at_least_one_device() {
         assert!(line.starts_with(&prefix) && line.len() > prefix.len(), "{line:?}");
     }
 }
+
+/// The repository's lenses/ directory.
+fn lenses_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("lenses")
+}
+
+#[test]
+fn shipped_prescription_lens_matches_a_fresh_trace() {
+    // lenses/tessar-walch-lens.toml was written by `lens analyze --write-tables`; tracing the
+    // prescription again gives the same tables, so the shipped file cannot drift from the tracer.
+    let dir = TestDir::new("tessar_tables");
+    let out = dir.arg("tessar.toml");
+    let prescription = lenses_dir().join("tessar-walch.toml");
+    let run = realcam(
+        &dir,
+        s(&[
+            "lens",
+            "analyze",
+            prescription.to_str().unwrap(),
+            "--field",
+            "0,2,4,6,8,10,12,14,16,18,20",
+            "--write-tables",
+            &out,
+        ]),
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert_contains(&run.stdout, "EFL 101.8278 mm");
+    let tables = |text: &str| text[text.find("[longitudinal_color]").expect("derived tables")..].to_string();
+    let fresh = std::fs::read_to_string(&out).unwrap();
+    let shipped = std::fs::read_to_string(lenses_dir().join("tessar-walch-lens.toml")).unwrap();
+    assert_eq!(tables(&fresh), tables(&shipped));
+    // The derived lens file renders, and its plan runs the passes its tables call for.
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--lens", &out, "--fstop", "2.8", "--focus", "3", "--explain"]));
+    let run = render(&dir, &args);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    for pass in ["[run ] distortion", "[run ] astigmatism", "[run ] coma"] {
+        assert_contains(&run.stderr, pass);
+    }
+}
+
+#[test]
+fn analysing_a_lens_file_without_surfaces_is_an_error() {
+    let dir = TestDir::new("analyze_no_surfaces");
+    let run = realcam(&dir, s(&["lens", "analyze", lenses_dir().join("default.toml").to_str().unwrap()]));
+    let err = run.failure();
+    assert_contains(&err, "has no [[surface]] tables to analyze");
+}
+
+#[test]
+fn film_file_errors_name_the_line_and_tables_render() {
+    let dir = TestDir::new("film_file");
+    let mut args = small_scene(&dir);
+    let film = dir.arg("film.toml");
+    std::fs::write(
+        &film,
+        "name = \"f\"\nsource = \"s\"\n[table]\nlog10_sensor_value = [0, -1]\nlog10_output = [0, 1]\n",
+    )
+    .unwrap();
+    let mut bad = args.clone();
+    bad.extend(s(&["--film-file", &film]));
+    let err = render(&dir, &bad).failure();
+    assert_contains(
+        &err,
+        &format!("error: film file {film}, line 4: table.log10_sensor_value is not increasing at entry 2: 0 then -1"),
+    );
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("films/reversal-example.toml");
+    args.extend(s(&["--film-file", example.to_str().unwrap(), "--explain"]));
+    let run = render(&dir, &args);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert_contains(&run.stderr, "characteristic curve from a table of 14 entries");
+}

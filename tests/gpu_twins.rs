@@ -83,7 +83,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap(), &plan.aperture_mask);
         let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap(), &plan.vignette_table);
-        let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap());
+        let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap(), &plan.film_table);
         assert_close(&out.rgba, &cpu, &format!("pipeline with {blades} blades"), 1e-4);
     }
 }
@@ -128,7 +128,7 @@ fn sensor_noise_is_deterministic_and_grows_with_the_square_root_of_iso() {
         let plan = planner::plan(&frame, &camera);
         assert!(plan.runs("film"));
         let (rgba, _) = render_plan(&gpu, &frame, &plan);
-        let cpu = film::film_cpu(&frame.color, plan.film.as_ref().unwrap());
+        let cpu = film::film_cpu(&frame.color, plan.film.as_ref().unwrap(), &plan.film_table);
         assert_close(&rgba, &cpu, "noise GPU vs CPU", 1e-4);
         let greens: Vec<f64> = rgba.chunks_exact(4).map(|p| p[1] as f64).collect();
         let mean = greens.iter().sum::<f64>() / greens.len() as f64;
@@ -141,4 +141,45 @@ fn sensor_noise_is_deterministic_and_grows_with_the_square_root_of_iso() {
     assert_eq!(stds[1].1, stds[2].1, "the same seed gives the same noise");
     assert_ne!(stds[2].1, stds[3].1, "another seed gives other noise");
     assert!((stds[1].0 / stds[0].0 - 4.0).abs() < 0.2, "ISO 1600 / ISO 100 noise: {}", stds[1].0 / stds[0].0);
+}
+
+#[test]
+fn film_table_matches_its_cpu_twin_and_the_curve_it_samples() {
+    // A film file's table sampled from the neutral curve every 0.1 decade: the GPU follows its
+    // CPU twin, and the tabled curve stays within the linear-interpolation error of the
+    // parametric one (second derivative * step^2 / 8).
+    use realcam::film_file::{FilmFile, FilmResponse};
+    let curve = FilmCurve::default_filmic();
+    let xs: Vec<f64> = (0..=100).map(|i| -8.0 + 0.1 * i as f64).collect();
+    let ys: Vec<f64> = xs.iter().map(|&x| curve.apply_log10(x)).collect();
+    let row = |v: &[f64]| v.iter().map(|x| format!("{x:.9}")).collect::<Vec<_>>().join(", ");
+    let text = format!(
+        "name = \"sampled\"\nsource = \"test\"\n[table]\nlog10_sensor_value = [{}]\nlog10_output = [{}]\n",
+        row(&xs),
+        row(&ys)
+    );
+    let film = FilmFile::parse(&text, std::path::Path::new("sampled.toml")).unwrap();
+    assert!(matches!(film.response, FilmResponse::Table(_)));
+    let gpu = gpu();
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    camera.film = FilmMode::from_file(&film);
+    let (w, h) = (64u32, 2u32);
+    let values: Vec<f32> = (0..w * h).map(|i| 10f32.powf(-7.0 + 9.0 * i as f32 / (w * h) as f32)).collect();
+    let color: Vec<f32> = values.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
+    let frame = Frame::new(w, h, color.clone(), vec![2.0; (w * h) as usize]);
+    let plan = planner::plan(&frame, &camera);
+    assert!(plan.runs("film"));
+    let (rgba, _) = render_plan(&gpu, &frame, &plan);
+    let cpu = film::film_cpu(&color, plan.film.as_ref().unwrap(), &plan.film_table);
+    assert_close(&rgba, &cpu, "film table GPU vs CPU", 1e-4);
+    // Linear interpolation error bound: max |y''| h^2 / 8 = max |second difference| / 8.
+    let bound = (1..ys.len() - 1).map(|i| (ys[i + 1] - 2.0 * ys[i] + ys[i - 1]).abs()).fold(0.0, f64::max) / 8.0;
+    assert!(bound < 0.01, "bound {bound}");
+    for (i, &v) in values.iter().enumerate() {
+        let decades = (rgba[i * 4] as f64).log10() - curve.apply_log10((v as f64).log10());
+        assert!(
+            decades.abs() < 1.5 * bound + 1e-5,
+            "H = {v}: table off the curve by {decades} decades (bound {bound})"
+        );
+    }
 }

@@ -37,6 +37,16 @@ impl HeightTable {
     pub fn max_abs(&self) -> f64 {
         self.values.iter().fold(0.0, |m, v| m.max(v.abs()))
     }
+
+    /// Largest |value| at heights up to `max_height_mm` (the frame's farthest corner): the
+    /// table's entries below it and the interpolated value at it.
+    pub fn max_abs_within(&self, max_height_mm: f64) -> f64 {
+        self.image_height_mm
+            .iter()
+            .zip(&self.values)
+            .filter(|(h, _)| **h <= max_height_mm)
+            .fold(self.at(max_height_mm).abs(), |m, (_, v)| m.max(v.abs()))
+    }
 }
 
 /// Distortion of the green (reference) image and the extra distortion of red and blue, percent.

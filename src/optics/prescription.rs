@@ -878,11 +878,14 @@ impl LensAnalysis {
             t.sagittal_blur_mm.push(least_confusion_mm);
             t.coma_mm.push(f.tangential_coma_mm.ok_or_else(missing)?);
         }
-        // On axis the real heights are 0 and the ratios 0/0: take the first off-axis value's
-        // limit as 0 (distortion and lateral colour vanish on axis to first order).
+        // On axis the heights are 0 and the ratios 0/0: take their limits.
+        // Distortion in percent goes as h^2 (0 on axis); lateral colour in percent tends to a
+        // constant (the colour's height difference goes as h): continue the first off-axis value.
         t.distortion_percent[0] = 0.0;
-        t.lateral_color_red_percent[0] = 0.0;
-        t.lateral_color_blue_percent[0] = 0.0;
+        if t.image_height_mm.len() > 1 {
+            t.lateral_color_red_percent[0] = t.lateral_color_red_percent[1];
+            t.lateral_color_blue_percent[0] = t.lateral_color_blue_percent[1];
+        }
         t.coma_mm[0] = 0.0;
         if let Some(i) = (1..t.image_height_mm.len()).find(|&i| t.image_height_mm[i] <= t.image_height_mm[i - 1]) {
             return Err(format!("the image heights do not increase at field {} degrees", self.fields[i].angle_deg));

@@ -27,6 +27,16 @@ pub struct FilmParams {
     /// Sensor noise: standard deviation at sensor value 1 (scaled by sqrt(value)); 0: none.
     pub noise_sigma: f32,
     pub seed: u32,
+    /// Entries of the characteristic-curve table (use_curve 2); 0: none.
+    pub table_entries: i32,
+}
+
+/// The table buffer: log10 sensor values, then log10 outputs ([0] when there is no table).
+pub fn table_data(table: Option<&crate::film_file::FilmTable>) -> Vec<f32> {
+    match table {
+        None => vec![0.0],
+        Some(t) => t.log10_sensor_value.iter().chain(&t.log10_output).map(|&v| v as f32).collect(),
+    }
 }
 
 /// The shader's integer hash (glsl/film.comp).
@@ -64,28 +74,50 @@ impl FilmParams {
             log10_white_out: c.white_out.log10() as f32,
             noise_sigma: 0.0,
             seed: 0,
+            table_entries: 0,
         }
     }
 
+    /// The same, through a tabled characteristic curve.
+    pub fn with_table(self, table: &crate::film_file::FilmTable) -> FilmParams {
+        FilmParams { use_curve: 2, table_entries: table.log10_sensor_value.len() as i32, ..self }
+    }
+
     /// CPU twin of the shader for channel `c` of pixel (x, y), in f32 like the shader.
-    pub fn apply_at(&self, value: f32, x: u32, y: u32, c: u32) -> f32 {
+    pub fn apply_at(&self, value: f32, x: u32, y: u32, c: u32, table: &[f32]) -> f32 {
         let v = if value.is_finite() { value } else { 0.0 };
         let mut h = v * self.exposure_gain;
         if self.noise_sigma > 0.0 {
             h += self.noise_sigma * h.max(0.0).sqrt() * gaussian(x, y, c, self.seed);
         }
-        self.response(h)
+        self.response(h, table)
     }
 
     /// CPU twin without noise.
-    pub fn apply(&self, value: f32) -> f32 {
+    pub fn apply(&self, value: f32, table: &[f32]) -> f32 {
         let v = if value.is_finite() { value } else { 0.0 };
-        self.response(v * self.exposure_gain)
+        self.response(v * self.exposure_gain, table)
     }
 
-    fn response(&self, h: f32) -> f32 {
+    fn response(&self, h: f32, table: &[f32]) -> f32 {
         if self.use_curve == 0 {
             return h;
+        }
+        if self.use_curve == 2 {
+            let n = self.table_entries as usize;
+            let x = h.clamp(1.0e-30, 1.0e30).log10();
+            let y = if x <= table[0] {
+                table[n]
+            } else {
+                (1..n)
+                    .find(|&i| x <= table[i])
+                    .map(|i| {
+                        let t = (x - table[i - 1]) / (table[i] - table[i - 1]);
+                        table[n + i - 1] + (table[n + i] - table[n + i - 1]) * t
+                    })
+                    .unwrap_or(table[2 * n - 1])
+            };
+            return 10f32.powf(y);
         }
         let smooth_max = |a: f32, b: f32, k: f32| {
             a.max(b) + k * (1.0 + (-(a - b).abs() / k * std::f32::consts::LN_10).exp()).ln() / std::f32::consts::LN_10
@@ -102,14 +134,19 @@ impl FilmParams {
 }
 
 /// CPU twin on an RGBA image.
-pub fn film_cpu(rgba: &[f32], params: &FilmParams) -> Vec<f32> {
+pub fn film_cpu(rgba: &[f32], params: &FilmParams, table: &[f32]) -> Vec<f32> {
     let w = params.size[0].max(1) as u32;
     rgba.chunks_exact(4)
         .enumerate()
         .flat_map(|(i, px)| {
             let (x, y) = (i as u32 % w, i as u32 / w);
             let a = if px[3].is_finite() { px[3] } else { 0.0 };
-            [params.apply_at(px[0], x, y, 0), params.apply_at(px[1], x, y, 1), params.apply_at(px[2], x, y, 2), a]
+            [
+                params.apply_at(px[0], x, y, 0, table),
+                params.apply_at(px[1], x, y, 1, table),
+                params.apply_at(px[2], x, y, 2, table),
+                a,
+            ]
         })
         .collect()
 }
@@ -120,7 +157,8 @@ pub struct FilmPass {
 
 impl FilmPass {
     pub fn new(gpu: &Gpu) -> GpuResult<FilmPass> {
-        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 2];
+        let bindings =
+            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
         let size = std::mem::size_of::<FilmParams>() as u32;
         Ok(FilmPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
     }
@@ -130,6 +168,7 @@ impl FilmPass {
         rec: &mut Recorder,
         input: &GpuImage,
         output: &GpuImage,
+        table: &crate::gpu::GpuBuffer,
         params: &FilmParams,
     ) -> GpuResult<()> {
         rec.begin_pass(NAME);
@@ -138,7 +177,7 @@ impl FilmPass {
         rec.image_barriers(&[after_compute_write(input), overwrite(output)]);
         rec.dispatch(
             &self.pipeline,
-            &[Bind::Image(input), Bind::Image(output)],
+            &[Bind::Image(input), Bind::Image(output), Bind::Buffer(table)],
             push_bytes(params),
             groups_for(input.width, input.height),
         )?;
