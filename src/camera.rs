@@ -184,6 +184,12 @@ impl Camera {
                 curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
+                // Traced LSA goes as the pupil height squared (third order); an amount the user
+                // asks for replaces it.
+                lsa_rim_mm: match (req.spherical_aberration, lens_file.longitudinal_spherical_aberration) {
+                    (None, Some(l)) => Some(l.rim_mm * (l.at_f_number / f_number).powi(2)),
+                    _ => None,
+                },
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),

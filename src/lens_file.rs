@@ -84,6 +84,10 @@ pub struct LensFile {
     /// Quantities against image height (Kyaw 2013 sec 7.2: tables of off-axis distance).
     #[serde(default)]
     pub tables: Option<LensTables>,
+    /// Traced longitudinal spherical aberration, used in the bokeh instead of
+    /// `spherical_aberration` (src/optics/spherical.rs strength_traced).
+    #[serde(default)]
+    pub longitudinal_spherical_aberration: Option<LsaSpec>,
     /// Longitudinal (axial) colour: where the red and the blue image of an object focus
     /// relative to the green one, along the axis.
     #[serde(default)]
@@ -102,6 +106,15 @@ pub struct LongitudinalColorSpec {
     pub red_mm: f64,
     /// Blue (F line, 486 nm) focus minus green focus.
     pub blue_mm: f64,
+}
+
+/// Longitudinal spherical aberration: the rim zone's focus minus the paraxial focus (mm; < 0
+/// under-corrected), at `at_f_number`; it scales with the square of the pupil height.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LsaSpec {
+    pub rim_mm: f64,
+    pub at_f_number: f64,
 }
 
 /// Relative illumination measured at one f-number (vignetting changes as the lens stops down).
@@ -404,6 +417,20 @@ impl LensFile {
                 }
             }
         }
+        if let Some(l) = &self.longitudinal_spherical_aberration {
+            if !(l.rim_mm.is_finite() && l.rim_mm.abs() < 0.1 * self.focal_length_mm) {
+                return bad(format!(
+                    "longitudinal_spherical_aberration.rim_mm = {} must be finite and below a tenth of the focal length",
+                    l.rim_mm
+                ));
+            }
+            if !(l.at_f_number.is_finite() && l.at_f_number > 0.0) {
+                return bad(format!(
+                    "longitudinal_spherical_aberration.at_f_number = {} must be a positive f-number",
+                    l.at_f_number
+                ));
+            }
+        }
         if let Some(lc) = &self.longitudinal_color {
             for (key, v) in [("red_mm", lc.red_mm), ("blue_mm", lc.blue_mm)] {
                 if !(v.is_finite() && v.abs() < 0.1 * self.focal_length_mm) {
@@ -473,6 +500,7 @@ pub fn with_derived_tables(
     };
     doc.remove("tables");
     doc.remove("longitudinal_color");
+    doc.remove("longitudinal_spherical_aberration");
     // Appended as text, after everything else: tables keep the order written here.
     Ok(format!("{}\n{}", doc.to_string().trim_end(), derived.to_toml(source)))
 }

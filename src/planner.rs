@@ -131,13 +131,19 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     } else {
         "circular aperture".into()
     };
+    // Traced spherical aberration: the rim's focus shift seen as a CoC (src/optics/spherical.rs).
+    let lsa_coc_px = camera.aperture.lsa_rim_mm.map_or(0.0, |lsa_mm| {
+        -lsa_mm / (camera.lens.effective_f_number() * camera.lens.pupil_magnification * pitch_mm)
+    });
     let (mut coc, mut gather, mut tiled, mut diffraction) = (None, None, None, None);
     if dof {
         steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
         coc = Some(coc_params);
         match camera.bokeh {
             BokehMode::Reference => {
-                let g = GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
+                let mut g =
+                    GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
+                g.aperture.sa_lsa_coc_px = lsa_coc_px as f32;
                 steps.push(Step {
                     pass: crate::passes::bokeh_gather::NAME,
                     run: true,
@@ -180,7 +186,9 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                 diffraction = Some((std::sync::Arc::new(tables), params));
             }
             BokehMode::Tiled => {
-                let t = TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
+                let mut t =
+                    TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
+                t.aperture.sa_lsa_coc_px = lsa_coc_px as f32;
                 steps.push(Step {
                     pass: BOKEH_TILED,
                     run: true,

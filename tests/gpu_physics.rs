@@ -361,6 +361,56 @@ fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
     }
 }
 
+#[test]
+fn traced_spherical_aberration_follows_the_ray_model() {
+    // A traced lens gives the rim zone's focus shift LSA; the ray model's strength is then
+    // s = -LSA / Delta with Delta the film's defocus (src/optics/spherical.rs), computed as
+    // s = lsa_coc / coc with lsa_coc = -LSA / (N' P pitch). Opening from f/2 to f/1 doubles the
+    // pupil height: LSA (third order, ~ h^2) grows 4x while the film defocus of the same point
+    // stays, so s grows 4x; the disks' ring-to-core ratios follow the model at both.
+    use realcam::optics::spherical;
+    let gpu = gpu();
+    let lsa_at_f2_mm = -0.02; // under-corrected
+    let mut ratios = Vec::new();
+    for f_number in [2.0, 1.0] {
+        let mut camera = dof_camera(50.0, f_number, 2.0, 0);
+        camera.aperture.lsa_rim_mm = Some(lsa_at_f2_mm * (2.0 / f_number) * (2.0 / f_number));
+        let frame = testdata_frame("point_bg", &camera);
+        let (rgba, plan, _) = render(&gpu, &frame, &camera);
+        let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
+        let l = &camera.lens;
+        let lsa_coc_px =
+            -camera.aperture.lsa_rim_mm.unwrap() / (l.effective_f_number() * l.pupil_magnification * pitch_mm);
+        let tiled = plan.tiled.as_ref().expect("tiled path");
+        assert!((tiled.aperture.sa_lsa_coc_px as f64 / lsa_coc_px - 1.0).abs() < 1e-6);
+        let coc_px = camera.lens.coc_mm(6000.0) / pitch_mm;
+        let s = spherical::strength_traced(lsa_coc_px, coc_px);
+        let radius = coc_px / 2.0;
+        let core = annulus_mean(&rgba, frame.width, frame.height, radius, 0.0, 0.35);
+        let ring = annulus_mean(&rgba, frame.width, frame.height, radius, 0.6, 0.85);
+        let mean = |a: f64, b: f64| {
+            let n = 400;
+            let (mut num, mut den) = (0.0, 0.0);
+            for i in 0..n {
+                let r = a + (b - a) * (i as f64 + 0.5) / n as f64;
+                num += spherical::intensity(s, r) * r;
+                den += r;
+            }
+            num / den
+        };
+        let expected = mean(0.6, 0.85) / mean(0.0, 0.35);
+        println!("f/{f_number}: s = {s:.3}, ring/core {:.3}, model {expected:.3}", ring / core);
+        assert!(s > 0.0 && s < spherical::MAX_STRENGTH, "s = {s} should be inside the model's range");
+        assert!(
+            (ring / core / expected - 1.0).abs() < 0.05,
+            "f/{f_number}: ring/core {:.3} vs {expected:.3}",
+            ring / core
+        );
+        ratios.push(s);
+    }
+    assert!((ratios[1] / ratios[0] - 4.0).abs() < 0.01, "strength f/1 over f/2: {}", ratios[1] / ratios[0]);
+}
+
 /// Edge radius of the disk along direction `theta` (radians, y up) from the centre: where the
 /// excess over the plane, bilinearly interpolated, first falls below half the inner mean.
 fn edge_radius(rgba: &[f32], w: u32, h: u32, theta: f64, half_level: f64) -> f64 {

@@ -14,6 +14,7 @@ struct Aperture {
     float centre_x_px;     // optical centre, in the shader's pixel units
     float centre_y_px;
     float cats_eye_per_px; // cat's-eye amount / distance from the centre to the farthest corner
+    float sa_lsa_coc_px;   // traced spherical aberration: the rim's focus shift as a CoC; 0: sa_amount
 };
 
 // The user's aperture image (src/aperture_mask.rs): [size, mean, size*size values], size 0 when
@@ -39,6 +40,10 @@ float mask_value(vec2 uv) {
 // appendix 11.2-11.3): s grows with the CoC, flips sign in front of the focus plane.
 #define SA_MAX_STRENGTH 0.3
 float sa_strength(float coc_px, Aperture ap) {
+    // Traced (src/optics/spherical.rs strength_traced): s = -LSA / defocus, both as CoC.
+    if (ap.sa_lsa_coc_px != 0.0) {
+        return coc_px == 0.0 ? 0.0 : clamp(ap.sa_lsa_coc_px / coc_px, -SA_MAX_STRENGTH, SA_MAX_STRENGTH);
+    }
     float sa = clamp(ap.sa_amount * abs(coc_px) / max(ap.sa_max_coc_px, 1e-9), -1.0, 1.0);
     return (coc_px < 0.0 ? -sa : sa) * SA_MAX_STRENGTH;
 }

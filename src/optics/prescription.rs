@@ -826,6 +826,10 @@ pub struct DerivedTables {
     pub coma_mm: Vec<f64>,
     /// Red (C) and blue (F) paraxial focus minus green (d), mm.
     pub longitudinal_color_mm: [f64; 2],
+    /// Longitudinal spherical aberration at the rim of the pupil from the least-squares fit
+    /// LSA = k h^2 over the traced, unclipped zones (the third-order part the bokeh model
+    /// represents), mm.
+    pub lsa_rim_mm: f64,
 }
 
 impl LensAnalysis {
@@ -859,6 +863,23 @@ impl LensAnalysis {
                 self.longitudinal_color.focus_c_minus_d_mm,
                 self.longitudinal_color.focus_f_minus_d_mm,
             ],
+            lsa_rim_mm: {
+                let (mut num, mut den) = (0.0, 0.0);
+                // Zones whose ray some semi-diameter clips are not in the beam.
+                for z in self.spherical.iter().filter(|z| z.clipped.is_none()) {
+                    if let Some(l) = z.lsa_mm {
+                        let h2 = z.height_mm * z.height_mm;
+                        num += l * h2;
+                        den += h2 * h2;
+                    }
+                }
+                let rim_mm = self.spherical.iter().map(|z| z.height_mm).fold(0.0, f64::max);
+                if den > 0.0 {
+                    num / den * rim_mm * rim_mm
+                } else {
+                    return Err("no spherical-aberration zone could be traced".into());
+                }
+            },
         };
         for f in &self.fields {
             let missing = || format!("the rays at {} degrees could not be traced", f.angle_deg);
@@ -909,6 +930,8 @@ impl DerivedTables {
             "red_mm = {:.6}\nblue_mm = {:.6}\n\n",
             self.longitudinal_color_mm[0], self.longitudinal_color_mm[1]
         ));
+        s.push_str("[longitudinal_spherical_aberration]  # fit LSA = k h^2 over the traced zones, at the rim\n");
+        s.push_str(&format!("rim_mm = {:.6}\nat_f_number = {:.4}\n\n", self.lsa_rim_mm, self.f_number));
         s.push_str("[tables]\n");
         s.push_str(&format!("at_f_number = {:.4}\n", self.f_number));
         for (key, v, prec) in [
@@ -1237,6 +1260,12 @@ mod tests {
         // circle of least confusion at the medial surface: |T - S| / (2N)
         assert!((t.tangential_blur_mm[2] - f.astigmatism_mm.unwrap().abs() / 5.6).abs() < 1e-12);
         assert_eq!(t.longitudinal_color_mm[0], a.longitudinal_color.focus_c_minus_d_mm);
+        // LSA = k h^2 fitted over the unclipped zones, at the rim: on a pure h^2 lens it is exact.
+        let zones: Vec<_> = a.spherical.iter().filter(|z| z.clipped.is_none()).collect();
+        let k = zones.iter().map(|z| z.lsa_mm.unwrap() * z.height_mm.powi(2)).sum::<f64>()
+            / zones.iter().map(|z| z.height_mm.powi(4)).sum::<f64>();
+        let rim = a.spherical.last().unwrap().height_mm;
+        assert!((t.lsa_rim_mm - k * rim * rim).abs() < 1e-12);
         // red minus blue lateral colour in percent = (C - F) heights over the ideal height
         let lat = t.lateral_color_red_percent[2] - t.lateral_color_blue_percent[2];
         assert!((lat + 100.0 * f.lateral_color_f_minus_c_mm.unwrap() / f.ideal_height_mm).abs() < 1e-9);

@@ -26,6 +26,20 @@ pub fn strength(amount: f64, coc_px: f64, max_coc_px: f64) -> f64 {
     signed * MAX_STRENGTH
 }
 
+/// s from a traced lens: the zone rho focuses LSA rho^2 from the paraxial focus, so at a film
+/// defocus Delta its ray lands at rho (Delta - LSA rho^2) (in units of the rim's defocus blur),
+/// i.e. s = -LSA / Delta. In CoC terms (both seen as blur diameters on the film, px) that is
+/// s = lsa_coc_px / coc_px with lsa_coc_px = -LSA / (N' P pitch): the aberration matters less as
+/// the defocus grows, has the CoC's sign (so it flips in front of the focus plane by itself), and
+/// is clamped to the model's range near focus, where the aberration would exceed the defocus
+/// (the rim rays cross: a caustic the model does not represent).
+pub fn strength_traced(lsa_coc_px: f64, coc_px: f64) -> f64 {
+    if coc_px == 0.0 {
+        return 0.0;
+    }
+    (lsa_coc_px / coc_px).clamp(-MAX_STRENGTH, MAX_STRENGTH)
+}
+
 /// Film radius (0..1) of the ray through pupil zone `rho` (0..1).
 pub fn landing_radius(s: f64, rho: f64) -> f64 {
     rho * (1.0 + s * rho * rho) / (1.0 + s)

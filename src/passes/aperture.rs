@@ -14,11 +14,21 @@ pub struct ApertureShape {
     /// Cat's eye (optical vignetting) at the frame's farthest corner, 0..1: the aperture is
     /// clipped by a circle shifted by this fraction of its radius there (less nearer the centre).
     pub cats_eye: f64,
+    /// Traced spherical aberration instead of `spherical_aberration`: the rim zone's focus
+    /// shift (marginal minus paraxial focus, mm, < 0 under-corrected) at this f-number; None
+    /// for the amount model.
+    pub lsa_rim_mm: Option<f64>,
 }
 
 impl ApertureShape {
-    pub const CIRCLE: ApertureShape =
-        ApertureShape { blades: 0, rotation_deg: 0.0, curvature: 1.0, spherical_aberration: 0.0, cats_eye: 0.0 };
+    pub const CIRCLE: ApertureShape = ApertureShape {
+        blades: 0,
+        rotation_deg: 0.0,
+        curvature: 1.0,
+        spherical_aberration: 0.0,
+        cats_eye: 0.0,
+        lsa_rim_mm: None,
+    };
 
     /// cats_eye / (distance from the optical centre to the farthest corner), per pixel.
     pub fn cats_eye_per_px(&self, width: u32, height: u32, centre_px: [f64; 2]) -> f64 {
@@ -49,9 +59,14 @@ pub struct ApertureConstants {
     pub centre_x_px: f32,
     pub centre_y_px: f32,
     pub cats_eye_per_px: f32,
+    /// Traced spherical aberration: the rim's focus shift seen as a signed CoC (px),
+    /// -LSA / (N' P pitch); 0: the amount model (sa_amount) instead.
+    pub sa_lsa_coc_px: f32,
 }
 
 impl ApertureConstants {
+    /// The traced spherical aberration (`sa_lsa_coc_px`) starts at 0; the planner sets it, as it
+    /// depends on the pixel pitch.
     pub fn new(shape: &ApertureShape, sa_max_coc_px: f64, centre_px: [f64; 2], width: u32, height: u32) -> Self {
         ApertureConstants {
             blades: shape.blades as i32,
@@ -62,6 +77,16 @@ impl ApertureConstants {
             centre_x_px: centre_px[0] as f32,
             centre_y_px: centre_px[1] as f32,
             cats_eye_per_px: shape.cats_eye_per_px(width, height, centre_px) as f32,
+            sa_lsa_coc_px: 0.0,
+        }
+    }
+
+    /// Spherical-aberration strength s of src/optics/spherical.rs for a sample of signed CoC.
+    pub fn sa_strength(&self, coc_px: f32) -> f64 {
+        if self.sa_lsa_coc_px != 0.0 {
+            crate::optics::spherical::strength_traced(self.sa_lsa_coc_px as f64, coc_px as f64)
+        } else {
+            crate::optics::spherical::strength(self.sa_amount as f64, coc_px as f64, self.sa_max_coc_px as f64)
         }
     }
 
@@ -69,6 +94,7 @@ impl ApertureConstants {
     pub fn half_resolution(&self) -> Self {
         ApertureConstants {
             sa_max_coc_px: 0.5 * self.sa_max_coc_px,
+            sa_lsa_coc_px: 0.5 * self.sa_lsa_coc_px,
             centre_x_px: 0.5 * self.centre_x_px,
             centre_y_px: 0.5 * self.centre_y_px,
             cats_eye_per_px: 2.0 * self.cats_eye_per_px,

@@ -66,11 +66,7 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams, aperture_mask:
                     let o = [-dx as f32 * flip, -dy as f32 * flip];
                     let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
                     let cov_over_area = aperture_weight(o, reach, &p.aperture, sample_px, flip, aperture_mask);
-                    let s = crate::optics::spherical::strength(
-                        p.aperture.sa_amount as f64,
-                        coc_q as f64,
-                        p.aperture.sa_max_coc_px as f64,
-                    );
+                    let s = p.aperture.sa_strength(coc_q);
                     let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
                     let sa = crate::optics::spherical::intensity(s, r_norm as f64) as f32;
                     let wgt = cov_over_area * sa;
