@@ -225,19 +225,7 @@ fn astigmatism_smears_points_along_the_tabled_direction_only() {
         camera.astigmatism = Some((tangential, sagittal));
         let (rgba, plan, profile) = render(&gpu, &frame, &camera);
         assert!(plan.runs("astigmatism") && profile.pass_ms("astigmatism_sagittal").is_some());
-        let (mut e, mut mx, mut my, mut vx, mut vy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for y in 40..104 {
-            for x in 170..230 {
-                let v = at(&rgba, W, x, y, 1) as f64;
-                let (dx, dy) = (x as f64 - px as f64, y as f64 - py as f64);
-                e += v;
-                mx += v * dx;
-                my += v * dy;
-                vx += v * dx * dx;
-                vy += v * dy * dy;
-            }
-        }
-        let (var_radial, var_tangential) = (vx / e - (mx / e).powi(2), vy / e - (my / e).powi(2));
+        let (e, _, _, var_radial, var_tangential) = moments(&rgba, px, py, 30);
         println!("{name}: radial variance {var_radial:.2} px^2, tangential {var_tangential:.2} px^2, energy {e:.2}");
         let expected = length_px * length_px / 12.0;
         let (along, across) =

@@ -308,6 +308,22 @@ fn annulus_mean(rgba: &[f32], w: u32, h: u32, radius_px: f64, from: f64, to: f64
     sum / n.max(1) as f64
 }
 
+/// The ray model's ring (0.6..0.85 of the radius) to core (0..0.35) ratio of area-weighted
+/// mean intensities for strength s (src/optics/spherical.rs).
+fn model_ring_to_core(s: f64) -> f64 {
+    let mean = |a: f64, b: f64| {
+        let n = 400;
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..n {
+            let r = a + (b - a) * (i as f64 + 0.5) / n as f64;
+            num += realcam::optics::spherical::intensity(s, r) * r;
+            den += r;
+        }
+        num / den
+    };
+    mean(0.6, 0.85) / mean(0.0, 0.35)
+}
+
 #[test]
 fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
     use realcam::optics::spherical;
@@ -331,17 +347,7 @@ fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
                     let measured = ring / core;
                     // The model's ratio over the same annuli (area-weighted means).
                     let s = spherical::strength(amount, coc_px, 24.0);
-                    let mean = |a: f64, b: f64| {
-                        let n = 400;
-                        let (mut num, mut den) = (0.0, 0.0);
-                        for i in 0..n {
-                            let r = a + (b - a) * (i as f64 + 0.5) / n as f64;
-                            num += spherical::intensity(s, r) * r;
-                            den += r;
-                        }
-                        num / den
-                    };
-                    let expected = mean(0.6, 0.85) / mean(0.0, 0.35);
+                    let expected = model_ring_to_core(s);
                     // Under-corrected: bright core behind (ratio < 1), bright ring in front (> 1);
                     // over-corrected swaps them.
                     let bright_ring_expected = (coc_px < 0.0) == (amount > 0.0);
@@ -388,17 +394,7 @@ fn traced_spherical_aberration_follows_the_ray_model() {
         let radius = coc_px / 2.0;
         let core = annulus_mean(&rgba, frame.width, frame.height, radius, 0.0, 0.35);
         let ring = annulus_mean(&rgba, frame.width, frame.height, radius, 0.6, 0.85);
-        let mean = |a: f64, b: f64| {
-            let n = 400;
-            let (mut num, mut den) = (0.0, 0.0);
-            for i in 0..n {
-                let r = a + (b - a) * (i as f64 + 0.5) / n as f64;
-                num += spherical::intensity(s, r) * r;
-                den += r;
-            }
-            num / den
-        };
-        let expected = mean(0.6, 0.85) / mean(0.0, 0.35);
+        let expected = model_ring_to_core(s);
         println!("f/{f_number}: s = {s:.3}, ring/core {:.3}, model {expected:.3}", ring / core);
         assert!(s > 0.0 && s < spherical::MAX_STRENGTH, "s = {s} should be inside the model's range");
         assert!(
