@@ -44,12 +44,18 @@ vec4 bilinear(vec2 x) {
                mix(load_clamped(i + ivec2(0, 1)), load_clamped(i + ivec2(1, 1)), f.x), f.y);
 }
 
+// C near p, linear in the height: the table is linear between its entries (millimetres, tens
+// of pixels apart), so this is exact unless a comet straddles an entry, and it keeps the table
+// lookups out of the sample loop.
+float c_at_p, c_slope, h_at_p;
+float c_near(float h) { return c_at_p + c_slope * (h - h_at_p); }
+
 // Displacement of pupil sample (a, b) for a source at q (relative to the centre).
 vec2 displacement(vec2 q, float a, float b) {
     float h = length(q);
     if (h < 1e-6) return vec2(0.0);
     vec2 r = q / h;
-    return coma_c_px(h) * (a * r + b * vec2(-r.y, r.x));
+    return c_near(h) * (a * r + b * vec2(-r.y, r.x));
 }
 
 void main() {
@@ -64,6 +70,10 @@ void main() {
         imageStore(color_out, p, imageLoad(color_in, p));
         return;
     }
+    h_at_p = h_p;
+    c_at_p = coma_c_px(h_p);
+    float lo = max(h_p - 0.5, 0.0);
+    c_slope = (coma_c_px(h_p + 0.5) - coma_c_px(lo)) / (h_p + 0.5 - lo);
     int n_rho = clamp(int(ceil(3.0 * c_max)), 2, 48);
     int n_theta = clamp(int(ceil(2.0 * PI * c_max)), 4, 96);
     vec4 sum = vec4(0.0);
@@ -77,10 +87,8 @@ void main() {
             q = x - displacement(q, a, b);
             // Area factor of the map q -> p at q.
             float h = max(length(q), 1e-3);
-            float c = coma_c_px(h);
-            float slope = coma_c_px(h + 0.5) - coma_c_px(max(h - 0.5, 0.0));
-            slope /= (h + 0.5) - max(h - 0.5, 0.0);
-            float det = (1.0 + slope * a) * (1.0 + c / h * a) + slope * (c / h) * b * b;
+            float c = c_near(h);
+            float det = (1.0 + c_slope * a) * (1.0 + c / h * a) + c_slope * (c / h) * b * b;
             sum += bilinear(q + pc.centre_px) / max(det, 1e-3);
         }
     }

@@ -44,9 +44,16 @@ void main() {
     float real_mm = length(d) * pc.pixel_pitch_mm;
     vec4 out_color = imageLoad(color_in, p);
     for (int c = 0; c < 3; ++c) {
-        // Fixed-point inverse of eq 6.8 (src/optics/distortion.rs).
+        // Fixed-point inverse of eq 6.8 (src/optics/distortion.rs). It contracts by about the
+        // distortion's slope per step (a few percent), so it stops once a step moves r by less
+        // than float precision, usually after 3 to 5 steps.
         float r = real_mm;
-        for (int k = 0; k < 12; ++k) r = real_mm / (1.0 + percent(c, r) / 100.0);
+        for (int k = 0; k < 12; ++k) {
+            float next = real_mm / (1.0 + percent(c, r) / 100.0);
+            bool done = abs(next - r) <= 2.0e-7 * real_mm;
+            r = next;
+            if (done) break;
+        }
         float scale = real_mm > 0.0 ? r / real_mm : 1.0;
         out_color[c] = bilinear(pc.centre_px + d * scale)[c];
     }

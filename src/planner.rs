@@ -311,8 +311,8 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     };
 
     let coma = match &camera.coma {
-        // A comet shorter than a tenth of a pixel is invisible.
-        Some(t) if t.max_abs_within(corner_mm) / pitch_mm >= 0.1 => {
+        // A comet shorter than a pixel is invisible (its light moves by a third of that).
+        Some(t) if t.max_abs_within(corner_mm) / pitch_mm >= 1.0 => {
             steps.push(Step {
                 pass: crate::passes::coma::NAME,
                 run: true,
@@ -330,7 +330,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                 pass: crate::passes::coma::NAME,
                 run: false,
                 why: format!(
-                    "the lens's comets are at most {:.3} px long in the frame (< 0.1 px)",
+                    "the lens's comets are at most {:.3} px long in the frame (< 1 px): invisible",
                     t.max_abs_within(corner_mm) / pitch_mm
                 ),
             });

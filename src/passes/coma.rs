@@ -45,15 +45,28 @@ pub fn table_data(coma_mm: &HeightTable) -> Vec<f32> {
     coma_mm.image_height_mm.iter().chain(&coma_mm.values).map(|&v| v as f32).collect()
 }
 
-/// The pupil-sample displacement of third-order coma (see glsl/coma.comp).
-fn displacement(params: &ComaParams, table: &[f32], q: [f32; 2], a: f32, b: f32) -> [f32; 2] {
-    let h = (q[0] * q[0] + q[1] * q[1]).sqrt();
-    if h < 1e-6 {
-        return [0.0, 0.0];
+/// C near a pixel, linear in the height (see glsl/coma.comp).
+struct Local {
+    c_at_p: f32,
+    slope: f32,
+    h_at_p: f32,
+}
+
+impl Local {
+    fn c(&self, h: f32) -> f32 {
+        self.c_at_p + self.slope * (h - self.h_at_p)
     }
-    let (rx, ry) = (q[0] / h, q[1] / h);
-    let c = params.c_px(table, h);
-    [c * (a * rx - b * ry), c * (a * ry + b * rx)]
+
+    /// The pupil-sample displacement of third-order coma for a source at q.
+    fn displacement(&self, q: [f32; 2], a: f32, b: f32) -> [f32; 2] {
+        let h = (q[0] * q[0] + q[1] * q[1]).sqrt();
+        if h < 1e-6 {
+            return [0.0, 0.0];
+        }
+        let (rx, ry) = (q[0] / h, q[1] / h);
+        let c = self.c(h);
+        [c * (a * rx - b * ry), c * (a * ry + b * rx)]
+    }
 }
 
 /// CPU twin of glsl/coma.comp (same sampling, f32).
@@ -89,6 +102,12 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaParams, table: &[f32]) -> Vec<f32> {
                 out[o..o + 4].copy_from_slice(&load(px, py));
                 continue;
             }
+            let lo = (h_p - 0.5).max(0.0);
+            let local = Local {
+                c_at_p: params.c_px(table, h_p),
+                slope: (params.c_px(table, h_p + 0.5) - params.c_px(table, lo)) / (h_p + 0.5 - lo),
+                h_at_p: h_p,
+            };
             let n_rho = ((3.0 * c_max).ceil() as i32).clamp(2, 48);
             let n_theta = ((2.0 * std::f32::consts::PI * c_max).ceil() as i32).clamp(4, 96);
             let mut sum = [0.0f32; 4];
@@ -97,15 +116,13 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaParams, table: &[f32]) -> Vec<f32> {
                 for j in 0..n_theta {
                     let t2 = 2.0 * std::f32::consts::PI * (j as f32 + 0.5) / n_theta as f32;
                     let (a, b) = (rho2 * (2.0 + t2.cos()), rho2 * t2.sin());
-                    let d = displacement(params, table, x, a, b);
+                    let d = local.displacement(x, a, b);
                     let q = [x[0] - d[0], x[1] - d[1]];
-                    let d = displacement(params, table, q, a, b);
+                    let d = local.displacement(q, a, b);
                     let q = [x[0] - d[0], x[1] - d[1]];
                     let hq = (q[0] * q[0] + q[1] * q[1]).sqrt().max(1e-3);
-                    let c = params.c_px(table, hq);
-                    let lo = (hq - 0.5).max(0.0);
-                    let slope = (params.c_px(table, hq + 0.5) - params.c_px(table, lo)) / (hq + 0.5 - lo);
-                    let det = (1.0 + slope * a) * (1.0 + c / hq * a) + slope * (c / hq) * b * b;
+                    let c = local.c(hq);
+                    let det = (1.0 + local.slope * a) * (1.0 + c / hq * a) + local.slope * (c / hq) * b * b;
                     let v = bilinear(q[0] + params.centre_px[0], q[1] + params.centre_px[1]);
                     for k in 0..4 {
                         sum[k] += v[k] / det.max(1e-3);
