@@ -2,9 +2,10 @@
 # Installs the system packages realcam needs on Debian 12 (as root), only those missing:
 # the Vulkan loader and headers, lavapipe (Mesa's CPU Vulkan driver), the Khronos validation
 # layer, shaderc with the glslang/SPIRV-Tools static libraries it links against, and the C/C++
-# compilers the FLIP metric (nv-flip) builds with.
+# compilers the FLIP metric (nv-flip) builds with, and lensfun's lens database (XML; for
+# `realcam lens import-lensfun` and --lens-lensfun).
 set -euo pipefail
-packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools gcc g++)
+packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools gcc g++ liblensfun-data-v1)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -16,6 +16,7 @@ pub mod focus_processor;
 pub mod gpu;
 pub mod io;
 pub mod lens_file;
+pub mod lensfun;
 pub mod metrics;
 pub mod optics;
 pub mod passes;

@@ -76,6 +76,9 @@ enum LensCommand {
         #[arg(long = "write-tables", value_name = "LENS_FILE")]
         write_tables: Option<PathBuf>,
     },
+    /// Convert a lens of the lensfun database (its distortion, lateral colour and vignetting
+    /// calibrations) into a lens file: printed, or written with --out.
+    ImportLensfun(ImportLensfunArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -117,9 +120,9 @@ enum FitArg {
 
 #[derive(Args)]
 struct LensArgs {
-    /// Lens file (TOML, see lenses/); the built-in default lens when absent.
-    #[arg(long)]
-    lens: Option<PathBuf>,
+    /// Lens file (TOML, see lenses/) or --lens-lensfun MODEL; the built-in default lens when absent.
+    #[command(flatten)]
+    lens: LensChoice,
     /// Focal length in mm (must match a prime lens file unless --force).
     #[arg(long = "focal-length")]
     focal_length_mm: Option<f64>,
@@ -317,6 +320,7 @@ fn main() {
         Command::Lens { command: LensCommand::Analyze { file, f_number, field_deg, write_tables } } => {
             lens_analyze(&file, f_number, &field_deg, write_tables.as_deref())
         }
+        Command::Lens { command: LensCommand::ImportLensfun(args) } => lens_import_lensfun(&args),
         Command::Bench(args) => bench(args),
         Command::Accuracy(args) => accuracy(args),
         Command::Compare { test, reference } => compare(&test, &reference),
@@ -342,10 +346,15 @@ fn parse_shutter(text: &str) -> Result<f64> {
     Ok(value)
 }
 
-fn load_lens(path: Option<&Path>) -> Result<LensFile> {
-    Ok(match path {
-        Some(p) => LensFile::load(p)?,
-        None => LensFile::default_lens(),
+fn load_lens(choice: &LensChoice) -> Result<LensFile> {
+    Ok(match (&choice.lens, &choice.lens_lensfun) {
+        (Some(p), _) => LensFile::load(p)?,
+        (None, Some(model)) => {
+            let options = realcam::lensfun::ImportOptions::default();
+            realcam::lensfun::import_lens_file(model, &options, None)
+                .with_context(|| format!("--lens-lensfun {model:?}"))?
+        }
+        (None, None) => LensFile::default_lens(),
     })
 }
 
@@ -685,6 +694,86 @@ fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64], write_tab
             .with_context(|| format!("--write-tables {}: the derived file", out.display()))?;
         write_text_atomically(out, &new_text).with_context(|| format!("writing {}", out.display()))?;
         eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+/// The lens of a command: a lens file, or a lens of the lensfun database.
+#[derive(Args)]
+struct LensChoice {
+    /// Lens file (TOML, see lenses/); the built-in default lens when neither this nor
+    /// --lens-lensfun is given.
+    #[arg(long)]
+    lens: Option<PathBuf>,
+    /// A lens of the lensfun database by model name (as `realcam lens import-lensfun` converts
+    /// it with its defaults; for a zoom, its shortest calibrated focal length).
+    #[arg(long = "lens-lensfun", value_name = "MODEL", conflicts_with = "lens")]
+    lens_lensfun: Option<String>,
+}
+
+impl LensChoice {
+    /// Itself: lets the call sites keep reading `load_lens(args.lens.lens.as_deref())`, as
+    /// when `lens` was an `Option<PathBuf>`.
+    fn as_deref(&self) -> &LensChoice {
+        self
+    }
+}
+
+#[derive(Args)]
+#[command(allow_negative_numbers = true)]
+struct ImportLensfunArgs {
+    /// The lens model as lensfun names it, e.g. "Carl Zeiss Planar T* 1,4/50 ZF.2" (case,
+    /// ',' or '.' and spacing do not matter; the maker may be prefixed).
+    model: String,
+    /// Write the lens file here (atomically) instead of printing it.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// For a zoom: use the calibrations at the focal length nearest this (no interpolation);
+    /// default the shortest.
+    #[arg(long = "focal-length", value_name = "MM")]
+    focal_length_mm: Option<f64>,
+    /// Vignetting: per f-number, the calibration at the focus distance nearest this; default the farthest.
+    #[arg(long = "distance-m", value_name = "M")]
+    distance_m: Option<f64>,
+    /// The widest f-number, when lensfun's entry and the model name do not give it (overrides them).
+    #[arg(long = "f-number-min", value_name = "N")]
+    f_number_min: Option<f64>,
+    /// Closest focus in metres (not in lensfun; default 10 focal lengths, marked as assumed).
+    #[arg(long = "focus-min-m", value_name = "M")]
+    focus_min_m: Option<f64>,
+    /// Aperture blades (not in lensfun; default 0, circular, marked as assumed).
+    #[arg(long)]
+    blades: Option<u32>,
+    /// Diagonal of the sensor the tables are for, in mm; default full frame (43.27 mm).
+    #[arg(long = "sensor-diagonal-mm", value_name = "MM")]
+    sensor_diagonal_mm: Option<f64>,
+    /// The lensfun database folder; default $REALCAM_LENSFUN_DIR or /usr/share/lensfun/version_1.
+    #[arg(long = "lensfun-dir", value_name = "DIR")]
+    lensfun_dir: Option<PathBuf>,
+}
+
+fn lens_import_lensfun(args: &ImportLensfunArgs) -> Result<()> {
+    let options = realcam::lensfun::ImportOptions {
+        focal_length_mm: args.focal_length_mm,
+        distance_m: args.distance_m,
+        f_number_min: args.f_number_min,
+        focus_min_m: args.focus_min_m,
+        blades: args.blades,
+        sensor_diagonal_mm: args.sensor_diagonal_mm,
+    };
+    let imported = realcam::lensfun::import(&args.model, &options, args.lensfun_dir.as_deref())?;
+    let crop = imported.entry.crop_factor.map_or_else(|| "not given".to_string(), |c| c.to_string());
+    eprintln!("lensfun entry: {} (crop factor {crop})", imported.entry.at);
+    for other in &imported.others {
+        let crop = other.crop_factor.map_or_else(|| "not given".to_string(), |c| c.to_string());
+        eprintln!("  not used: the same model at {} (crop factor {crop})", other.at);
+    }
+    match &args.out {
+        Some(out) => {
+            write_text_atomically(out, &imported.toml).with_context(|| format!("writing {}", out.display()))?;
+            eprintln!("wrote {}", out.display());
+        }
+        None => print!("{}", imported.toml),
     }
     Ok(())
 }
