@@ -19,8 +19,12 @@
 //!   hypot(36, 24) / cropfactor / 2 mm.
 //!
 //! realcam's tables (src/optics/distortion.rs): distortion percent at each ideal height h is
-//! Kyaw 2013 eq 6.8, D = 100 (R - r) / r, i.e. 100 (r_d - r_u) / r_u; the lateral-colour tables
-//! are the extra percent of red and blue over green at the same ideal height.
+//! Kyaw 2013 eq 6.8, D = 100 (R - r) / r, with r the PARAXIAL ideal height, so D = 0 on the axis.
+//! lensfun normalises its models to keep r_u = 1 fixed instead: near the axis
+//! r_d = d0 r_u with d0 = 1 - k1 (poly3), 1 - a - b - c (ptlens), 1 (poly5), which is why
+//! lensfun's "real focal length" is d0 times the nominal one. The paraxial ideal height is
+//! therefore h = d0 r_u (in the model's unit), and D(h) = 100 (r_d / (d0 r_u) - 1). The
+//! lateral-colour tables are the extra percent of red and blue over green at the same h.
 
 use crate::lens_file::{LensFile, LensFileError};
 use std::fmt::Write as _;
@@ -877,19 +881,23 @@ impl Tables {
     fn sample(sensor: &CalibrationSensor, selection: &Selection, target_mm: f64) -> Tables {
         let unit_mm = sensor.half_short_side_mm();
         let calibrated_mm = sensor.half_diagonal_mm();
-        let heights_mm = sample_heights(target_mm, &[unit_mm, calibrated_mm]);
-        // r_d / r_u - 1 at the ideal height h: Kyaw 2013 eq 6.8 divided by 100.
-        let excess = |h: f64| selection.distortion.map_or(0.0, |d| d.model.excess(h / unit_mm));
-        let distortion_percent = selection.distortion.map(|_| heights_mm.iter().map(|&h| 100.0 * excess(h)).collect());
-        // The red image lands at k(r_g) r_g, with r_g = r_u (1 + D/100) the green (distorted)
-        // radius: its distortion over the ideal height is 100 (k r_g / r_u - 1) percent, and
-        // minus green's D the extra is 100 (k - 1)(1 + D/100) (100 (k - 1) to first order).
+        // The model's slope at the axis (module documentation): paraxial height = d0 r_u.
+        let d0 = selection.distortion.map_or(1.0, |d| 1.0 + d.model.excess(0.0));
+        let r_u = |h: f64| h / (d0 * unit_mm);
+        let heights_mm = sample_heights(target_mm, &[d0 * unit_mm, calibrated_mm]);
+        // Real over ideal height, r_d / h = (1 + excess(r_u)) / d0: 1 + Kyaw 2013 eq 6.8 / 100.
+        let ratio = |h: f64| selection.distortion.map_or(1.0, |d| (1.0 + d.model.excess(r_u(h))) / d0);
+        let distortion_percent =
+            selection.distortion.map(|_| heights_mm.iter().map(|&h| 100.0 * (ratio(h) - 1.0)).collect());
+        // The red image lands at k(r_g) r_g, with r_g = h ratio the green (distorted) radius:
+        // over the ideal height that is 100 (k ratio - 1) percent, and less green's D the
+        // extra is 100 (k - 1) ratio (100 (k - 1) to first order).
         let lateral_color_percent = selection.tca.map(|t| {
             heights_mm
                 .iter()
                 .map(|&h| {
-                    let ratio = 1.0 + excess(h);
-                    let (kr, kb) = t.model.factors(h / unit_mm * ratio);
+                    let ratio = ratio(h);
+                    let (kr, kb) = t.model.factors(h * ratio / unit_mm);
                     (100.0 * (kr - 1.0) * ratio, 100.0 * (kb - 1.0) * ratio)
                 })
                 .collect()
@@ -1121,18 +1129,21 @@ fn lens_file_text(
             let _ = writeln!(
                 t,
                 "# Distortion at {} mm ({}): {}.\n\
-                 #   distortion_percent = 100 (r_d - r_u) / r_u at each ideal height (Kyaw 2013 eq 6.8).",
+                 #   distortion_percent = 100 (r_d / (d0 r_u) - 1) at each paraxial ideal height h = d0 r_u\n\
+                 #   (Kyaw 2013 eq 6.8), d0 the model's slope at the axis.",
                 d.focal_mm,
                 d.at,
                 d.model.describe()
             );
-            let centre = 100.0 * d.model.excess(0.0);
-            if centre.abs() > 5e-6 {
+            let d0 = 1.0 + d.model.excess(0.0);
+            if (d0 - 1.0).abs() > 5e-8 {
                 let _ = writeln!(
                     t,
-                    "#   lensfun's models keep r = 1 fixed, not the axis: at the centre the table is {}%, a\n\
-                     #   uniform scale of the image there (as lensfun's own correction keeps the scale at r = 1).",
-                    num(centre, 5)
+                    "#   lensfun keeps r_u = 1 fixed, not the axis; here d0 = {}: the paraxial focal length\n\
+                     #   is d0 x {} mm (lensfun's real focal length), and the tables are referred to it, so\n\
+                     #   distortion is 0 at the centre.",
+                    num(d0, 6),
+                    d.focal_mm
                 );
             }
         }
@@ -1278,26 +1289,32 @@ mod tests {
     /// hypot(36, 24) / 2: the full frame's half diagonal.
     const FF_HALF_DIAGONAL_MM: f64 = 21.633_307_652_783_937;
 
+    /// poly3 referred to the axis, worked by hand: with d0 = 1 - k1 and r = h / (d0 unit),
+    /// D = 100 ((1 - k1 + k1 r^2) / d0 - 1) = 100 k1 r^2 / (1 - k1): pure h^2, 0 on the axis.
+    fn poly3_percent(k1: f64, h_mm: f64, unit_mm: f64) -> f64 {
+        let r = h_mm / ((1.0 - k1) * unit_mm);
+        100.0 * k1 * r * r / (1.0 - k1)
+    }
+
     #[test]
     fn poly3_distortion_is_100_k1_r2_minus_1() {
         let k1 = 0.01;
-        // A 48 mm diagonal puts the last sample at 24 mm, r = 2 (r = 1 = 12 mm on full frame).
+        // A 48 mm diagonal puts the last sample at 24 mm (r = 1 is 12 mm on full frame).
         let options = ImportOptions { sensor_diagonal_mm: Some(48.0), ..Default::default() };
         let imported = import_one(
             lens("Poly3 50mm f/2", 1.0, "", &format!("<distortion model=\"poly3\" focal=\"50\" k1=\"{k1}\"/>")),
             &options,
         );
         let l = &imported.lens;
-        // r = 1 (half the short side of a crop-1 3:2 sensor: 12 mm): exactly 0.
-        assert_eq!(sample(l, distortion, 12.0), 0.0);
-        // r = 2: 100 k1 (4 - 1) = 3 %; r = 0: -100 k1.
-        assert!((sample(l, distortion, 24.0) - 300.0 * k1).abs() < 1e-9);
-        assert!((sample(l, distortion, 0.0) - -100.0 * k1).abs() < 1e-9);
-        // Half way, r = 1.5 if sampled, else any sample: 100 k1 (r^2 - 1).
+        // On the axis: exactly 0 (Kyaw eq 6.8 is relative to the paraxial image).
+        assert_eq!(sample(l, distortion, 0.0), 0.0);
+        // lensfun's r_u = 1 lies at the paraxial height d0 x 12 mm, where r_d = r_u: the
+        // image there is 1/d0 - 1 larger than the paraxial one.
+        let d0 = 1.0 - k1;
+        assert!((sample(l, distortion, 12.0 * d0) - 100.0 * (1.0 / d0 - 1.0)).abs() < 1e-5);
         let t = l.tables.as_ref().unwrap();
         for (h, d) in t.image_height_mm.iter().zip(distortion(t)) {
-            let r: f64 = h / 12.0;
-            assert!((d - 100.0 * k1 * (r * r - 1.0)).abs() < 2e-4, "h {h}: {d}");
+            assert!((d - poly3_percent(k1, *h, 12.0)).abs() < 2e-4, "h {h}: {d}");
         }
         // 24 mm is beyond the calibrated field (half the diagonal, 21.63 mm): said so.
         assert!(imported.warnings.iter().any(|w| w.contains("extrapolate")), "{:?}", imported.warnings);
@@ -1311,11 +1328,16 @@ mod tests {
         let options = ImportOptions { sensor_diagonal_mm: Some(48.0), ..Default::default() };
         let xml = format!("<distortion model=\"ptlens\" focal=\"21\" a=\"{a}\" b=\"{b}\" c=\"{c}\"/>");
         let l = import_one(lens("Pt 21mm f/2.8", 1.0, "", &xml), &options).lens;
-        assert_eq!(sample(&l, distortion, 12.0), 0.0);
-        // r = 2: 100 (8a + 4b + 2c + 1 - a - b - c - 1) = 100 (7a + 3b + c) = 1.5 %.
-        assert!((sample(&l, distortion, 24.0) - 1.5).abs() < 1e-9);
-        // r = 0: 100 (1 - a - b - c - 1).
-        assert!((sample(&l, distortion, 0.0) - 100.0 * -(a + b + c)).abs() < 1e-9);
+        // Referred to the axis (d0 = 1 - a - b - c, r = h / (12 d0)):
+        // D = 100 (a r^3 + b r^2 + c r) / d0, 0 on the axis.
+        let d0 = 1.0 - a - b - c;
+        let expect = |h: f64| {
+            let r = h / (12.0 * d0);
+            100.0 * (a * r.powi(3) + b * r * r + c * r) / d0
+        };
+        assert_eq!(sample(&l, distortion, 0.0), 0.0);
+        assert!((sample(&l, distortion, 24.0) - expect(24.0)).abs() < 1e-5);
+        assert!((sample(&l, distortion, 12.0 * d0) - 100.0 * (1.0 / d0 - 1.0)).abs() < 1e-5);
         // No warning at full frame for a crop-1 calibration.
         let imported = import_one(lens("Pt 21mm f/2.8", 1.0, "", &xml), &ImportOptions::default());
         assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
@@ -1336,10 +1358,11 @@ mod tests {
         let full = import_one(lens("L 50mm f/2", 1.0, "", &xml), &ImportOptions::default());
         let crop = import_one(lens("L 50mm f/2", 1.5, "", &xml), &ImportOptions::default());
         // The same coefficients put r = 1 at 12 mm on crop 1 and at 8 mm on crop 1.5.
-        assert_eq!(sample(&full.lens, distortion, 12.0), 0.0);
-        assert_eq!(sample(&crop.lens, distortion, 8.0), 0.0);
-        let r = FF_HALF_DIAGONAL_MM / 8.0;
-        assert!((sample(&crop.lens, distortion, FF_HALF_DIAGONAL_MM) - 100.0 * k1 * (r * r - 1.0)).abs() < 1e-5);
+        let d0 = 1.0 - k1;
+        assert!((sample(&full.lens, distortion, 12.0 * d0) - 100.0 * (1.0 / d0 - 1.0)).abs() < 1e-5);
+        assert!((sample(&crop.lens, distortion, 8.0 * d0) - 100.0 * (1.0 / d0 - 1.0)).abs() < 1e-5);
+        let corner = sample(&crop.lens, distortion, FF_HALF_DIAGONAL_MM);
+        assert!((corner - poly3_percent(k1, FF_HALF_DIAGONAL_MM, 8.0)).abs() < 1e-5);
         // Crop 1.5 is calibrated to 14.42 mm: full frame beyond is extrapolated; crop 1 is not.
         assert!(crop.toml.contains("covers heights up to 14.42 mm"), "{}", crop.toml);
         assert!(full.warnings.is_empty());
@@ -1358,10 +1381,10 @@ mod tests {
         // hypot(36, 24) / hypot(4/3, 1) / 2 = 43.267 / (5/3) / 2 = 12.98 mm.
         let unit_mm = FULL_FRAME_DIAGONAL_MM / (5.0 / 3.0) / 2.0;
         assert!((unit_mm - 12.98).abs() < 1e-3);
-        assert_eq!(sample(&four_thirds.lens, distortion, unit_mm), 0.0);
-        let r = FF_HALF_DIAGONAL_MM / unit_mm;
-        let expect = 100.0 * k1 * (r * r - 1.0);
+        let expect = poly3_percent(k1, FF_HALF_DIAGONAL_MM, unit_mm);
         assert!((sample(&four_thirds.lens, distortion, FF_HALF_DIAGONAL_MM) - expect).abs() < 1e-5);
+        let on_full_frame = import_one(lens("L 50mm f/2", 1.0, "", &xml), &ImportOptions::default());
+        assert!(sample(&on_full_frame.lens, distortion, FF_HALF_DIAGONAL_MM) > expect);
         // "1.5" and "3:2" are the default.
         let default = import_one(lens("L 50mm f/2", 1.0, "", &xml), &ImportOptions::default());
         for written in ["1.5", "3:2"] {
@@ -1438,13 +1461,15 @@ mod tests {
         let at = |focal: Option<f64>| {
             let options = ImportOptions { focal_length_mm: focal, ..Default::default() };
             let l = db.import("Zoom 24-70mm f/2.8", &options).unwrap().lens;
-            // D(0) = -100 k1 identifies the calibration used.
-            (l.focal_length_mm, -sample(&l, distortion, 0.0) / 100.0)
+            // D at the corner identifies the calibration used.
+            (l.focal_length_mm, sample(&l, distortion, FF_HALF_DIAGONAL_MM))
         };
-        assert_eq!(at(None), (24.0, 0.024)); // default: the shortest
-        assert_eq!(at(Some(50.0)), (35.0, 0.035)); // |50 - 35| < |50 - 70|: no interpolation
-        assert_eq!(at(Some(60.0)), (70.0, 0.070));
-        assert_eq!(at(Some(200.0)), (70.0, 0.070));
+        let corner = |k1: f64| poly3_percent(k1, FF_HALF_DIAGONAL_MM, 12.0);
+        let close = |(f, d): (f64, f64), (f0, k1): (f64, f64)| f == f0 && (d - corner(k1)).abs() < 1e-5;
+        assert!(close(at(None), (24.0, 0.024))); // default: the shortest
+        assert!(close(at(Some(50.0)), (35.0, 0.035))); // |50 - 35| < |50 - 70|: no interpolation
+        assert!(close(at(Some(60.0)), (70.0, 0.070)));
+        assert!(close(at(Some(200.0)), (70.0, 0.070)));
         let imported =
             db.import("Zoom 24-70mm f/2.8", &ImportOptions { focal_length_mm: Some(50.0), ..Default::default() });
         assert!(imported.unwrap().warnings.iter().any(|w| w.contains("nearest calibrated focal length, 35 mm")));

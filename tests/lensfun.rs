@@ -58,22 +58,28 @@ fn distagon_21_distortion_is_lensfuns_ptlens() {
     let t = tables(&imported.lens);
     let d = t.distortion_percent.as_ref().expect("distortion table");
     // slr-zeiss.xml: <distortion model="ptlens" focal="21" a="0.03083" b="-0.0633" c="0.01093"/>,
-    // calibrated on crop factor 1: r = 1 is half the short side of 36 x 24 mm, 12 mm.
+    // calibrated on crop factor 1: r = 1 is half the short side of 36 x 24 mm, 12 mm. Near the
+    // axis r_d = d0 r_u with d0 = 1 - a - b - c: the paraxial height is h = d0 r_u 12 mm, and
+    // Kyaw's eq 6.8 relative to it is D = 100 (a r^3 + b r^2 + c r) / d0 (0 on the axis).
     let (a, b, c) = (0.03083, -0.0633, 0.01093);
+    let d0: f64 = 1.0 - a - b - c;
     assert_eq!(imported.lens.focal_length_mm, 21.0);
-    assert_eq!(at_sample(t, d, 12.0), 0.0);
-    // The full-frame corner, hypot(36, 24) / 2 = 21.633 mm: r = 21.633 / 12.
+    assert_eq!(at_sample(t, d, 0.0), 0.0);
+    // The full-frame corner, hypot(36, 24) / 2 = 21.633 mm: r = 21.633 / (12 d0).
     let corner_mm = 36f64.hypot(24.0) / 2.0;
-    let r = corner_mm / 12.0;
-    let r_d_over_r_u = a * r * r * r + b * r * r + c * r + 1.0 - a - b - c;
-    let expect = 100.0 * (r_d_over_r_u - 1.0);
-    assert!((expect - 1.6153).abs() < 1e-3, "{expect}"); // pincushion at the corner
+    let r = corner_mm / (12.0 * d0);
+    let expect = 100.0 * (a * r * r * r + b * r * r + c * r) / d0;
+    // The Distagon's moustache: pincushion near the centre (c > 0), barrel at the corner.
+    assert!((expect - -0.8224).abs() < 1e-3, "{expect}");
     let got = at_sample(t, d, corner_mm);
     assert!((got - expect).abs() < 1e-5, "{got} vs {expect}");
+    let mid_mm = t.image_height_mm[1];
+    assert!(at_sample(t, d, mid_mm) > 0.0, "pincushion at {mid_mm} mm");
     assert_eq!(*t.image_height_mm.last().unwrap(), 21.6333);
-    // TCA linear kr = kb = 1.0001: +0.01 % at r = 1 (where the distortion is 0).
+    // TCA linear kr = kb = 1.0001: the red image 0.01 % larger than the green one wherever it
+    // lands, i.e. 100 (kr - 1) (1 + D/100) over the ideal height.
     let red = t.lateral_color_red_percent.as_ref().expect("red table");
-    assert!((at_sample(t, red, 12.0) - 0.01).abs() < 1e-9);
+    assert!((at_sample(t, red, corner_mm) - 0.01 * (1.0 + expect / 100.0)).abs() < 1e-5);
     // Crop 1 covers full frame: nothing extrapolated.
     assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
 }
