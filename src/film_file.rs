@@ -245,7 +245,7 @@ mod tests {
             (format!("{head}[table]\nlog10_sensor_value = [0, 1, 1]\nlog10_output = [0, 1, 2]\n"), "film file f.toml, line 4: table.log10_sensor_value is not increasing at entry 3: 1 then 1"),
             (format!("{head}[table]\nlog10_sensor_value = [0, 1]\nlog10_output = [0]\n"), "film file f.toml, line 5: table.log10_output has 1 values but log10_sensor_value has 2"),
             (format!("{head}[table]\nlog10_sensor_value = [0, 1]\ndensity = [0.1, 2.0]\n"), "film file f.toml, line 5: table.density of a reversal film must fall with exposure; it rises at entry 2: 0.1 then 2"),
-            (format!("{head}"), "film file f.toml, line 1: the film file needs a [curve] or a [table]"),
+            (head.to_string(), "film file f.toml, line 1: the film file needs a [curve] or a [table]"),
         ];
         for (text, expected) in cases {
             let got = FilmFile::parse(&text, Path::new("f.toml")).unwrap_err().to_string();

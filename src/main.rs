@@ -25,13 +25,14 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render color + depth (+ velocity) EXR passes through a camera.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Print focusing, field of view, exposure and depth-of-field numbers for a lens setting.
     Dof(DofArgs),
     /// List the Vulkan devices.
     Devices,
-    /// Lens prescriptions (surfaces, glasses, stop): paraxial data, distortion, field curves,
-    /// spherical aberration, relative illumination and colour by real ray tracing.
+    /// Lenses: analyse a prescription by real ray tracing (paraxial data, distortion, field
+    /// curves, spherical aberration, coma, relative illumination, colour) and write its tables
+    /// into a lens file; import a lens from the lensfun database.
     Lens {
         #[command(subcommand)]
         command: LensCommand,
@@ -305,8 +306,8 @@ struct BenchArgs {
 struct DofArgs {
     #[command(flatten)]
     lens: LensArgs,
-    /// CoC criterion: an image CoC in mm (e.g. 0.03) or an angular ratio like 1/1000 (Potmesil & Chakravarty).
-    #[arg(long, default_value = "0.03")]
+    /// CoC criterion: an image CoC in mm (e.g. 0.03mm) or an angular ratio like 1/1000 (Potmesil & Chakravarty).
+    #[arg(long, default_value = "0.03mm")]
     coc: String,
 }
 
@@ -314,7 +315,7 @@ fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => render(*args),
         Command::Dof(args) => dof(args),
         Command::Devices => devices(),
         Command::Lens { command: LensCommand::Analyze { file, f_number, field_deg, write_tables } } => {
@@ -367,7 +368,7 @@ fn fit(arg: FitArg) -> SensorFit {
 }
 
 fn render(args: RenderArgs) -> Result<()> {
-    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    let lens_file = load_lens(&args.lens.lens)?;
     let shutter_s = parse_shutter(&args.shutter).with_context(|| format!("--shutter {:?}", args.shutter))?;
     let request = CameraRequest {
         focal_length_mm: args.lens.focal_length_mm,
@@ -504,7 +505,7 @@ fn write_text_atomically(path: &Path, text: &str) -> std::io::Result<()> {
 }
 
 fn dof(args: DofArgs) -> Result<()> {
-    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    let lens_file = load_lens(&args.lens.lens)?;
     let f_number = args.lens.f_number.unwrap_or(lens_file.f_number_min);
     let focal_length_mm = args.lens.focal_length_mm.unwrap_or(lens_file.focal_length_mm);
     let lens = ThinLens::new(focal_length_mm, f_number, args.lens.focus_m * 1000.0)?
@@ -597,7 +598,7 @@ fn bench(args: BenchArgs) -> Result<()> {
 }
 
 fn accuracy(args: AccuracyArgs) -> Result<()> {
-    let lens_file = load_lens(args.lens.lens.as_deref())?;
+    let lens_file = load_lens(&args.lens.lens)?;
     // The blur alone: no exposure, vignetting or film curve; no aberrations in the bokeh, which
     // the diffraction reference does not model.
     let request = CameraRequest {
@@ -709,14 +710,6 @@ struct LensChoice {
     /// it with its defaults; for a zoom, its shortest calibrated focal length).
     #[arg(long = "lens-lensfun", value_name = "MODEL", conflicts_with = "lens")]
     lens_lensfun: Option<String>,
-}
-
-impl LensChoice {
-    /// Itself: lets the call sites keep reading `load_lens(args.lens.lens.as_deref())`, as
-    /// when `lens` was an `Option<PathBuf>`.
-    fn as_deref(&self) -> &LensChoice {
-        self
-    }
 }
 
 #[derive(Args)]

@@ -184,6 +184,22 @@ pub fn write_scene(dir: &Path, name: &str, scene: &SynthScene) -> Result<(), IoE
     write_exr_channels(&depth_path, scene.width, scene.height, &[("Z", &depth.data)], &opts)
 }
 
+/// Every scene committed in testdata/, by file-name stem. `realcam synth` writes them; a test
+/// checks that the committed files are exactly what this generator makes.
+pub fn testdata_scenes() -> Vec<(&'static str, SynthScene)> {
+    vec![
+        ("demo", SynthScene::demo()),
+        // A highlight of known energy (400 per channel) on a grey plane behind the focus plane
+        // (6 m) and in front of it (1.2 m), for disk diameters and energy.
+        ("point_bg", SynthScene::point_on_plane(256, 144, 6.0, [400.0; 3])),
+        ("point_fg", SynthScene::point_on_plane(256, 144, 1.2, [400.0; 3])),
+        // The same at the focus distance used by the tests (2 m).
+        ("point_focus", SynthScene::point_on_plane(256, 144, 2.0, [400.0; 3])),
+        // Left half at 2 m, right half at 8 m: depth edges.
+        ("edges", SynthScene::two_planes(256, 144, 2.0, 8.0)),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,20 +254,4 @@ mod tests {
         assert_eq!(crate::io::read_exr_channel(&dir.join("tp_depth.exr"), "Z").unwrap(), depth);
         let _ = std::fs::remove_dir_all(&dir);
     }
-}
-
-/// Every scene committed in testdata/, by file-name stem. `realcam synth` writes them; a test
-/// checks that the committed files are exactly what this generator makes.
-pub fn testdata_scenes() -> Vec<(&'static str, SynthScene)> {
-    vec![
-        ("demo", SynthScene::demo()),
-        // A highlight of known energy (400 per channel) on a grey plane behind the focus plane
-        // (6 m) and in front of it (1.2 m), for disk diameters and energy.
-        ("point_bg", SynthScene::point_on_plane(256, 144, 6.0, [400.0; 3])),
-        ("point_fg", SynthScene::point_on_plane(256, 144, 1.2, [400.0; 3])),
-        // The same at the focus distance used by the tests (2 m).
-        ("point_focus", SynthScene::point_on_plane(256, 144, 2.0, [400.0; 3])),
-        // Left half at 2 m, right half at 8 m: depth edges.
-        ("edges", SynthScene::two_planes(256, 144, 2.0, 8.0)),
-    ]
 }

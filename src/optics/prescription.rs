@@ -476,10 +476,9 @@ impl Prescription {
     pub fn trace_through(&self, ray: &Ray, last: usize, lambda_nm: f64, clip: bool) -> Result<Ray, RayFailure> {
         let zs = self.vertex_z_mm();
         let mut r = *ray;
-        for i in 0..=last {
-            let s = &self.surfaces[i];
+        for (i, (s, &z)) in self.surfaces.iter().zip(&zs).enumerate().take(last + 1) {
             // to the vertex plane, then to the sphere (Welford's stable form)
-            r = r.at_z(zs[i]);
+            r = r.at_z(z);
             let c = s.curvature_per_mm();
             let (x, y) = (r.p[0], r.p[1]);
             let [l, m, nz] = r.d;
@@ -581,7 +580,7 @@ impl Prescription {
         let ep_z = par.entrance_pupil_z_mm;
 
         // Longitudinal spherical aberration at pupil zones.
-        let zones = [0.2, 0.4, 0.6, 0.7071067811865476, 0.8, 0.9, 1.0];
+        let zones = [0.2, 0.4, 0.6, std::f64::consts::FRAC_1_SQRT_2, 0.8, 0.9, 1.0];
         let spherical: Vec<LsaSample> = zones
             .iter()
             .map(|&rho| {
