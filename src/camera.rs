@@ -184,6 +184,8 @@ impl Camera {
                 curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
+                // The user's --cats-eye holds at the frame corner; the lens file's may name its height.
+                cats_eye_at_mm: if req.cats_eye.is_some() { None } else { lens_file.aperture.cats_eye_at_mm },
                 // Traced LSA goes as the pupil height squared (third order); an amount the user
                 // asks for replaces it.
                 lsa_rim_mm: match (req.spherical_aberration, lens_file.longitudinal_spherical_aberration) {

@@ -44,6 +44,10 @@ pub struct ApertureSpec {
     /// Cat's eye (optical vignetting of the bokeh) at the frame's farthest corner, 0..1.
     #[serde(default)]
     pub cats_eye: f64,
+    /// The image height (mm) at which `cats_eye` holds, growing linearly from the centre; when
+    /// absent, `cats_eye` holds at the frame's farthest corner, whatever the sensor.
+    #[serde(default)]
+    pub cats_eye_at_mm: Option<f64>,
 }
 
 impl ApertureSpec {
@@ -443,6 +447,11 @@ impl LensFile {
         if !self.surfaces.is_empty() {
             self.prescription(path, text)?;
         }
+        if let Some(h) = a.cats_eye_at_mm {
+            if !(h.is_finite() && h > 0.0) {
+                return bad(format!("aperture.cats_eye_at_mm = {h} must be a positive height"));
+            }
+        }
         if let Some(n) = a.polygonal_from_f_number {
             if !(n.is_finite() && n >= self.f_number_min) {
                 return bad(format!(
@@ -485,12 +494,16 @@ pub fn with_derived_tables(
              focus_min_m = {focus:.3}\n\
              pupil_magnification = {pm:.4}\n\n\
              [aperture]\n\
-             blades = 0\n\n",
+             blades = 0\n\
+             cats_eye = {k:.4}\n\
+             cats_eye_at_mm = {k_at:.4}\n\n",
             name = analysis.name,
             src = format!("realcam lens analyze of {source}"),
             n = analysis.f_number,
             focus = 10.0 * efl / 1000.0,
             pm = p.pupil_magnification,
+            k = derived.cats_eye,
+            k_at = derived.cats_eye_at_mm,
         );
         // The surfaces, as written (from the first [[surface]] on).
         if let Some(at) = text.find("[[surface]]") {
@@ -501,8 +514,13 @@ pub fn with_derived_tables(
     doc.remove("tables");
     doc.remove("longitudinal_color");
     doc.remove("longitudinal_spherical_aberration");
+    // The traced cat's eye goes into the lens's [aperture].
+    if let Some(aperture) = doc.get_mut("aperture").and_then(|a| a.as_table_mut()) {
+        aperture["cats_eye"] = toml_edit::value((derived.cats_eye * 1e4).round() / 1e4);
+        aperture["cats_eye_at_mm"] = toml_edit::value((derived.cats_eye_at_mm * 1e4).round() / 1e4);
+    }
     // Appended as text, after everything else: tables keep the order written here.
-    Ok(format!("{}\n{}", doc.to_string().trim_end(), derived.to_toml(source)))
+    Ok(format!("{}\n\n{}", doc.to_string().trim_end(), derived.to_toml(source)))
 }
 
 #[cfg(test)]

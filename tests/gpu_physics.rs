@@ -692,3 +692,26 @@ fn longitudinal_colour_gives_each_channel_its_own_disk() {
         }
     }
 }
+
+#[test]
+fn cats_eye_given_at_an_image_height_grows_linearly_from_the_centre() {
+    // A lens file's cat's eye K at height h_mm (e.g. traced by `lens analyze`) holds there on
+    // any sensor: per pixel K pitch / h_mm. Given at the frame's corner height it is the same
+    // as the frame-corner default, and the renders are identical.
+    let gpu = gpu();
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 6);
+    camera.aperture.cats_eye = 0.5;
+    let frame = testdata_frame("point_bg", &camera);
+    let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
+    let (w, h) = (frame.width as f64, frame.height as f64);
+    let corner_mm = (0.25 * w * w + 0.25 * h * h).sqrt() * pitch_mm;
+    let (default_rgba, default_plan, _) = render(&gpu, &frame, &camera);
+    camera.aperture.cats_eye_at_mm = Some(corner_mm);
+    let (at_corner_rgba, at_corner_plan, _) = render(&gpu, &frame, &camera);
+    let per_px = |p: &realcam::planner::Plan| p.tiled.as_ref().unwrap().aperture.cats_eye_per_px as f64;
+    assert!((per_px(&default_plan) / per_px(&at_corner_plan) - 1.0).abs() < 1e-6);
+    assert_eq!(default_rgba, at_corner_rgba);
+    camera.aperture.cats_eye_at_mm = Some(2.0 * corner_mm);
+    let plan = planner::plan(&frame, &camera);
+    assert!((per_px(&plan) - 0.5 * pitch_mm / (2.0 * corner_mm)).abs() < 1e-9);
+}

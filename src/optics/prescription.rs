@@ -825,10 +825,40 @@ pub struct DerivedTables {
     pub coma_mm: Vec<f64>,
     /// Red (C) and blue (F) paraxial focus minus green (d), mm.
     pub longitudinal_color_mm: [f64; 2],
+    /// Cat's eye at `cats_eye_at_mm` (the outermost field traced): the shift K (in pupil radii)
+    /// of the clipping circle whose overlap with the pupil passes the traced fraction of rays.
+    pub cats_eye: f64,
+    pub cats_eye_at_mm: f64,
     /// Longitudinal spherical aberration at the rim of the pupil from the least-squares fit
     /// LSA = k h^2 over the traced, unclipped zones (the third-order part the bokeh model
     /// represents), mm.
     pub lsa_rim_mm: f64,
+}
+
+/// Fraction of a unit circle's area that a second unit circle, shifted by `k` radii, overlaps:
+/// (2 acos(k/2) - k sqrt(1 - k^2/4)) / pi. The cat's-eye model of the bokeh passes
+/// (glsl/include/aperture.glsl, src/passes/aperture.rs) clips the aperture this way.
+pub fn circle_overlap_fraction(k: f64) -> f64 {
+    let h = (0.5 * k).clamp(0.0, 1.0);
+    (2.0 * h.acos() - 2.0 * h * (1.0 - h * h).sqrt()) / std::f64::consts::PI
+}
+
+/// The shift whose overlap passes `transmission` of the light (bisection; 0 for 1 or more).
+pub fn cats_eye_from_transmission(transmission: f64) -> f64 {
+    // NaN and full transmission: no cat's eye.
+    if transmission.is_nan() || transmission >= 1.0 {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (0.0, 2.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if circle_overlap_fraction(mid) > transmission {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 impl LensAnalysis {
@@ -841,7 +871,9 @@ impl LensAnalysis {
     ///   diameter |T - S| / (2 N) (the tangential and sagittal fans each defocused by
     ///   |T - S| / 2, each spreading over defocus / N): both blur tables get that length;
     /// - coma = the tangential coma (the comet's length);
-    /// - relative illumination = pupil transmission * cos^4.
+    /// - relative illumination = pupil transmission * cos^4;
+    /// - the cat's eye: the traced pupil transmission at the outermost field read as the
+    ///   overlap of the pupil with a shifted circle (the bokeh passes' model).
     pub fn derived_tables(&self) -> Result<DerivedTables, String> {
         if self.fields.first().is_none_or(|f| f.angle_deg != 0.0) {
             return Err("the field angles must start at 0 degrees".into());
@@ -862,6 +894,11 @@ impl LensAnalysis {
                 self.longitudinal_color.focus_c_minus_d_mm,
                 self.longitudinal_color.focus_f_minus_d_mm,
             ],
+            cats_eye: {
+                let last = self.fields.last().map_or(1.0, |f| f.pupil_transmission);
+                cats_eye_from_transmission(last)
+            },
+            cats_eye_at_mm: self.fields.last().map_or(0.0, |f| f.ideal_height_mm),
             lsa_rim_mm: {
                 let (mut num, mut den) = (0.0, 0.0);
                 // Zones whose ray some semi-diameter clips are not in the beam.
@@ -1247,6 +1284,19 @@ mod tests {
     }
 
     #[test]
+    fn cats_eye_overlap_and_its_inverse() {
+        assert_eq!(circle_overlap_fraction(0.0), 1.0);
+        assert!(circle_overlap_fraction(2.0).abs() < 1e-15);
+        // By hand: K = 0.55 -> (2 acos 0.275 - 0.55 sqrt(1 - 0.075625)) / pi = 0.6544.
+        assert!((circle_overlap_fraction(0.55) - 0.6544).abs() < 1e-4);
+        for t in [0.99, 0.8, 0.5, 0.1] {
+            assert!((circle_overlap_fraction(cats_eye_from_transmission(t)) - t).abs() < 1e-12);
+        }
+        assert_eq!(cats_eye_from_transmission(1.0), 0.0);
+        assert_eq!(cats_eye_from_transmission(f64::NAN), 0.0);
+    }
+
+    #[test]
     fn derived_tables_follow_the_trace() {
         let a = walch().analyze(2.8, &[0.0, 5.0, 10.0, 15.0]);
         let t = a.derived_tables().unwrap();
@@ -1268,6 +1318,10 @@ mod tests {
         // red minus blue lateral colour in percent = (C - F) heights over the ideal height
         let lat = t.lateral_color_red_percent[2] - t.lateral_color_blue_percent[2];
         assert!((lat + 100.0 * f.lateral_color_f_minus_c_mm.unwrap() / f.ideal_height_mm).abs() < 1e-9);
+        // The cat's eye: the outermost field's pupil transmission as a shifted circle's overlap.
+        let last = a.fields.last().unwrap();
+        assert_eq!(t.cats_eye_at_mm, last.ideal_height_mm);
+        assert!((circle_overlap_fraction(t.cats_eye) - last.pupil_transmission).abs() < 1e-12);
         let err = walch().analyze(2.8, &[5.0, 10.0]).derived_tables().unwrap_err();
         assert_eq!(err, "the field angles must start at 0 degrees");
     }

@@ -18,6 +18,8 @@ pub struct ApertureShape {
     /// shift (marginal minus paraxial focus, mm, < 0 under-corrected) at this f-number; None
     /// for the amount model.
     pub lsa_rim_mm: Option<f64>,
+    /// The image height (mm) at which `cats_eye` holds; None: at the frame's farthest corner.
+    pub cats_eye_at_mm: Option<f64>,
 }
 
 impl ApertureShape {
@@ -28,6 +30,7 @@ impl ApertureShape {
         spherical_aberration: 0.0,
         cats_eye: 0.0,
         lsa_rim_mm: None,
+        cats_eye_at_mm: None,
     };
 
     /// cats_eye / (distance from the optical centre to the farthest corner), per pixel.
