@@ -793,3 +793,22 @@ fn dof_uses_a_0_03_mm_circle_of_confusion_by_default() {
     assert_contains(&run.stdout, "Depth of field (0.03 mm circle of confusion on the film)");
     assert_contains(&run.stdout, "hyperfocal distance           41716.67 mm");
 }
+
+#[test]
+fn every_film_file_in_films_parses_and_the_presets_match_the_built_ins() {
+    use realcam::film_file::{FilmFile, FilmResponse};
+    use realcam::optics::film::FilmCurve;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("films");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let film = FilmFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
+        if let Some(preset) = FilmCurve::preset(&stem) {
+            assert_eq!(film.response, FilmResponse::Curve(preset), "{stem}");
+        }
+        names.push(stem);
+    }
+    names.sort();
+    assert_eq!(names, ["contrast", "neutral", "reversal-example", "soft"]);
+}
