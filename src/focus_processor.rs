@@ -416,7 +416,8 @@ pub fn build_tables(
                 })
             })
             .collect();
-        workers.into_iter().map(|w| w.join().expect("table worker panicked")).collect()
+        // A worker's panic (a bug, not bad input) goes on with its own message.
+        workers.into_iter().map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p))).collect()
     });
     for (task, tables, kept) in results.into_iter().flatten() {
         data[task * per_task..(task + 1) * per_task].copy_from_slice(&tables);

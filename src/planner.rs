@@ -131,13 +131,18 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     } else {
         "circular aperture".into()
     };
-    // Traced spherical aberration: the rim's focus shift seen as a CoC (src/optics/spherical.rs).
-    let lsa_coc_px = camera.aperture.lsa_rim_mm.map_or(0.0, |lsa_mm| {
-        -lsa_mm / (camera.lens.effective_f_number() * camera.lens.pupil_magnification * pitch_mm)
-    });
-    // A cat's eye given at an image height grows linearly from the centre (per pixel).
-    let cats_eye_per_px =
-        camera.aperture.cats_eye_at_mm.map(|h_mm| camera.aperture.cats_eye.clamp(0.0, 1.0) * pitch_mm / h_mm);
+    // What of the aperture depends on the pixel pitch, set after the bokeh pass's constants:
+    // traced spherical aberration, the rim's focus shift seen as a CoC (src/optics/spherical.rs),
+    // and a cat's eye given at an image height, growing linearly from the centre (per pixel).
+    let with_pitch = |aperture: &mut crate::passes::aperture::ApertureConstants| {
+        if let Some(lsa_mm) = camera.aperture.lsa_rim_mm {
+            let n = camera.lens.effective_f_number() * camera.lens.pupil_magnification;
+            aperture.sa_lsa_coc_px = (-lsa_mm / (n * pitch_mm)) as f32;
+        }
+        if let Some(h_mm) = camera.aperture.cats_eye_at_mm {
+            aperture.cats_eye_per_px = (camera.aperture.cats_eye.clamp(0.0, 1.0) * pitch_mm / h_mm) as f32;
+        }
+    };
     let (mut coc, mut gather, mut tiled, mut diffraction) = (None, None, None, None);
     if dof {
         steps.push(Step { pass: crate::passes::coc::NAME, run: true, why: coc_why });
@@ -146,10 +151,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
             BokehMode::Reference => {
                 let mut g =
                     GatherParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
-                g.aperture.sa_lsa_coc_px = lsa_coc_px as f32;
-                if let Some(per_px) = cats_eye_per_px {
-                    g.aperture.cats_eye_per_px = per_px as f32;
-                }
+                with_pitch(&mut g.aperture);
                 steps.push(Step {
                     pass: crate::passes::bokeh_gather::NAME,
                     run: true,
@@ -194,10 +196,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
             BokehMode::Tiled => {
                 let mut t =
                     TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, frame.centre_px);
-                t.aperture.sa_lsa_coc_px = lsa_coc_px as f32;
-                if let Some(per_px) = cats_eye_per_px {
-                    t.aperture.cats_eye_per_px = per_px as f32;
-                }
+                with_pitch(&mut t.aperture);
                 steps.push(Step {
                     pass: BOKEH_TILED,
                     run: true,
