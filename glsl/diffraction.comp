@@ -7,7 +7,7 @@
 // samples around p seen through each channel's pattern, which normalises the image borders;
 // one per channel since the patterns differ by wavelength), then divides. No float atomics,
 // no occlusion (every source spreads regardless of depth order: the paper's model).
-// CPU reference: src/focus_processor.rs (process_cpu); tables and layout: build_tables.
+// CPU reference: src/optics/focus_processor.rs (process_cpu); tables and layout: build_tables.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;

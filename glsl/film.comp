@@ -6,7 +6,7 @@
 // shot-noise-like (standard deviation sigma * sqrt(value)), sigma growing with the square root of
 // the ISO speed, from a hash of the pixel, the channel and a seed: deterministic. A film file may
 // give the curve as a table instead (log10 sensor value against log10 output, linear between
-// entries, constant beyond the ends; src/film_file.rs).
+// entries, constant beyond the ends; src/io/film_file.rs).
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;

@@ -1,26 +1,18 @@
 //! realcam: a realistic camera for rendered images.
 //!
-//! Layers (see README.md, "Architecture"):
+//! Layers, each using only those above it (README.md, "How it works"):
 //! - [`optics`]: plain f64 camera math on the CPU (no Vulkan), tested against the source documents.
-//! - [`io`]: OpenEXR and PNG input/output.
+//! - [`io`]: files: OpenEXR passes, PNG previews, lens files, film files, the lensfun database.
+//! - [`model`]: the camera and the frame a render uses.
 //! - [`gpu`]: the thin Vulkan runtime; knows no optics.
-//! - [`passes`]: one module per compute pass, joining optics and the runtime.
-//! - [`planner`]: decides which passes a scene and camera call for.
+//! - [`passes`]: one module per compute pass, joining the model and the runtime; the pass order.
+//! - [`pipeline`]: the planner (which passes a scene calls for, and why) and the renderer.
+//! - [`tools`]: benchmark, accuracy report, metrics, synthetic scenes.
 
-pub mod accuracy;
-pub mod aperture_mask;
-pub mod bench;
-pub mod camera;
-pub mod film_file;
-pub mod focus_processor;
 pub mod gpu;
 pub mod io;
-pub mod lens_file;
-pub mod lensfun;
-pub mod metrics;
+pub mod model;
 pub mod optics;
 pub mod passes;
-pub mod planner;
-pub mod render;
-pub mod scene;
-pub mod synth;
+pub mod pipeline;
+pub mod tools;

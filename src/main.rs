@@ -2,16 +2,16 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use realcam::camera::{Camera, CameraRequest, FilmMode};
 use realcam::gpu::{Gpu, GpuOptions};
+use realcam::io::lens_file::LensFile;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
-use realcam::lens_file::LensFile;
+use realcam::model::camera::{Camera, CameraRequest, FilmMode};
+use realcam::model::frame::Frame;
 use realcam::optics::dof::{dof_report, CocCriterion};
 use realcam::optics::film::FilmCurve;
 use realcam::optics::sensor::SensorFit;
 use realcam::optics::{Sensor, ThinLens};
-use realcam::render::Renderer;
-use realcam::scene::Frame;
+use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -351,8 +351,8 @@ fn load_lens(choice: &LensChoice) -> Result<LensFile> {
     Ok(match (&choice.lens, &choice.lens_lensfun) {
         (Some(p), _) => LensFile::load(p)?,
         (None, Some(model)) => {
-            let options = realcam::lensfun::ImportOptions::default();
-            realcam::lensfun::import_lens_file(model, &options, None)
+            let options = realcam::io::lensfun::ImportOptions::default();
+            realcam::io::lensfun::import_lens_file(model, &options, None)
                 .with_context(|| format!("--lens-lensfun {model:?}"))?
         }
         (None, None) => LensFile::default_lens(),
@@ -386,7 +386,7 @@ fn render(args: RenderArgs) -> Result<()> {
         exposure: !args.no_exposure,
         vignetting: !args.no_vignetting,
         film: Some(match (&args.film_file, args.film) {
-            (Some(path), _) => FilmMode::from_file(&realcam::film_file::FilmFile::load(path)?),
+            (Some(path), _) => FilmMode::from_file(&realcam::io::film_file::FilmFile::load(path)?),
             (None, film) => match film {
                 FilmArg::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
                 FilmArg::Contrast => {
@@ -399,9 +399,9 @@ fn render(args: RenderArgs) -> Result<()> {
         max_coc_px: args.max_coc_px,
         force: args.lens.force,
         bokeh: match args.bokeh {
-            BokehArg::Tiled => realcam::camera::BokehMode::Tiled,
-            BokehArg::Reference => realcam::camera::BokehMode::Reference,
-            BokehArg::Diffraction => realcam::camera::BokehMode::Diffraction,
+            BokehArg::Tiled => realcam::model::camera::BokehMode::Tiled,
+            BokehArg::Reference => realcam::model::camera::BokehMode::Reference,
+            BokehArg::Diffraction => realcam::model::camera::BokehMode::Diffraction,
         },
     };
     let mut request = request;
@@ -421,7 +421,7 @@ fn render(args: RenderArgs) -> Result<()> {
     camera.grain = args.grain;
     camera.seed = args.seed;
     if let Some(path) = &args.aperture_image {
-        camera.aperture_mask = Some(realcam::aperture_mask::ApertureMask::load(path)?);
+        camera.aperture_mask = Some(realcam::model::aperture::ApertureMask::load(path)?);
     }
     if !(args.depth_unit_m.is_finite() && args.depth_unit_m > 0.0) {
         bail!("--depth-unit must be a positive number of metres, got {}", args.depth_unit_m);
@@ -444,7 +444,7 @@ fn render(args: RenderArgs) -> Result<()> {
     };
     let channel_report = passes.channel_report.clone();
     let frame = Frame::from_passes(passes, &camera, depth_kind);
-    let plan = realcam::planner::plan(&frame, &camera);
+    let plan = realcam::pipeline::planner::plan(&frame, &camera);
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         eprintln!("{}", plan.explain());
@@ -527,8 +527,8 @@ fn devices() -> Result<()> {
 
 fn synth(out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    for (name, scene) in realcam::synth::testdata_scenes() {
-        realcam::synth::write_scene(out, name, &scene)?;
+    for (name, scene) in realcam::tools::synth::testdata_scenes() {
+        realcam::tools::synth::write_scene(out, name, &scene)?;
         println!("wrote {0}/{name}_color.exr and {0}/{name}_depth.exr", out.display());
     }
     Ok(())
@@ -548,7 +548,7 @@ fn compare(test: &Path, reference: &Path) -> Result<()> {
             b.height
         );
     }
-    let e = realcam::metrics::compare_rgba(&a.data, &b.data);
+    let e = realcam::tools::metrics::compare_rgba(&a.data, &b.data);
     println!(
         "rmse {:.6}  rmse_display {:.6}  mean_abs {:.6}  psnr {:.2} dB  energy {:+.3}%",
         e.rmse,
@@ -571,7 +571,7 @@ fn bench(args: BenchArgs) -> Result<()> {
         }
     }
     let gpu = open_gpu(&args.gpu)?;
-    let bench_options = realcam::bench::BenchOptions {
+    let bench_options = realcam::tools::bench::BenchOptions {
         resolutions,
         radii_px: args.radii_px.clone(),
         runs: args.runs,
@@ -583,13 +583,13 @@ fn bench(args: BenchArgs) -> Result<()> {
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let rows = realcam::bench::run(&gpu, &bench_options, |step| {
+    let rows = realcam::tools::bench::run(&gpu, &bench_options, |step| {
         bar.set_message(step.to_string());
         bar.inc(1);
     })?;
     bar.finish_and_clear();
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let table = realcam::bench::markdown(&gpu.info().to_string(), &command, &rows);
+    let table = realcam::tools::bench::markdown(&gpu.info().to_string(), &command, &rows);
     print!("{table}");
     if let Some(out) = &args.out {
         write_text_atomically(out, &table).with_context(|| format!("writing {}", out.display()))?;
@@ -619,7 +619,7 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
         film: Some(FilmMode::Linear),
         max_coc_px: args.max_coc_px,
         force: args.lens.force,
-        bokeh: realcam::camera::BokehMode::Reference,
+        bokeh: realcam::model::camera::BokehMode::Reference,
     };
     let camera = Camera::new(&lens_file, &request)?;
     let sources = PassSources {
@@ -635,20 +635,20 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let results = realcam::accuracy::run(&gpu, &frame, &camera, |m| {
+    let results = realcam::tools::accuracy::run(&gpu, &frame, &camera, |m| {
         bar.set_message(m.to_string());
         bar.inc(1);
     })?;
     bar.finish_and_clear();
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let device = gpu.info().to_string();
-    let table = realcam::accuracy::markdown(&device, &command, &results);
+    let table = realcam::tools::accuracy::markdown(&device, &command, &results);
     print!("{table}");
     std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
     for (name, text) in [
         ("accuracy.md", table.clone()),
-        ("accuracy.csv", realcam::accuracy::csv(&results)),
-        ("accuracy.svg", realcam::accuracy::svg(&device, &results)),
+        ("accuracy.csv", realcam::tools::accuracy::csv(&results)),
+        ("accuracy.svg", realcam::tools::accuracy::svg(&device, &results)),
     ] {
         let path = args.out_dir.join(name);
         write_text_atomically(&path, &text).with_context(|| format!("writing {}", path.display()))?;
@@ -658,7 +658,7 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
 }
 
 fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64], write_tables: Option<&Path>) -> Result<()> {
-    use realcam::lens_file::LensFile;
+    use realcam::io::lens_file::LensFile;
     use realcam::optics::prescription::Prescription;
     let text =
         std::fs::read_to_string(file).with_context(|| format!("lens file {}: cannot read it", file.display()))?;
@@ -682,7 +682,7 @@ fn lens_analyze(file: &Path, f_number: Option<f64>, field_deg: &[f64], write_tab
     print!("{analysis}");
     if let Some(out) = write_tables {
         let derived = analysis.derived_tables().map_err(|e| anyhow!("--write-tables: {e}"))?;
-        let new_text = realcam::lens_file::with_derived_tables(
+        let new_text = realcam::io::lens_file::with_derived_tables(
             &text,
             lens.is_some(),
             &analysis,
@@ -746,7 +746,7 @@ struct ImportLensfunArgs {
 }
 
 fn lens_import_lensfun(args: &ImportLensfunArgs) -> Result<()> {
-    let options = realcam::lensfun::ImportOptions {
+    let options = realcam::io::lensfun::ImportOptions {
         focal_length_mm: args.focal_length_mm,
         distance_m: args.distance_m,
         f_number_min: args.f_number_min,
@@ -754,7 +754,7 @@ fn lens_import_lensfun(args: &ImportLensfunArgs) -> Result<()> {
         blades: args.blades,
         sensor_diagonal_mm: args.sensor_diagonal_mm,
     };
-    let imported = realcam::lensfun::import(&args.model, &options, args.lensfun_dir.as_deref())?;
+    let imported = realcam::io::lensfun::import(&args.model, &options, args.lensfun_dir.as_deref())?;
     let crop = imported.entry.crop_factor.map_or_else(|| "not given".to_string(), |c| c.to_string());
     eprintln!("lensfun entry: {} (crop factor {crop})", imported.entry.at);
     for other in &imported.others {

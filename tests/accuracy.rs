@@ -3,8 +3,8 @@
 
 mod support;
 
-use realcam::camera::{BokehMode, FilmMode};
-use realcam::scene::Frame;
+use realcam::model::camera::{BokehMode, FilmMode};
+use realcam::model::frame::Frame;
 use support::*;
 
 #[test]
@@ -25,7 +25,7 @@ fn accuracy_report_on_a_tiny_scene() {
     let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
     camera.film = FilmMode::Linear;
     camera.bokeh = BokehMode::Reference;
-    let results = realcam::accuracy::run(&gpu, &frame, &camera, |_| ()).expect("accuracy run");
+    let results = realcam::tools::accuracy::run(&gpu, &frame, &camera, |_| ()).expect("accuracy run");
     assert_validation_clean(&gpu);
     assert_eq!(results.len(), 7);
     let reference = &results[0];
@@ -52,9 +52,9 @@ fn accuracy_report_on_a_tiny_scene() {
         geometric.error,
         exact_tiled.error
     );
-    let md = realcam::accuracy::markdown("test device", "cmd", &results);
-    let csv = realcam::accuracy::csv(&results);
-    let svg = realcam::accuracy::svg("test device", &results);
+    let md = realcam::tools::accuracy::markdown("test device", "cmd", &results);
+    let csv = realcam::tools::accuracy::csv(&results);
+    let svg = realcam::tools::accuracy::svg("test device", &results);
     for r in &results {
         assert!(md.contains(&r.method) && csv.contains(&r.method) && svg.contains(&r.method));
     }

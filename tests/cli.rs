@@ -7,7 +7,7 @@
 
 use realcam::io::{read_exr_channel, read_exr_rgba, write_exr_channels, write_exr_rgba};
 use realcam::io::{ExrWriteOptions, Image};
-use realcam::synth::{write_scene, SynthScene};
+use realcam::tools::synth::{write_scene, SynthScene};
 use std::collections::BTreeSet;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -796,7 +796,7 @@ fn dof_uses_a_0_03_mm_circle_of_confusion_by_default() {
 
 #[test]
 fn every_film_file_in_films_parses_and_the_presets_match_the_built_ins() {
-    use realcam::film_file::{FilmFile, FilmResponse};
+    use realcam::io::film_file::{FilmFile, FilmResponse};
     use realcam::optics::film::FilmCurve;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("films");
     let mut names = Vec::new();

@@ -5,9 +5,9 @@
 mod support;
 
 use ash::vk;
-use realcam::focus_processor::{build_tables, process_cpu, FocusGeometry, PsfTableSettings, PsfTables};
 use realcam::gpu::{Gpu, Recorder};
 use realcam::optics::diffraction::{encircled_energy, WAVELENGTHS_RGB_NM};
+use realcam::optics::focus_processor::{build_tables, process_cpu, FocusGeometry, PsfTableSettings, PsfTables};
 use realcam::optics::ThinLens;
 use realcam::passes::diffraction::{DiffractionParams, DiffractionPass, NAME};
 use support::{assert_validation_clean, energy, gpu};

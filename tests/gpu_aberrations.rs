@@ -3,9 +3,9 @@
 
 mod support;
 
+use realcam::model::frame::Frame;
 use realcam::optics::distortion::{DistortionTables, HeightTable};
 use realcam::passes::distortion::distortion_cpu;
-use realcam::scene::Frame;
 use support::*;
 
 const W: u32 = 256;
@@ -41,7 +41,7 @@ fn lines_frame(rows: &[u32]) -> Frame {
     Frame::new(W, H, color, vec![2.0; (W * H) as usize])
 }
 
-fn camera_with(tables: DistortionTables) -> realcam::camera::Camera {
+fn camera_with(tables: DistortionTables) -> realcam::model::camera::Camera {
     let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
     camera.distortion = Some(tables);
     camera

@@ -3,13 +3,13 @@
 
 mod support;
 
-use realcam::camera::{BokehMode, FilmMode};
-use realcam::passes::aperture::ApertureShape;
+use realcam::model::aperture::ApertureShape;
+use realcam::model::camera::{BokehMode, FilmMode};
+use realcam::model::frame::Frame;
 use realcam::passes::bokeh_gather::GatherParams;
 use realcam::passes::coc::CocParams;
 use realcam::passes::tiled_dof::TiledDofParams;
-use realcam::planner;
-use realcam::scene::Frame;
+use realcam::pipeline::planner;
 use support::*;
 
 /// Plane value of the synthetic point scenes and the highlight's value per channel.
@@ -33,8 +33,8 @@ fn row_width_px(rgba: &[f32], w: u32, h: u32) -> usize {
 }
 
 /// True when the plan runs depth of field with either method.
-fn runs_dof(plan: &realcam::planner::Plan) -> bool {
-    plan.runs("bokeh_gather") || plan.runs(realcam::planner::BOKEH_TILED)
+fn runs_dof(plan: &realcam::pipeline::planner::Plan) -> bool {
+    plan.runs("bokeh_gather") || plan.runs(realcam::pipeline::planner::BOKEH_TILED)
 }
 
 #[test]
@@ -234,9 +234,9 @@ fn profile_times_every_pass() {
     camera.film = FilmMode::Curve(realcam::optics::film::FilmCurve::default_filmic());
     let frame = testdata_frame("demo", &camera);
     let (_, plan, profile) = render(&gpu, &frame, &camera);
-    for pass in ["coc", realcam::planner::BOKEH_TILED, "vignette", "film"] {
+    for pass in ["coc", realcam::pipeline::planner::BOKEH_TILED, "vignette", "film"] {
         assert!(plan.runs(pass), "{pass} planned");
-        let pass = if pass == realcam::planner::BOKEH_TILED { "dof_half_gather" } else { pass };
+        let pass = if pass == realcam::pipeline::planner::BOKEH_TILED { "dof_half_gather" } else { pass };
         let ms = profile.pass_ms(pass).unwrap_or_else(|| panic!("{pass} timed"));
         assert!(ms.is_finite() && ms > 0.0, "{pass}: {ms} ms");
     }
@@ -492,7 +492,7 @@ fn tiled_path_stays_close_to_the_reference() {
         let (reference, _, _) = render(&gpu, &frame, &camera);
         camera.bokeh = BokehMode::Tiled;
         let (tiled, plan, _) = render(&gpu, &frame, &camera);
-        let e = realcam::metrics::compare_rgba(&tiled, &reference);
+        let e = realcam::tools::metrics::compare_rgba(&tiled, &reference);
         println!(
             "{scene} f/{f_number} focus {focus_m}: CoC {:?}, display RMSE {:.4}, energy {:+.3}%",
             plan.coc_range_px,
@@ -617,7 +617,7 @@ fn aperture_image_shapes_the_bokeh_upright_behind_and_inverted_in_front() {
             }
         })
         .collect();
-    let mask = realcam::aperture_mask::ApertureMask::from_grey(s, s, &grey).unwrap();
+    let mask = realcam::model::aperture::ApertureMask::from_grey(s, s, &grey).unwrap();
     for (scene, upper_expected) in [("point_bg", true), ("point_fg", false)] {
         for mode in [BokehMode::Tiled, BokehMode::Reference] {
             let mut camera = dof_camera(50.0, 1.0, 2.0, 0);
@@ -708,7 +708,7 @@ fn cats_eye_given_at_an_image_height_grows_linearly_from_the_centre() {
     let (default_rgba, default_plan, _) = render(&gpu, &frame, &camera);
     camera.aperture.cats_eye_at_mm = Some(corner_mm);
     let (at_corner_rgba, at_corner_plan, _) = render(&gpu, &frame, &camera);
-    let per_px = |p: &realcam::planner::Plan| p.tiled.as_ref().unwrap().aperture.cats_eye_per_px as f64;
+    let per_px = |p: &realcam::pipeline::planner::Plan| p.tiled.as_ref().unwrap().aperture.cats_eye_per_px as f64;
     assert!((per_px(&default_plan) / per_px(&at_corner_plan) - 1.0).abs() < 1e-6);
     assert_eq!(default_rgba, at_corner_rgba);
     camera.aperture.cats_eye_at_mm = Some(2.0 * corner_mm);

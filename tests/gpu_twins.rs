@@ -2,12 +2,12 @@
 
 mod support;
 
-use realcam::camera::FilmMode;
+use realcam::model::camera::FilmMode;
+use realcam::model::frame::Frame;
 use realcam::optics::film::FilmCurve;
 use realcam::passes::{bokeh_gather, coc, film, vignette};
-use realcam::planner;
-use realcam::render::Renderer;
-use realcam::scene::Frame;
+use realcam::pipeline::planner;
+use realcam::pipeline::render::Renderer;
 use support::*;
 
 /// A small deterministic frame with varied depths (0.6 m .. 20 m and sky), colors and a few
@@ -56,7 +56,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
             }
         })
         .collect();
-    let mask = realcam::aperture_mask::ApertureMask::from_grey(s, s, &triangle).unwrap();
+    let mask = realcam::model::aperture::ApertureMask::from_grey(s, s, &triangle).unwrap();
     for (blades, with_mask) in [(0, false), (5, false), (0, true)] {
         let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
         camera.aperture_mask = with_mask.then(|| mask.clone());
@@ -66,7 +66,7 @@ fn whole_pipeline_matches_the_cpu_twins() {
             image_height_mm: vec![0.0, 1.0, 3.0],
             values: vec![0.0, 0.05, 0.3],
         });
-        camera.bokeh = realcam::camera::BokehMode::Reference;
+        camera.bokeh = realcam::model::camera::BokehMode::Reference;
         camera.vignetting = true;
         camera.exposure = true;
         camera.film = FilmMode::Curve(FilmCurve::default_filmic());
@@ -99,7 +99,7 @@ fn film_pass_matches_the_f64_characteristic_curve() {
     let color: Vec<f32> = values.iter().flat_map(|&v| [v, v, v, 1.0]).collect();
     let frame = Frame::new(w, h, color, vec![2.0; (w * h) as usize]);
     let plan = planner::plan(&frame, &camera);
-    assert!(plan.runs("film") && !plan.runs("bokeh_gather") && !plan.runs(realcam::planner::BOKEH_TILED));
+    assert!(plan.runs("film") && !plan.runs("bokeh_gather") && !plan.runs(realcam::pipeline::planner::BOKEH_TILED));
     let (rgba, _) = render_plan(&gpu, &frame, &plan);
     let curve = FilmCurve::default_filmic();
     for (i, &v) in values.iter().enumerate() {
@@ -148,7 +148,7 @@ fn film_table_matches_its_cpu_twin_and_the_curve_it_samples() {
     // A film file's table sampled from the neutral curve every 0.1 decade: the GPU follows its
     // CPU twin, and the tabled curve stays within the linear-interpolation error of the
     // parametric one (second derivative * step^2 / 8).
-    use realcam::film_file::{FilmFile, FilmResponse};
+    use realcam::io::film_file::{FilmFile, FilmResponse};
     let curve = FilmCurve::default_filmic();
     let xs: Vec<f64> = (0..=100).map(|i| -8.0 + 0.1 * i as f64).collect();
     let ys: Vec<f64> = xs.iter().map(|&x| curve.apply_log10(x)).collect();

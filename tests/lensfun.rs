@@ -3,8 +3,8 @@
 //! and the command line. Without the database these tests fail (they are not skipped): run
 //! scripts/install-deps.sh.
 
-use realcam::lens_file::{LensFile, LensTables};
-use realcam::lensfun::{self, Database, ImportOptions, Imported};
+use realcam::io::lens_file::{LensFile, LensTables};
+use realcam::io::lensfun::{self, Database, ImportOptions, Imported};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;

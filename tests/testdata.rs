@@ -1,4 +1,4 @@
-//! The committed scenes in testdata/ are exactly what the generator in src/synth.rs makes, so
+//! The committed scenes in testdata/ are exactly what the generator in src/tools/synth.rs makes, so
 //! the tests' known geometry (depths, highlight energy and position) is the generator's.
 
 use realcam::io::{read_exr_channel, read_exr_rgba};
@@ -7,7 +7,7 @@ use std::path::PathBuf;
 #[test]
 fn committed_testdata_matches_the_generator() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("testdata");
-    for (name, scene) in realcam::synth::testdata_scenes() {
+    for (name, scene) in realcam::tools::synth::testdata_scenes() {
         let (color, depth) = scene.render();
         let file_color = read_exr_rgba(&dir.join(format!("{name}_color.exr"))).unwrap_or_else(|e| panic!("{e}"));
         let file_depth =
@@ -19,7 +19,7 @@ fn committed_testdata_matches_the_generator() {
 
 #[test]
 fn point_scenes_hold_one_highlight_of_known_energy() {
-    for (name, scene) in realcam::synth::testdata_scenes() {
+    for (name, scene) in realcam::tools::synth::testdata_scenes() {
         if !name.starts_with("point_") {
             continue;
         }

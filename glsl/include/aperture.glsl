@@ -17,7 +17,7 @@ struct Aperture {
     float sa_lsa_coc_px;   // traced spherical aberration: the rim's focus shift as a CoC; 0: sa_amount
 };
 
-// The user's aperture image (src/aperture_mask.rs): [size, mean, size*size values], size 0 when
+// The user's aperture image (src/model/aperture.rs): [size, mean, size*size values], size 0 when
 // none. Each shader that includes this file defines APERTURE_MASK_BINDING.
 layout(binding = APERTURE_MASK_BINDING, std430) readonly buffer ApertureMask { float aperture_mask[]; };
 

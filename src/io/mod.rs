@@ -1,10 +1,12 @@
-//! OpenEXR and PNG input/output.
+//! Files in and out: OpenEXR passes, PNG previews, lens files, film files, lensfun's database.
 //!
 //! - [`exr_read`]: loads the color, depth and velocity passes of a rendered frame
 //!   ([`load_passes`]), discovering the channel names that Blender, Nuke and other
 //!   renderers write; see the table at the top of that file.
 //! - [`exr_write`]: writes RGBA or arbitrary channels as half or float32 EXR.
 //! - [`png`]: writes an 8-bit sRGB preview.
+//! - [`lens_file`], [`film_file`]: realcam's TOML lens and film files, every field checked.
+//! - [`lensfun`]: lenses of the lensfun database converted into lens files.
 //!
 //! Both writers write a temporary file next to the target and rename it onto the target
 //! only after a complete, successful write, so a failed write never touches an existing
@@ -12,6 +14,9 @@
 
 pub mod exr_read;
 pub mod exr_write;
+pub mod film_file;
+pub mod lens_file;
+pub mod lensfun;
 pub mod png;
 
 pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba};

@@ -1,51 +1,9 @@
-//! The aperture shared by every bokeh pass: the user's description ([`ApertureShape`]), its
-//! push-constant form ([`ApertureConstants`], the `Aperture` struct of
-//! glsl/include/aperture.glsl), and the CPU twins of that file's functions.
+//! The aperture shared by every bokeh pass: the push-constant form ([`ApertureConstants`], the
+//! `Aperture` struct of glsl/include/aperture.glsl) of the camera's
+//! [`ApertureShape`](crate::model::aperture::ApertureShape), and the CPU twins of that file's
+//! functions.
 
-/// The iris: n blades (< 3 means circular), rotation, blade curvature 0 (straight) .. 1 (round).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ApertureShape {
-    pub blades: u32,
-    pub rotation_deg: f64,
-    pub curvature: f64,
-    /// Spherical aberration amount (-1..1): > 0 under-corrected, < 0 over-corrected, 0 uniform
-    /// disks (src/optics/spherical.rs).
-    pub spherical_aberration: f64,
-    /// Cat's eye (optical vignetting) at the frame's farthest corner, 0..1: the aperture is
-    /// clipped by a circle shifted by this fraction of its radius there (less nearer the centre).
-    pub cats_eye: f64,
-    /// Traced spherical aberration instead of `spherical_aberration`: the rim zone's focus
-    /// shift (marginal minus paraxial focus, mm, < 0 under-corrected) at this f-number; None
-    /// for the amount model.
-    pub lsa_rim_mm: Option<f64>,
-    /// The image height (mm) at which `cats_eye` holds; None: at the frame's farthest corner.
-    pub cats_eye_at_mm: Option<f64>,
-}
-
-impl ApertureShape {
-    pub const CIRCLE: ApertureShape = ApertureShape {
-        blades: 0,
-        rotation_deg: 0.0,
-        curvature: 1.0,
-        spherical_aberration: 0.0,
-        cats_eye: 0.0,
-        lsa_rim_mm: None,
-        cats_eye_at_mm: None,
-    };
-
-    /// cats_eye / (distance from the optical centre to the farthest corner), per pixel.
-    pub fn cats_eye_per_px(&self, width: u32, height: u32, centre_px: [f64; 2]) -> f64 {
-        let corner = [(0.0, 0.0), (width as f64, 0.0), (0.0, height as f64), (width as f64, height as f64)]
-            .iter()
-            .map(|&(x, y)| ((x - centre_px[0]).powi(2) + (y - centre_px[1]).powi(2)).sqrt())
-            .fold(0.0, f64::max);
-        if corner > 0.0 {
-            self.cats_eye.clamp(0.0, 1.0) / corner
-        } else {
-            0.0
-        }
-    }
-}
+use crate::model::aperture::ApertureShape;
 
 /// The `Aperture` struct of glsl/include/aperture.glsl: part of every bokeh pass's push
 /// constants (4-byte fields only, no padding).

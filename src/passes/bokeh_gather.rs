@@ -1,9 +1,10 @@
 //! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
-use super::aperture::{aperture_weight, ApertureConstants, ApertureShape};
+use super::aperture::{aperture_weight, ApertureConstants};
 use super::{after_compute_write, groups_for, overwrite, push_bytes};
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use crate::model::aperture::ApertureShape;
 use ash::vk;
 
 pub const NAME: &str = "bokeh_gather";
@@ -39,7 +40,7 @@ impl GatherParams {
 }
 
 /// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
-/// `aperture_mask`: the buffer data of src/aperture_mask.rs ([0, 0] for none).
+/// `aperture_mask`: the buffer data of src/model/aperture.rs ([0, 0] for none).
 pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams, aperture_mask: &[f32]) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
     let mut out = vec![0.0f32; rgba.len()];

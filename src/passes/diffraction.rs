@@ -1,6 +1,6 @@
 //! Diffraction depth of field: the focus processor of Potmesil & Chakravarty 1981 (sec. 3.2,
 //! eq 20) as a gather pass. Shader: glsl/diffraction.comp. Tables and CPU reference (f64):
-//! [`crate::focus_processor`] (`build_tables`, `process_cpu`).
+//! [`crate::optics::focus_processor`] (`build_tables`, `process_cpu`).
 //!
 //! Usage: build the tables on the CPU, upload them with [`Recorder::upload_buffer`] (its
 //! barrier makes them visible to compute reads), then [`DiffractionPass::record`] with
@@ -10,14 +10,14 @@
 //! Cost: `(2R+1)²` taps per output pixel, `R = PsfTables::radius_px`.
 
 use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::focus_processor::PsfTables;
 use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use crate::optics::focus_processor::PsfTables;
 use ash::vk;
 
 pub const NAME: &str = "diffraction";
 
 /// Push constants of glsl/diffraction.comp: the table geometry and the depth -> level mapping
-/// of [`crate::focus_processor::LevelMapping`] in f32.
+/// of [`crate::optics::focus_processor::LevelMapping`] in f32.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffractionParams {

@@ -5,7 +5,7 @@
 //! only highlights are scattered. Each step is its own pass module; this file only owns the
 //! buffers they share and the barriers between the classification and its indirect dispatches.
 
-use super::aperture::{ApertureConstants, ApertureShape};
+use super::aperture::ApertureConstants;
 use super::dof_classify::{ClassifyParams, DofClassifyPass};
 use super::dof_composite::{CompositeBindings, CompositeParams, DofCompositePass};
 use super::dof_downsample::{DofDownsamplePass, DownsampleParams};
@@ -15,6 +15,7 @@ use super::dof_tile_gather::{DofTileGatherPass, TileGatherBindings, TileGatherPa
 use super::dof_tiles::{DofTilesPass, TilesParams};
 use super::TILE_SIZE;
 use crate::gpu::{Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use crate::model::aperture::ApertureShape;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 

@@ -1,12 +1,12 @@
 //! Shared helpers for the GPU tests: a validated device, test cameras, measurements.
 #![allow(dead_code)]
 
-use realcam::camera::{Camera, CameraRequest, FilmMode};
 use realcam::gpu::{Gpu, GpuOptions, Profile};
-use realcam::lens_file::LensFile;
-use realcam::planner::{plan, Plan};
-use realcam::render::Renderer;
-use realcam::scene::Frame;
+use realcam::io::lens_file::LensFile;
+use realcam::model::camera::{Camera, CameraRequest, FilmMode};
+use realcam::model::frame::Frame;
+use realcam::pipeline::planner::{plan, Plan};
+use realcam::pipeline::render::Renderer;
 use std::path::PathBuf;
 
 /// The GPU with the Khronos validation layer and synchronization validation on. Tests fail if

@@ -2,13 +2,13 @@
 //! everywhere, for a range of CoC radii, with the fast path's error against the reference.
 //! Timings come from timestamp queries; the table names the device.
 
-use crate::camera::{BokehMode, Camera, CameraRequest, FilmMode};
 use crate::gpu::{Gpu, GpuResult, Profile};
-use crate::lens_file::LensFile;
-use crate::metrics::{compare_rgba, ImageError};
-use crate::planner::plan;
-use crate::render::Renderer;
-use crate::scene::Frame;
+use crate::io::lens_file::LensFile;
+use crate::model::camera::{BokehMode, Camera, CameraRequest, FilmMode};
+use crate::model::frame::Frame;
+use crate::pipeline::planner::plan;
+use crate::pipeline::render::Renderer;
+use crate::tools::metrics::{compare_rgba, ImageError};
 
 const PIXEL_PITCH_MM: f64 = 0.01;
 

@@ -2,10 +2,10 @@
 //! records the passes in order, reads the result back.
 
 use crate::gpu::{Gpu, GpuResult, Profile, Recorder};
+use crate::model::frame::Frame;
 use crate::passes::tiled_dof::TiledDof;
 use crate::passes::{bokeh_gather::BokehGatherPass, coc::CocPass, film::FilmPass, vignette::VignettePass};
-use crate::planner::Plan;
-use crate::scene::Frame;
+use crate::pipeline::planner::Plan;
 use ash::vk;
 
 /// The pipelines of one plan.

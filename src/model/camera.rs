@@ -1,11 +1,11 @@
 //! The camera a render uses: lens, aperture, sensor, shutter, ISO, film. Built from a lens file
 //! and the user's settings, checked against what the lens allows.
 
-use crate::lens_file::LensFile;
+use crate::io::lens_file::LensFile;
+use crate::model::aperture::ApertureShape;
 use crate::optics::film::FilmCurve;
 use crate::optics::sensor::SensorFit;
 use crate::optics::{OpticsError, Sensor, ThinLens};
-use crate::passes::aperture::ApertureShape;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
@@ -28,7 +28,7 @@ pub enum BokehMode {
     /// gather over the largest CoC): the accuracy reference, cost grows with the CoC squared.
     Reference,
     /// Potmesil & Chakravarty's focus processor: every sample spread by the diffraction pattern
-    /// of a defocused circular aperture at three wavelengths (src/focus_processor.rs); no
+    /// of a defocused circular aperture at three wavelengths (src/optics/focus_processor.rs); no
     /// occlusion. The accuracy reference of `realcam accuracy`.
     Diffraction,
 }
@@ -41,15 +41,15 @@ pub enum FilmMode {
     /// Through the film's characteristic curve (display-referred).
     Curve(FilmCurve),
     /// Through a characteristic curve given as a table (a film file's [table]).
-    Table(std::sync::Arc<crate::film_file::FilmTable>),
+    Table(std::sync::Arc<crate::io::film_file::FilmTable>),
 }
 
 impl FilmMode {
     /// A film file's response.
-    pub fn from_file(film: &crate::film_file::FilmFile) -> FilmMode {
+    pub fn from_file(film: &crate::io::film_file::FilmFile) -> FilmMode {
         match &film.response {
-            crate::film_file::FilmResponse::Curve(c) => FilmMode::Curve(*c),
-            crate::film_file::FilmResponse::Table(t) => FilmMode::Table(std::sync::Arc::new(t.clone())),
+            crate::io::film_file::FilmResponse::Curve(c) => FilmMode::Curve(*c),
+            crate::io::film_file::FilmResponse::Table(t) => FilmMode::Table(std::sync::Arc::new(t.clone())),
         }
     }
 }
@@ -73,7 +73,7 @@ pub struct Camera {
     pub max_coc_px: f64,
     pub bokeh: BokehMode,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
-    pub aperture_mask: Option<crate::aperture_mask::ApertureMask>,
+    pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
     pub distortion: Option<crate::optics::distortion::DistortionTables>,
     /// Field curvature: the sharp image surface's offset behind the film (mm) against height.

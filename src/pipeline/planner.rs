@@ -1,13 +1,13 @@
 //! Decides which passes a frame and camera call for, and says why (`--explain`). A pass whose
 //! effect would be invisible is not recorded and its pipeline is never created.
 
-use crate::camera::{BokehMode, Camera, FilmMode};
+use crate::model::camera::{BokehMode, Camera, FilmMode};
+use crate::model::frame::Frame;
 use crate::passes::bokeh_gather::GatherParams;
 use crate::passes::coc::CocParams;
 use crate::passes::film::FilmParams;
 use crate::passes::tiled_dof::TiledDofParams;
 use crate::passes::vignette::VignetteParams;
-use crate::scene::Frame;
 
 /// A CoC whose diameter is at most this many pixels is invisible.
 pub const VISIBLE_COC_PX: f64 = 1.0;
@@ -35,8 +35,10 @@ pub struct Plan {
     /// The tiled path (`--bokeh tiled`, the default).
     pub tiled: Option<TiledDofParams>,
     /// The diffraction focus processor (`--bokeh diffraction`): its tables and push constants.
-    pub diffraction:
-        Option<(std::sync::Arc<crate::focus_processor::PsfTables>, crate::passes::diffraction::DiffractionParams)>,
+    pub diffraction: Option<(
+        std::sync::Arc<crate::optics::focus_processor::PsfTables>,
+        crate::passes::diffraction::DiffractionParams,
+    )>,
     /// Distortion and lateral colour: push constants and the table buffer's data.
     pub distortion: Option<(crate::passes::distortion::DistortionParams, Vec<f32>)>,
     pub vignette: Option<VignetteParams>,
@@ -54,7 +56,7 @@ pub struct Plan {
     pub film: Option<FilmParams>,
     /// The film pass's table buffer (crate::passes::film::table_data).
     pub film_table: Vec<f32>,
-    /// The aperture image's storage-buffer data ([0, 0] when none), src/aperture_mask.rs.
+    /// The aperture image's storage-buffer data ([0, 0] when none), src/model/aperture.rs.
     pub aperture_mask: Vec<f32>,
     /// Signed CoC range over the frame in pixels (after the user clamp).
     pub coc_range_px: (f64, f64),
@@ -169,12 +171,12 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
                     step.run = false;
                     step.why = format!("{}; not needed by the focus processor", step.why);
                 }
-                let settings = crate::focus_processor::PsfTableSettings {
+                let settings = crate::optics::focus_processor::PsfTableSettings {
                     subpixel: 1,
                     max_radius_px: (0.5 * camera.max_coc_px).ceil().max(1.0) as u32 + 4,
                     ..Default::default()
                 };
-                let tables = crate::focus_processor::build_tables(
+                let tables = crate::optics::focus_processor::build_tables(
                     &camera.lens,
                     pitch_mm,
                     near_m.max(1e-6) as f64,
@@ -437,7 +439,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
         Some(params)
     };
 
-    let aperture_mask = crate::aperture_mask::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
+    let aperture_mask = crate::model::aperture::ApertureMask::buffer_data(camera.aperture_mask.as_ref());
     Plan {
         steps,
         coc,

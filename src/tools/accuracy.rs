@@ -3,12 +3,12 @@
 //! PSNR, energy error and the perceptual FLIP difference, as Markdown, CSV and an SVG plot of
 //! error against time. "Show what accuracy costs in time."
 
-use crate::camera::{BokehMode, Camera};
 use crate::gpu::{Gpu, GpuResult, Profile};
-use crate::metrics::{compare_rgba, ImageError};
-use crate::planner::{plan, Plan};
-use crate::render::Renderer;
-use crate::scene::Frame;
+use crate::model::camera::{BokehMode, Camera};
+use crate::model::frame::Frame;
+use crate::pipeline::planner::{plan, Plan};
+use crate::pipeline::render::Renderer;
+use crate::tools::metrics::{compare_rgba, ImageError};
 
 /// One method's result.
 #[derive(Clone, Debug)]

@@ -255,7 +255,7 @@ fn one() -> f64 {
 }
 
 /// The lens used when no --lens is given (lenses/default.toml, embedded).
-pub const DEFAULT_LENS_TOML: &str = include_str!("../lenses/default.toml");
+pub const DEFAULT_LENS_TOML: &str = include_str!("../../lenses/default.toml");
 
 impl LensFile {
     /// The prescription the file carries (its `[[surface]]` tables), checked as

@@ -1,8 +1,8 @@
 //! A frame ready for the GPU: RGBA color, planar depth in metres, optional velocity, and where
 //! the optical centre is.
 
-use crate::camera::Camera;
 use crate::io::{DepthKind, ScenePasses};
+use crate::model::camera::Camera;
 
 #[derive(Clone, Debug)]
 pub struct Frame {

@@ -1,7 +1,7 @@
 //! Lens files from the lensfun database (<https://lensfun.github.io>, XML in
 //! `/usr/share/lensfun/version_1`, Debian package liblensfun-data-v1): a lens's distortion,
 //! transverse chromatic aberration (lateral colour) and vignetting calibrations, converted into
-//! the tables of a realcam lens file (src/lens_file.rs) against image height in mm.
+//! the tables of a realcam lens file (src/io/lens_file.rs) against image height in mm.
 //!
 //! The models, as lensfun defines them (lensfun include/lensfun/lensfun.h.in,
 //! libs/lensfun/mod-coord.cpp, mod-color.cpp, database.cpp). Every model describes the lens,
@@ -26,7 +26,7 @@
 //! therefore h = d0 r_u (in the model's unit), and D(h) = 100 (r_d / (d0 r_u) - 1). The
 //! lateral-colour tables are the extra percent of red and blue over green at the same h.
 
-use crate::lens_file::{LensFile, LensFileError};
+use crate::io::lens_file::{LensFile, LensFileError};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -1275,7 +1275,7 @@ mod tests {
         values(t)[i]
     }
 
-    use crate::lens_file::LensTables;
+    use crate::io::lens_file::LensTables;
     fn distortion(t: &LensTables) -> Vec<f64> {
         t.distortion_percent.clone().expect("distortion table")
     }

@@ -1,0 +1,6 @@
+//! From a frame and a camera to an image: the [`planner`] walks the pass order and asks every
+//! pass whether the scene calls for it (and why); the [`render::Renderer`] records the passes that
+//! run, in order, into one command buffer.
+
+pub mod planner;
+pub mod render;

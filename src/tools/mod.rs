@@ -1,0 +1,8 @@
+//! What measures realcam rather than renders with it: the benchmark (`realcam bench`), the
+//! accuracy report (`realcam accuracy`), image error metrics (`realcam compare`) and the
+//! synthetic test scenes (`realcam synth`).
+
+pub mod accuracy;
+pub mod bench;
+pub mod metrics;
+pub mod synth;
