@@ -41,7 +41,7 @@ pub enum FilmMode {
     /// Through the film's characteristic curve (display-referred).
     Curve(FilmCurve),
     /// Through a characteristic curve given as a table (a film file's [table]).
-    Table(std::sync::Arc<crate::io::film_file::FilmTable>),
+    Table(std::sync::Arc<crate::optics::film::FilmTable>),
 }
 
 impl FilmMode {

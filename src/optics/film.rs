@@ -165,6 +165,34 @@ impl Default for FilmCurve {
     }
 }
 
+/// A characteristic curve as a table in log-log space, interpolated linearly, constant beyond
+/// its ends.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmTable {
+    pub log10_sensor_value: Vec<f64>,
+    pub log10_output: Vec<f64>,
+}
+
+impl FilmTable {
+    /// The response to a linear sensor value (NaN and values <= 0 give the first entry).
+    pub fn apply(&self, sensor_value: f64) -> f64 {
+        let x = if sensor_value > 1e-30 { sensor_value.min(1e30).log10() } else { -30.0 };
+        10f64.powf(self.apply_log10(x))
+    }
+
+    pub fn apply_log10(&self, x: f64) -> f64 {
+        let (xs, ys) = (&self.log10_sensor_value, &self.log10_output);
+        let n = xs.len();
+        if x <= xs[0] {
+            return ys[0];
+        }
+        match (1..n).find(|&i| x <= xs[i]) {
+            Some(i) => ys[i - 1] + (ys[i] - ys[i - 1]) * (x - xs[i - 1]) / (xs[i] - xs[i - 1]),
+            None => ys[n - 1],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -32,7 +32,7 @@ pub struct FilmParams {
 }
 
 /// The table buffer: log10 sensor values, then log10 outputs ([0] when there is no table).
-pub fn table_data(table: Option<&crate::io::film_file::FilmTable>) -> Vec<f32> {
+pub fn table_data(table: Option<&crate::optics::film::FilmTable>) -> Vec<f32> {
     match table {
         None => vec![0.0],
         Some(t) => t.log10_sensor_value.iter().chain(&t.log10_output).map(|&v| v as f32).collect(),
@@ -79,7 +79,7 @@ impl FilmParams {
     }
 
     /// The same, through a tabled characteristic curve.
-    pub fn with_table(self, table: &crate::io::film_file::FilmTable) -> FilmParams {
+    pub fn with_table(self, table: &crate::optics::film::FilmTable) -> FilmParams {
         FilmParams { use_curve: 2, table_entries: table.log10_sensor_value.len() as i32, ..self }
     }
 
