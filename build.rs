@@ -1,6 +1,10 @@
 //! Compiles every `glsl/*.comp` to SPIR-V with shaderc (linked against Debian's libshaderc-dev).
 //! `#include "x.glsl"` resolves against `glsl/include/`. A shader error fails the build and
 //! prints file:line.
+//!
+//! The integer `#define`s of each include (`#define NAME 12`) become Rust constants in a module
+//! named after the file (`realcam::gpu::shaders::dof_tiles::ARGS_WORDS`), so buffer layouts and
+//! indirect-argument offsets are written once, in GLSL, and shared.
 
 use std::path::{Path, PathBuf};
 
@@ -17,8 +21,27 @@ fn main() {
         .filter(|n| n.ends_with(".comp"))
         .collect();
     names.sort();
-    for entry in std::fs::read_dir(&include_dir).into_iter().flatten().flatten() {
-        println!("cargo:rerun-if-changed={}", entry.path().display());
+    let mut includes: Vec<PathBuf> =
+        std::fs::read_dir(&include_dir).into_iter().flatten().flatten().map(|e| e.path()).collect();
+    includes.sort();
+    let mut constants = String::new();
+    for path in &includes {
+        println!("cargo:rerun-if-changed={}", path.display());
+        let (Some(stem), Ok(text)) = (path.file_stem().and_then(|s| s.to_str()), std::fs::read_to_string(path)) else {
+            continue;
+        };
+        constants += &format!("/// The integer `#define`s of glsl/include/{stem}.glsl.\npub mod {stem} {{\n");
+        for line in text.lines() {
+            let mut words = line.split_whitespace();
+            if let (Some("#define"), Some(name), Some(value)) = (words.next(), words.next(), words.next()) {
+                let rest: Vec<&str> = words.collect();
+                let trailing_ok = rest.is_empty() || rest[0].starts_with("//");
+                if let (Ok(v), true) = (value.parse::<u32>(), trailing_ok) {
+                    constants += &format!("    pub const {name}: u32 = {v};\n");
+                }
+            }
+        }
+        constants += "}\n";
     }
 
     let compiler = shaderc::Compiler::new().expect("shaderc compiler");
@@ -62,5 +85,6 @@ fn main() {
         std::process::exit(1);
     }
     table += "];\n";
+    table += &constants;
     std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
 }

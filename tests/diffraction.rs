@@ -9,7 +9,8 @@ use realcam::gpu::{Gpu, Recorder};
 use realcam::optics::diffraction::{encircled_energy, WAVELENGTHS_RGB_NM};
 use realcam::optics::focus_processor::{build_tables, process_cpu, FocusGeometry, PsfTableSettings, PsfTables};
 use realcam::optics::ThinLens;
-use realcam::passes::diffraction::{DiffractionParams, DiffractionPass, NAME};
+use realcam::passes::diffraction::{Diffraction, DiffractionParams, DiffractionPush, NAME};
+use realcam::passes::{FrameImages, Pass};
 use support::{assert_validation_clean, energy, gpu};
 
 /// f/16 on 11.2 µm pixels, focused at 0.63 m: the Airy radius (1.22 λ N') is about one pixel,
@@ -28,16 +29,16 @@ fn settings() -> PsfTableSettings {
 
 /// Run the pass once; returns the RGBA output and the pass's GPU time in ms.
 fn run_gpu(gpu: &Gpu, rgba: &[f32], depth_m: &[f32], w: u32, h: u32, tables: &PsfTables) -> (Vec<f32>, f64) {
-    let pass = DiffractionPass::new(gpu).expect("pipeline");
-    let color = gpu.create_image("color", w, h, vk::Format::R32G32B32A32_SFLOAT).unwrap();
-    let depth = gpu.create_image("depth", w, h, vk::Format::R32_SFLOAT).unwrap();
-    let output = gpu.create_image("diffraction out", w, h, vk::Format::R32G32B32A32_SFLOAT).unwrap();
+    let pass = Diffraction::new(gpu).expect("pipeline");
     let mut rec = Recorder::new(gpu, "diffraction test").unwrap();
+    let color = rec.create_image("color", w, h, vk::Format::R32G32B32A32_SFLOAT).unwrap();
+    let depth = rec.create_image("depth", w, h, vk::Format::R32_SFLOAT).unwrap();
     rec.upload_images(&[(&color, rgba), (&depth, depth_m)]).unwrap();
-    let table = rec.upload_buffer("psf tables", &tables.data).unwrap();
-    let params = DiffractionParams::new(tables, w, h);
-    pass.record(&mut rec, &color, &depth, &table, &output, &params).unwrap();
-    let download = rec.download_image(&output, 4).unwrap();
+    let mut images = FrameImages::new(color, Some(depth));
+    let params =
+        DiffractionParams { push: DiffractionPush::new(tables, w, h), tables: std::sync::Arc::new(tables.clone()) };
+    pass.record(&mut rec, &mut images, &params).unwrap();
+    let download = rec.download_image(images.color(), 4).unwrap();
     let (profile, mut data) = rec.submit().unwrap();
     assert_validation_clean(gpu);
     let ms = profile.pass_ms(NAME).unwrap_or(f64::NAN);
@@ -300,7 +301,7 @@ fn tables_sum_to_one_and_extreme_depths_stay_finite() {
     // Every extreme depth through the GPU and the CPU: finite, and the two agree.
     let gpu = gpu();
     let t = build_tables(&lens, PITCH_MM, 0.0, 1e10, &small);
-    let params = DiffractionParams::new(&t, 1, 1);
+    let params = DiffractionPush::new(&t, 1, 1);
     let depths = [0.0f32, -1.0, 0.03, 0.05, FOCUS_M, 1e10, f32::INFINITY, f32::NAN, 1e-30, f32::MAX];
     for d in depths {
         let gpu_x = params.level_coordinate(d) as f64;

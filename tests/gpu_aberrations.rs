@@ -5,7 +5,7 @@ mod support;
 
 use realcam::model::frame::Frame;
 use realcam::optics::distortion::{DistortionTables, HeightTable};
-use realcam::passes::distortion::distortion_cpu;
+use realcam::passes::distortion::{distortion_cpu, Distortion};
 use support::*;
 
 const W: u32 = 256;
@@ -156,7 +156,7 @@ fn distortion_pass_matches_its_cpu_twin() {
     let camera = camera_with(tables.clone());
     let frame = lines_frame(&[20, 50, 90, 130]);
     let (rgba, plan, _) = render(&gpu, &frame, &camera);
-    let (params, _) = plan.distortion.as_ref().unwrap();
+    let params = &plan.params::<Distortion>().unwrap().push;
     let cpu = distortion_cpu(&frame.color, params, &tables);
     let worst = rgba.iter().zip(&cpu).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst < 2e-3, "GPU vs CPU distortion differ by {worst}");
@@ -303,7 +303,7 @@ fn coma_draws_a_comet_of_the_tabled_size_pointing_along_the_radius() {
 
 #[test]
 fn coma_pass_matches_its_cpu_twin() {
-    use realcam::passes::coma::{coma_cpu, table_data, ComaParams};
+    use realcam::passes::coma::{coma_cpu, table_data, Coma, ComaPush};
     let (w, h) = (48u32, 32u32);
     let color: Vec<f32> = (0..w * h * 4).map(|i| ((i * 37 % 101) as f32 / 50.0).powi(2)).collect();
     let frame = Frame::new(w, h, color.clone(), vec![2.0; (w * h) as usize]);
@@ -313,8 +313,8 @@ fn coma_pass_matches_its_cpu_twin() {
     let gpu = gpu();
     let (rgba, plan, _) = render(&gpu, &frame, &camera);
     let pitch_mm = camera.pixel_pitch_mm(w, h);
-    let params = ComaParams::new([w, h], [w as f64 / 2.0, h as f64 / 2.0], pitch_mm, &coma);
-    assert_eq!(plan.coma.as_ref().map(|(p, _)| *p), Some(params));
+    let params = ComaPush::new([w, h], [w as f64 / 2.0, h as f64 / 2.0], pitch_mm, &coma);
+    assert_eq!(plan.params::<Coma>().map(|p| p.push), Some(params));
     let cpu = coma_cpu(&color, &params, &table_data(&coma));
     let worst = rgba.iter().zip(&cpu).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "GPU vs CPU twin: {worst}");

@@ -6,9 +6,9 @@ mod support;
 use realcam::model::aperture::ApertureShape;
 use realcam::model::camera::{BokehMode, FilmMode};
 use realcam::model::frame::Frame;
-use realcam::passes::bokeh_gather::GatherParams;
-use realcam::passes::coc::CocParams;
-use realcam::passes::tiled_dof::TiledDofParams;
+use realcam::passes::bokeh_gather::{BokehGather, GatherParams};
+use realcam::passes::coc::{Coc, CocParams, CocPush};
+use realcam::passes::tiled_dof::{TiledDof, TiledDofParams};
 use realcam::pipeline::planner;
 use support::*;
 
@@ -120,15 +120,16 @@ fn in_focus_plane_passes_through_the_gather_unchanged() {
     // test them on an in-focus plane, with a gather radius as if the frame held a 20 px CoC.
     let mut plan = planner::plan(&frame, &camera);
     assert!(!plan.runs("coc") && !runs_dof(&plan));
-    plan.coc = Some(CocParams::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144, [128.0, 72.0], None));
-    plan.gather = Some(GatherParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
+    let push = CocPush::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144, [128.0, 72.0], None);
+    plan.force::<Coc>(CocParams::new(push, None));
+    plan.force::<BokehGather>(GatherParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("bokeh_gather").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst <= 1e-3, "reference gather: largest change {worst}");
     // The tiled path classifies every tile as a copy.
-    plan.gather = None;
-    plan.tiled = Some(TiledDofParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
+    plan.skip::<BokehGather>();
+    plan.force::<TiledDof>(TiledDofParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("dof_copy_tiles").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
@@ -199,7 +200,7 @@ fn blurred_foreground_covers_the_background_softly() {
         let frame = testdata_frame("edges", &camera);
         let (rgba, plan, _) = render(&gpu, &frame, &camera);
         let (w, h) = (frame.width, frame.height);
-        let near_radius_px = (plan.coc_range_px.0.abs() / 2.0) as u32;
+        let near_radius_px = (plan.coc_range_px().0.abs() / 2.0) as u32;
         assert!(near_radius_px >= 4, "test needs a clearly blurred foreground, got radius {near_radius_px}");
         let y = h / 2;
         // Blue channel: the far plane is blue (>= 0.1), the near plane is not (<= 0.2 * ...).
@@ -387,7 +388,7 @@ fn traced_spherical_aberration_follows_the_ray_model() {
         let l = &camera.lens;
         let lsa_coc_px =
             -camera.aperture.lsa_rim_mm.unwrap() / (l.effective_f_number() * l.pupil_magnification * pitch_mm);
-        let tiled = plan.tiled.as_ref().expect("tiled path");
+        let tiled = plan.params::<TiledDof>().expect("tiled path");
         assert!((tiled.aperture.sa_lsa_coc_px as f64 / lsa_coc_px - 1.0).abs() < 1e-6);
         let coc_px = camera.lens.coc_mm(6000.0) / pitch_mm;
         let s = spherical::strength_traced(lsa_coc_px, coc_px);
@@ -495,7 +496,7 @@ fn tiled_path_stays_close_to_the_reference() {
         let e = realcam::tools::metrics::compare_rgba(&tiled, &reference);
         println!(
             "{scene} f/{f_number} focus {focus_m}: CoC {:?}, display RMSE {:.4}, energy {:+.3}%",
-            plan.coc_range_px,
+            plan.coc_range_px(),
             e.rmse_display,
             100.0 * e.relative_energy_error
         );
@@ -708,7 +709,7 @@ fn cats_eye_given_at_an_image_height_grows_linearly_from_the_centre() {
     let (default_rgba, default_plan, _) = render(&gpu, &frame, &camera);
     camera.aperture.cats_eye_at_mm = Some(corner_mm);
     let (at_corner_rgba, at_corner_plan, _) = render(&gpu, &frame, &camera);
-    let per_px = |p: &realcam::pipeline::planner::Plan| p.tiled.as_ref().unwrap().aperture.cats_eye_per_px as f64;
+    let per_px = |p: &realcam::pipeline::planner::Plan| p.params::<TiledDof>().unwrap().aperture.cats_eye_per_px as f64;
     assert!((per_px(&default_plan) / per_px(&at_corner_plan) - 1.0).abs() < 1e-6);
     assert_eq!(default_rgba, at_corner_rgba);
     camera.aperture.cats_eye_at_mm = Some(2.0 * corner_mm);

@@ -3,11 +3,14 @@
 mod support;
 
 use realcam::model::camera::FilmMode;
+use realcam::model::camera::{BokehMode, Camera};
 use realcam::model::frame::Frame;
+use realcam::optics::distortion::{DistortionTables, HeightTable};
 use realcam::optics::film::FilmCurve;
-use realcam::passes::{bokeh_gather, coc, film, vignette};
+use realcam::passes::{bokeh_gather, coc, film, vignette, PASS_ORDER};
 use realcam::pipeline::planner;
 use realcam::pipeline::render::Renderer;
+use std::collections::BTreeSet;
 use support::*;
 
 /// A small deterministic frame with varied depths (0.6 m .. 20 m and sky), colors and a few
@@ -34,6 +37,40 @@ fn busy_frame(w: u32, h: u32) -> Frame {
     Frame::new(w, h, color, depth)
 }
 
+/// Depth bands across the frame: in focus (copy tiles), a small CoC (exact tiles), a large
+/// CoC (half resolution, with sprites from the highlights), in front of and behind the focus.
+fn banded_frame(w: u32, h: u32) -> Frame {
+    let mut frame = busy_frame(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let depth = match x * 10 / w {
+                0..=3 => 2.0,
+                4 | 5 => 2.3,
+                6 | 7 => 0.9,
+                _ => 8.0,
+            };
+            frame.depth_m[(y * w + x) as usize] = depth;
+        }
+    }
+    frame
+}
+
+/// A triangular aperture image.
+fn triangle_mask() -> realcam::model::aperture::ApertureMask {
+    let s = 32u32;
+    let triangle: Vec<f32> = (0..s * s)
+        .map(|i| {
+            let (x, y) = ((i % s) as f32, (i / s) as f32);
+            if x >= y * 0.5 && x <= s as f32 - y * 0.5 {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    realcam::model::aperture::ApertureMask::from_grey(s, s, &triangle).unwrap()
+}
+
 fn assert_close(gpu: &[f32], cpu: &[f32], what: &str, relative: f32) {
     assert_eq!(gpu.len(), cpu.len());
     for (i, (g, c)) in gpu.iter().zip(cpu).enumerate() {
@@ -42,35 +79,79 @@ fn assert_close(gpu: &[f32], cpu: &[f32], what: &str, relative: f32) {
     }
 }
 
-#[test]
-fn whole_pipeline_matches_the_cpu_twins() {
-    let gpu = gpu();
-    // A triangular aperture image for the third run.
-    let s = 32u32;
-    let triangle: Vec<f32> = (0..s * s)
-        .map(|i| {
-            if (i % s) as f32 >= ((i / s) as f32) * 0.5 && (i % s) as f32 <= s as f32 - ((i / s) as f32) * 0.5 {
-                0.0
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let mask = realcam::model::aperture::ApertureMask::from_grey(s, s, &triangle).unwrap();
-    for (blades, with_mask) in [(0, false), (5, false), (0, true)] {
+/// Scenes and cameras that together make every pass of the pass order run, on tiny frames.
+fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
+    let mut cases = Vec::new();
+    // The reference gather with everything the aperture can do, vignetting and the film curve.
+    for (blades, with_mask) in [(5, false), (0, true)] {
         let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
-        camera.aperture_mask = with_mask.then(|| mask.clone());
+        camera.aperture_mask = with_mask.then(triangle_mask);
         camera.aperture.spherical_aberration = 0.5;
         camera.aperture.cats_eye = 0.3;
-        camera.field_curvature = Some(realcam::optics::distortion::HeightTable {
-            image_height_mm: vec![0.0, 1.0, 3.0],
-            values: vec![0.0, 0.05, 0.3],
-        });
-        camera.bokeh = realcam::model::camera::BokehMode::Reference;
+        camera.field_curvature =
+            Some(HeightTable { image_height_mm: vec![0.0, 1.0, 3.0], values: vec![0.0, 0.05, 0.3] });
+        camera.bokeh = BokehMode::Reference;
         camera.vignetting = true;
         camera.exposure = true;
         camera.film = FilmMode::Curve(FilmCurve::default_filmic());
-        let frame = busy_frame(40, 28);
+        cases.push(("reference gather, vignette, film", busy_frame(40, 28), camera));
+    }
+    // The tiled path (copy, small and large tiles, sprites) once per channel for longitudinal
+    // colour, then every aberration of the image.
+    let mut camera = dof_camera(50.0, 1.4, 2.0, 6);
+    camera.aperture.spherical_aberration = -0.4;
+    camera.longitudinal_color_mm = Some([0.3, -0.3]);
+    let table = |values: Vec<f64>| HeightTable { image_height_mm: vec![0.0, 2.0, 6.0], values };
+    camera.distortion = Some(DistortionTables {
+        green_percent: table(vec![0.0, -1.0, -4.0]),
+        red_extra_percent: table(vec![0.0, 0.1, 0.3]),
+        blue_extra_percent: table(vec![0.0, -0.1, -0.3]),
+    });
+    camera.astigmatism = Some((table(vec![0.0, 0.05, 0.2]), table(vec![0.0, 0.02, 0.1])));
+    camera.coma = Some(table(vec![0.0, 0.1, 0.3]));
+    cases.push(("tiled, longitudinal colour, distortion, astigmatism, coma", banded_frame(160, 48), camera));
+    // The diffraction focus processor.
+    let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
+    camera.bokeh = BokehMode::Diffraction;
+    camera.max_coc_px = 12.0;
+    cases.push(("diffraction", busy_frame(24, 16), camera));
+    cases
+}
+
+#[test]
+fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
+    // Every dispatch of the plan is checked against its shader's CPU twin on the GPU's own
+    // inputs (the recorder reads the bindings back before and after it). A pass of the pass
+    // order that no case runs, or a compiled shader that no dispatch checked, fails the test.
+    let gpu = gpu();
+    let (mut ran, mut checked, mut failures) = (BTreeSet::new(), BTreeSet::new(), Vec::new());
+    for (name, frame, camera) in twin_cases() {
+        let plan = planner::plan(&frame, &camera);
+        let renderer = Renderer::new(&gpu, &plan).expect("pipelines");
+        let (_, checks) = renderer.render_with_twin_checks(&frame, &plan).expect("render");
+        assert_validation_clean(&gpu);
+        for c in checks {
+            checked.insert(c.shader);
+            if let Err(e) = c.result {
+                failures.push(format!("{name}: pass {}: {e}", c.pass));
+            }
+        }
+        ran.extend(plan.passes.iter().filter(|p| p.runs()).map(|p| p.name));
+    }
+    assert!(failures.is_empty(), "{} dispatches differ from their twins:\n{}", failures.len(), failures.join("\n"));
+    for entry in PASS_ORDER {
+        assert!(ran.contains(entry.name), "pass {} ran in no case: add one to twin_cases", entry.name);
+    }
+    for (shader, _) in realcam::gpu::shaders::ALL {
+        assert!(checked.contains(shader), "shader {shader} was never checked against a twin");
+    }
+}
+
+#[test]
+fn whole_pipeline_matches_the_chained_cpu_twins() {
+    // The renderer's composition: the CPU twins chained by hand give the GPU's output.
+    let gpu = gpu();
+    for (_, frame, camera) in twin_cases().into_iter().take(2) {
         let plan = planner::plan(&frame, &camera);
         for pass in ["coc", "bokeh_gather", "vignette", "film"] {
             assert!(plan.runs(pass), "{pass} should run:\n{}", plan.explain());
@@ -79,12 +160,16 @@ fn whole_pipeline_matches_the_cpu_twins() {
         let out = renderer.render(&frame, &plan, true).expect("render");
         assert_validation_clean(&gpu);
 
-        let coc_cpu = coc::coc_cpu(&frame.depth_m, plan.coc.as_ref().unwrap(), &plan.coc_table);
+        let coc_params = plan.params::<coc::Coc>().unwrap();
+        let coc_cpu = coc::coc_cpu(&frame.depth_m, &coc_params.push, &coc_params.table);
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
-        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, plan.gather.as_ref().unwrap(), &plan.aperture_mask);
-        let vig = vignette::vignette_cpu(&dof, plan.vignette.as_ref().unwrap(), &plan.vignette_table);
-        let cpu = film::film_cpu(&vig, plan.film.as_ref().unwrap(), &plan.film_table);
-        assert_close(&out.rgba, &cpu, &format!("pipeline with {blades} blades"), 1e-4);
+        let gather = plan.params::<bokeh_gather::BokehGather>().unwrap();
+        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture_mask);
+        let v = plan.params::<vignette::Vignette>().unwrap();
+        let vig = vignette::vignette_cpu(&dof, &v.push, &v.table);
+        let f = plan.params::<film::Film>().unwrap();
+        let cpu = film::film_cpu(&vig, &f.push, &f.table);
+        assert_close(&out.rgba, &cpu, "pipeline", 1e-4);
     }
 }
 
@@ -128,7 +213,8 @@ fn sensor_noise_is_deterministic_and_grows_with_the_square_root_of_iso() {
         let plan = planner::plan(&frame, &camera);
         assert!(plan.runs("film"));
         let (rgba, _) = render_plan(&gpu, &frame, &plan);
-        let cpu = film::film_cpu(&frame.color, plan.film.as_ref().unwrap(), &plan.film_table);
+        let f = plan.params::<film::Film>().unwrap();
+        let cpu = film::film_cpu(&frame.color, &f.push, &f.table);
         assert_close(&rgba, &cpu, "noise GPU vs CPU", 1e-4);
         let greens: Vec<f64> = rgba.chunks_exact(4).map(|p| p[1] as f64).collect();
         let mean = greens.iter().sum::<f64>() / greens.len() as f64;
@@ -170,7 +256,8 @@ fn film_table_matches_its_cpu_twin_and_the_curve_it_samples() {
     let plan = planner::plan(&frame, &camera);
     assert!(plan.runs("film"));
     let (rgba, _) = render_plan(&gpu, &frame, &plan);
-    let cpu = film::film_cpu(&color, plan.film.as_ref().unwrap(), &plan.film_table);
+    let f = plan.params::<film::Film>().unwrap();
+    let cpu = film::film_cpu(&color, &f.push, &f.table);
     assert_close(&rgba, &cpu, "film table GPU vs CPU", 1e-4);
     // Linear interpolation error bound: max |y''| h^2 / 8 = max |second difference| / 8.
     let bound = (1..ys.len() - 1).map(|i| (ys[i + 1] - 2.0 * ys[i] + ys[i - 1]).abs()).fold(0.0, f64::max) / 8.0;

@@ -1,4 +1,5 @@
-// Layout of the tiled depth-of-field buffers (src/passes/dof_tiles.rs mirrors it).
+// Layout of the tiled depth-of-field buffers. The integer defines are Rust constants too
+// (realcam::gpu::shaders::dof_tiles, made by build.rs).
 #ifndef REALCAM_DOF_TILES_GLSL
 #define REALCAM_DOF_TILES_GLSL
 
@@ -10,11 +11,14 @@
 #define CLASS_COUNT 3
 
 // The args buffer: three indirect dispatches (x, y, z) then the sprite counters.
-#define ARGS_DISPATCH(c) ((c) * 3)
+#define ARGS_DISPATCH_WORDS 3
+#define ARGS_DISPATCH(c) ((c) * ARGS_DISPATCH_WORDS)
 #define ARGS_SPRITE_COUNT 9
 #define ARGS_SPRITES_DROPPED 10
 #define ARGS_WORDS 12
 
+// A sprite: vec2 + float + float + vec4 (std430: 32 bytes, 8 words).
+#define SPRITE_WORDS 8
 struct Sprite {
     vec2 centre_px;
     float coc_px;

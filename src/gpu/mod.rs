@@ -3,16 +3,19 @@
 //! queries. It knows nothing about optics; `src/passes/` builds on it.
 
 mod context;
+pub mod kernel;
 mod pipeline;
 mod profiler;
 mod recorder;
+pub mod reflect;
 mod resources;
 pub mod shaders;
 
 pub use context::{DeviceInfo, Gpu, GpuOptions};
+pub use kernel::{buffer, image, Binding, HostData, HostImage, Kernel, Shader, Twin};
 pub use pipeline::ComputePipeline;
 pub use profiler::{PassTiming, Profile};
-pub use recorder::{Bind, Download, Recorder};
+pub use recorder::{Bind, Download, Recorder, TwinCheck};
 pub use resources::{color_range, GpuBuffer, GpuImage};
 
 use ash::vk;
@@ -44,6 +47,15 @@ pub enum GpuError {
     AllocatorGone,
     #[error("the shader {0} is not in this build")]
     NoShader(String),
+    /// A pass's declaration of a shader's bindings or push constants does not match the SPIR-V.
+    #[error("shader {shader}: {message}")]
+    Interface { shader: &'static str, message: String },
+    /// A dispatch bound resources that do not fit the shader's declared bindings.
+    #[error("dispatch of shader {shader}: {message}")]
+    Binding { shader: &'static str, message: String },
+    /// A recording asked for something no earlier step provided (a bug, not bad input).
+    #[error("internal error: {0}")]
+    Internal(String),
 }
 
 pub type GpuResult<T> = Result<T, GpuError>;

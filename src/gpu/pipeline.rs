@@ -2,6 +2,7 @@
 //! `src/passes/` creates one of these for its shader; nothing else is shared between passes.
 
 use super::context::Shared;
+use super::kernel::Binding;
 use super::{Gpu, GpuError, GpuResult, VkContext};
 use ash::vk;
 use std::sync::Arc;
@@ -11,18 +12,19 @@ pub struct ComputePipeline {
     pub pipeline: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
-    pub bindings: Vec<vk::DescriptorType>,
+    pub bindings: Vec<Binding>,
     pub push_constant_bytes: u32,
     pub name: &'static str,
 }
 
 impl ComputePipeline {
-    /// `bindings[i]` is the descriptor type of binding `i` of set 0.
+    /// `bindings[i]` is binding `i` of set 0. Passes create theirs through
+    /// [`Kernel::new`](super::Kernel::new), which first checks them against the SPIR-V.
     pub fn new(
         gpu: &Gpu,
         name: &'static str,
         spirv: &[u8],
-        bindings: &[vk::DescriptorType],
+        bindings: &[Binding],
         push_constant_bytes: u32,
     ) -> GpuResult<ComputePipeline> {
         let device = gpu.device();
@@ -30,10 +32,10 @@ impl ComputePipeline {
         let layout_bindings: Vec<_> = bindings
             .iter()
             .enumerate()
-            .map(|(i, &ty)| {
+            .map(|(i, b)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
-                    .descriptor_type(ty)
+                    .descriptor_type(b.kind.descriptor_type())
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })

@@ -1,13 +1,22 @@
 //! One command buffer, recorded pass by pass and submitted once. Each pass is bracketed by a
-//! debug label and two timestamps; descriptor sets come from a pool owned by the recording.
+//! debug label and two timestamps; descriptor sets come from a pool owned by the recording, and
+//! so do the images and buffers created during it, which live until the submission completed.
 //! Barriers are not inferred here: every pass writes its own (see `src/passes/`).
+//!
+//! Every dispatch's bindings are checked against the shader's declaration. A recording made with
+//! [`Recorder::with_twin_checks`] also runs every dispatch against the shader's CPU twin: it
+//! submits before and after each dispatch, reads the bound resources back, runs the twin on the
+//! copy from before and compares (see [`TwinCheck`]); for tests.
 
+use super::kernel::{compare_with_twin, Binding, HostData, HostImage, TwinFn};
 use super::profiler::{PassTiming, Profile};
+use super::reflect::BindingKind;
 use super::resources::color_range;
-use super::{ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, VkContext};
+use super::{ComputePipeline, Gpu, GpuBuffer, GpuError, GpuImage, GpuResult, VkContext};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::ffi::CString;
+use std::sync::Arc;
 
 const MAX_TIMED_SPANS: u32 = 128;
 
@@ -17,6 +26,16 @@ pub enum Bind<'a> {
     Image(&'a GpuImage),
     /// A storage or uniform buffer, whole.
     Buffer(&'a GpuBuffer),
+}
+
+/// One dispatch run against its CPU twin ([`Recorder::with_twin_checks`]).
+#[derive(Clone, Debug)]
+pub struct TwinCheck {
+    /// The pass (span) the dispatch was recorded in.
+    pub pass: String,
+    pub shader: &'static str,
+    /// `Err` names the first binding and texel or word where GPU and twin differ.
+    pub result: Result<(), String>,
 }
 
 /// Recording of one frame's work.
@@ -30,6 +49,12 @@ pub struct Recorder {
     open_span: Option<usize>,
     staging: Vec<GpuBuffer>,
     downloads: Vec<(GpuBuffer, usize)>,
+    /// Images and buffers the passes created: alive until the recording is dropped, after the
+    /// submission completed.
+    images: Vec<Arc<GpuImage>>,
+    buffers: Vec<Arc<GpuBuffer>>,
+    /// `Some` when every dispatch is checked against its twin.
+    twin_checks: Option<Vec<TwinCheck>>,
 }
 
 /// Handle to an image read back by [`Recorder::download_image`].
@@ -38,6 +63,16 @@ pub struct Download(usize);
 
 impl Recorder {
     pub fn new(gpu: &Gpu, label: &str) -> GpuResult<Recorder> {
+        Self::create(gpu, label, false)
+    }
+
+    /// A recording that runs every dispatch against the shader's CPU twin (slow: it submits
+    /// around each dispatch; no timestamps). The results come back from [`Recorder::submit`].
+    pub fn with_twin_checks(gpu: &Gpu, label: &str) -> GpuResult<Recorder> {
+        Self::create(gpu, label, true)
+    }
+
+    fn create(gpu: &Gpu, label: &str, twin_checks: bool) -> GpuResult<Recorder> {
         let device = gpu.device();
         unsafe {
             let command_pool = device
@@ -65,7 +100,7 @@ impl Recorder {
             let descriptor_pool = device
                 .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(128).pool_sizes(&sizes), None)
                 .vk("vkCreateDescriptorPool")?;
-            let query_pool = if gpu.shared.timestamps {
+            let query_pool = if gpu.shared.timestamps && !twin_checks {
                 let pool = device
                     .create_query_pool(
                         &vk::QueryPoolCreateInfo::default()
@@ -97,6 +132,9 @@ impl Recorder {
                 open_span: None,
                 staging: Vec::new(),
                 downloads: Vec::new(),
+                images: Vec::new(),
+                buffers: Vec::new(),
+                twin_checks: twin_checks.then(Vec::new),
             })
         }
     }
@@ -114,7 +152,7 @@ impl Recorder {
         self.end_pass();
         let index = self.spans.len();
         self.spans.push(name.to_string());
-        if let Some(d) = &self.gpu.shared.debug_device {
+        if let (Some(d), None) = (&self.gpu.shared.debug_device, &self.twin_checks) {
             if let Ok(label) = CString::new(name) {
                 let info = vk::DebugUtilsLabelEXT::default().label_name(&label).color([0.2, 0.6, 0.9, 1.0]);
                 unsafe { d.cmd_begin_debug_utils_label(self.cb, &info) };
@@ -132,7 +170,7 @@ impl Recorder {
         if let (Some(pool), true) = (self.query_pool, (index as u32) < MAX_TIMED_SPANS) {
             unsafe { self.gpu.cmd_timestamp(self.cb, pool, index as u32 * 2 + 1) };
         }
-        if let Some(d) = &self.gpu.shared.debug_device {
+        if let (Some(d), None) = (&self.gpu.shared.debug_device, &self.twin_checks) {
             unsafe { d.cmd_end_debug_utils_label(self.cb) };
         }
     }
@@ -162,31 +200,213 @@ impl Recorder {
         unsafe { self.gpu.device().cmd_fill_buffer(self.cb, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
     }
 
+    /// A storage image (also a copy source and target) that lives until the recording is
+    /// dropped, after the submission completed.
+    pub fn create_image(
+        &mut self,
+        name: &str,
+        width: u32,
+        height: u32,
+        format: vk::Format,
+    ) -> GpuResult<Arc<GpuImage>> {
+        let image = Arc::new(self.gpu.create_image(name, width, height, format)?);
+        self.images.push(image.clone());
+        Ok(image)
+    }
+
+    /// A device-local buffer that lives until the recording is dropped.
+    pub fn create_buffer(
+        &mut self,
+        name: &str,
+        size_bytes: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> GpuResult<Arc<GpuBuffer>> {
+        // Also a copy source: twin checks read every buffer back.
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buffer = Arc::new(self.gpu.create_buffer(name, size_bytes, usage, MemoryLocation::GpuOnly)?);
+        self.buffers.push(buffer.clone());
+        Ok(buffer)
+    }
+
     /// Bind `pipeline` with a fresh descriptor set holding `binds`, push the constants, dispatch.
-    pub fn dispatch(
+    /// Reached through [`Kernel::dispatch`](super::Kernel::dispatch), which knows the twin.
+    pub(crate) fn dispatch(
         &mut self,
         pipeline: &ComputePipeline,
         binds: &[Bind<'_>],
         push_constants: &[u8],
         groups: [u32; 3],
+        twin: TwinFn,
     ) -> GpuResult<()> {
-        self.bind(pipeline, binds, push_constants)?;
-        unsafe { self.gpu.device().cmd_dispatch(self.cb, groups[0].max(1), groups[1].max(1), groups[2].max(1)) };
-        Ok(())
+        self.record_dispatch(pipeline, binds, push_constants, Groups::Direct(groups.map(|g| g.max(1))), twin)
     }
 
     /// Like [`Recorder::dispatch`], with the group counts read from `args` at `offset_bytes`
     /// (written by an earlier pass).
-    pub fn dispatch_indirect(
+    pub(crate) fn dispatch_indirect(
         &mut self,
         pipeline: &ComputePipeline,
         binds: &[Bind<'_>],
         push_constants: &[u8],
         args: &GpuBuffer,
         offset_bytes: u64,
+        twin: TwinFn,
     ) -> GpuResult<()> {
+        self.record_dispatch(pipeline, binds, push_constants, Groups::Indirect(args, offset_bytes), twin)
+    }
+
+    fn record_dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        binds: &[Bind<'_>],
+        push_constants: &[u8],
+        groups: Groups<'_>,
+        twin: TwinFn,
+    ) -> GpuResult<()> {
+        check_binds(pipeline.name, &pipeline.bindings, binds)?;
+        let before = match self.twin_checks {
+            Some(_) => Some(self.read_back(binds, groups)?),
+            None => None,
+        };
         self.bind(pipeline, binds, push_constants)?;
-        unsafe { self.gpu.device().cmd_dispatch_indirect(self.cb, args.buffer, offset_bytes) };
+        let device = self.gpu.device();
+        match groups {
+            Groups::Direct(g) => unsafe { device.cmd_dispatch(self.cb, g[0], g[1], g[2]) },
+            Groups::Indirect(args, offset) => unsafe { device.cmd_dispatch_indirect(self.cb, args.buffer, offset) },
+        }
+        if let Some((mut twin_data, counts)) = before {
+            let (mut gpu_data, _) = self.read_back(binds, Groups::Direct(counts))?;
+            (twin.run)(push_constants, counts, &mut twin_data);
+            (twin.canonical)(push_constants, &mut twin_data);
+            (twin.canonical)(push_constants, &mut gpu_data);
+            let result = compare_with_twin(pipeline.name, &pipeline.bindings, &gpu_data, &twin_data, twin.tolerance);
+            let pass = self.open_span.and_then(|i| self.spans.get(i)).cloned().unwrap_or_default();
+            if let Some(checks) = self.twin_checks.as_mut() {
+                checks.push(TwinCheck { pass, shader: pipeline.name, result });
+            }
+        }
+        Ok(())
+    }
+
+    /// Twin checks: submit what is recorded so far, then copy every bound resource back to the
+    /// host (images from layout GENERAL), with the workgroup counts of the dispatch.
+    fn read_back(&mut self, binds: &[Bind<'_>], groups: Groups<'_>) -> GpuResult<(Vec<HostData>, [u32; 3])> {
+        self.flush()?;
+        let mut staged = Vec::new();
+        let device = self.gpu.device().clone();
+        let copy_buffer = |rec: &mut Recorder, source: vk::Buffer, offset: u64, size: u64| -> GpuResult<GpuBuffer> {
+            let staging = rec.gpu.create_buffer(
+                "twin check read-back",
+                size,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
+            let region = vk::BufferCopy { src_offset: offset, dst_offset: 0, size };
+            unsafe { device.cmd_copy_buffer(rec.cb, source, staging.buffer, &[region]) };
+            Ok(staging)
+        };
+        // Every bound image is in GENERAL (the passes' own barriers put it there): to the copy's
+        // layout for the read-back, and back. The flush's global barrier already ordered the
+        // copies after everything recorded before.
+        let layout = |image: &GpuImage, from: vk::ImageLayout, to: vk::ImageLayout| {
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+                .old_layout(from)
+                .new_layout(to)
+                .image(image.image)
+                .subresource_range(color_range())
+        };
+        let images: Vec<&GpuImage> =
+            binds.iter().filter_map(|b| if let Bind::Image(i) = b { Some(*i) } else { None }).collect();
+        let (general, transfer) = (vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+        self.image_barriers(&images.iter().map(|i| layout(i, general, transfer)).collect::<Vec<_>>());
+        for b in binds {
+            staged.push(match b {
+                Bind::Image(image) => {
+                    let size = image.width as u64 * image.height as u64 * image.channels() as u64 * 4;
+                    let staging = self.gpu.create_buffer(
+                        "twin check read-back",
+                        size,
+                        vk::BufferUsageFlags::TRANSFER_DST,
+                        MemoryLocation::GpuToCpu,
+                    )?;
+                    let region = buffer_image_region(image);
+                    unsafe {
+                        device.cmd_copy_image_to_buffer(self.cb, image.image, transfer, staging.buffer, &[region])
+                    };
+                    staging
+                }
+                Bind::Buffer(buffer) => copy_buffer(self, buffer.buffer, 0, buffer.size_bytes)?,
+            });
+        }
+        let args = match groups {
+            Groups::Indirect(args, offset) => Some(copy_buffer(self, args.buffer, offset, 12)?),
+            Groups::Direct(_) => None,
+        };
+        self.image_barriers(&images.iter().map(|i| layout(i, transfer, general)).collect::<Vec<_>>());
+        // Copy writes -> host reads after the fence.
+        self.memory_barrier(
+            vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ),
+        );
+        self.flush()?;
+        let data = binds
+            .iter()
+            .zip(&staged)
+            .map(|(b, staging)| match b {
+                Bind::Image(image) => {
+                    HostData::Image(HostImage::new(image.width, image.height, image.channels(), staging.read_f32()))
+                }
+                Bind::Buffer(_) => HostData::Buffer(staging.read_u32()),
+            })
+            .collect();
+        let counts = match (groups, args) {
+            (Groups::Direct(g), _) => g,
+            (Groups::Indirect(..), Some(a)) => {
+                let w = a.read_u32();
+                [w[0], w[1], w[2]]
+            }
+            (Groups::Indirect(..), None) => [0; 3],
+        };
+        Ok((data, counts))
+    }
+
+    /// Twin checks: end and submit the command buffer, wait, and continue in a new one whose
+    /// first barrier orders everything after everything before (memory writes made available
+    /// and visible), so the split changes nothing for the passes.
+    fn flush(&mut self) -> GpuResult<()> {
+        let device = self.gpu.device().clone();
+        unsafe {
+            device.end_command_buffer(self.cb).vk("vkEndCommandBuffer")?;
+            self.gpu.submit_and_wait(self.cb)?;
+            self.cb = device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(self.command_pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .vk("vkAllocateCommandBuffers")?[0];
+            device
+                .begin_command_buffer(
+                    self.cb,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .vk("vkBeginCommandBuffer")?;
+        }
+        self.memory_barrier(
+            vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE),
+        );
         Ok(())
     }
 
@@ -205,7 +425,7 @@ impl Recorder {
                 let write = vk::WriteDescriptorSet::default()
                     .dst_set(set)
                     .dst_binding(i as u32)
-                    .descriptor_type(pipeline.bindings[i]);
+                    .descriptor_type(pipeline.bindings[i].kind.descriptor_type());
                 match b {
                     Bind::Image(img) => {
                         let info = [vk::DescriptorImageInfo {
@@ -298,7 +518,7 @@ impl Recorder {
 
     /// A device-local storage buffer holding `data` (lookup tables and the like). The copy is
     /// made visible to compute-shader reads by the barrier recorded here.
-    pub fn upload_buffer(&mut self, name: &str, data: &[f32]) -> GpuResult<GpuBuffer> {
+    pub fn upload_buffer(&mut self, name: &str, data: &[f32]) -> GpuResult<Arc<GpuBuffer>> {
         let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_ne_bytes()).collect();
         let size = bytes.len().max(4) as u64;
         let mut staging = self.gpu.create_buffer(
@@ -311,7 +531,10 @@ impl Recorder {
         let buffer = self.gpu.create_buffer(
             name,
             size,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            // A copy source too: twin checks read every buffer back.
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;
         unsafe {
@@ -332,6 +555,8 @@ impl Recorder {
             .offset(0)
             .size(vk::WHOLE_SIZE)]);
         self.staging.push(staging);
+        let buffer = Arc::new(buffer);
+        self.buffers.push(buffer.clone());
         Ok(buffer)
     }
 
@@ -382,7 +607,13 @@ impl Recorder {
 
     /// Submit, wait, and return the per-pass GPU times and the read-back data (indexed by the
     /// [`Download`] handles, in order).
-    pub fn submit(mut self) -> GpuResult<(Profile, Vec<Vec<f32>>)> {
+    pub fn submit(self) -> GpuResult<(Profile, Vec<Vec<f32>>)> {
+        self.submit_checked().map(|(profile, data, _)| (profile, data))
+    }
+
+    /// [`Recorder::submit`], also returning the twin checks of a recording made with
+    /// [`Recorder::with_twin_checks`] (empty otherwise).
+    pub fn submit_checked(mut self) -> GpuResult<(Profile, Vec<Vec<f32>>, Vec<TwinCheck>)> {
         self.end_pass();
         let device = self.gpu.device().clone();
         unsafe {
@@ -416,9 +647,42 @@ impl Recorder {
                 }
             }
             let data = self.downloads.iter().map(|(buffer, _)| buffer.read_f32()).collect();
-            Ok((Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms }, data))
+            let checks = self.twin_checks.take().unwrap_or_default();
+            Ok((Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms }, data, checks))
         }
     }
+}
+
+/// How many workgroups a dispatch runs.
+#[derive(Clone, Copy)]
+enum Groups<'a> {
+    Direct([u32; 3]),
+    /// Read from the buffer at the byte offset (VkDispatchIndirectCommand).
+    Indirect(&'a GpuBuffer, u64),
+}
+
+/// The resources of a dispatch against the shader's declared bindings: one per binding, each
+/// of the declared kind.
+fn check_binds(shader: &'static str, declared: &[Binding], binds: &[Bind<'_>]) -> GpuResult<()> {
+    if binds.len() != declared.len() {
+        return Err(GpuError::Binding {
+            shader,
+            message: format!("{} resources bound to {} declared bindings", binds.len(), declared.len()),
+        });
+    }
+    for (i, (b, d)) in binds.iter().zip(declared).enumerate() {
+        let given = match b {
+            Bind::Image(_) => BindingKind::StorageImage,
+            Bind::Buffer(_) => BindingKind::StorageBuffer,
+        };
+        if given != d.kind && !(given == BindingKind::StorageBuffer && d.kind == BindingKind::UniformBuffer) {
+            return Err(GpuError::Binding {
+                shader,
+                message: format!("binding {i} ({}) is {} but {given} was bound", d.name, d.kind),
+            });
+        }
+    }
+    Ok(())
 }
 
 impl Download {

@@ -132,6 +132,17 @@ impl Gpu {
     }
 }
 
+impl GpuImage {
+    /// f32 channels per texel (the formats realcam uses: R32F and RGBA32F).
+    pub fn channels(&self) -> u32 {
+        match self.format {
+            vk::Format::R32_SFLOAT => 1,
+            vk::Format::R32G32_SFLOAT => 2,
+            _ => 4,
+        }
+    }
+}
+
 pub fn color_range() -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {
         aspect_mask: vk::ImageAspectFlags::COLOR,

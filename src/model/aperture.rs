@@ -125,18 +125,6 @@ impl ApertureMask {
         let mean = values.iter().sum::<f32>() / (n * n) as f32;
         (mean > 0.0).then_some(ApertureMask { values, mean })
     }
-
-    /// The storage-buffer layout the shaders read (glsl/include/aperture.glsl): [size, mean, values...].
-    pub fn buffer_data(mask: Option<&ApertureMask>) -> Vec<f32> {
-        match mask {
-            None => vec![0.0, 0.0],
-            Some(m) => {
-                let mut data = vec![MASK_SIZE as f32, m.mean];
-                data.extend_from_slice(&m.values);
-                data
-            }
-        }
-    }
 }
 
 #[cfg(test)]

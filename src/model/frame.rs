@@ -66,6 +66,14 @@ impl Frame {
         }
     }
 
+    /// Distance (px) from the optical centre to the frame's farthest corner.
+    pub fn farthest_corner_px(&self) -> f64 {
+        let (cx, cy) = (self.centre_px[0], self.centre_px[1]);
+        let dx = cx.max(self.width as f64 - cx);
+        let dy = cy.max(self.height as f64 - cy);
+        (dx * dx + dy * dy).sqrt()
+    }
+
     /// Width and height of the display window (what the sensor maps to).
     pub fn display_size(&self) -> (u32, u32) {
         (self.display_window.2, self.display_window.3)

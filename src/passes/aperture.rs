@@ -8,7 +8,7 @@ use crate::model::aperture::ApertureShape;
 /// The `Aperture` struct of glsl/include/aperture.glsl: part of every bokeh pass's push
 /// constants (4-byte fields only, no padding).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ApertureConstants {
     pub blades: i32,
     pub rotation: f32,
@@ -42,6 +42,20 @@ impl ApertureConstants {
         }
     }
 
+    /// What of the aperture depends on the pixel pitch: traced spherical aberration (the rim's
+    /// focus shift seen as a CoC, src/optics/spherical.rs) and a cat's eye given at an image
+    /// height, growing linearly from the centre (per pixel).
+    pub fn with_pitch(mut self, camera: &crate::model::camera::Camera, pixel_pitch_mm: f64) -> Self {
+        if let Some(lsa_mm) = camera.aperture.lsa_rim_mm {
+            let n = camera.lens.effective_f_number() * camera.lens.pupil_magnification;
+            self.sa_lsa_coc_px = (-lsa_mm / (n * pixel_pitch_mm)) as f32;
+        }
+        if let Some(h_mm) = camera.aperture.cats_eye_at_mm {
+            self.cats_eye_per_px = (camera.aperture.cats_eye.clamp(0.0, 1.0) * pixel_pitch_mm / h_mm) as f32;
+        }
+        self
+    }
+
     /// Spherical-aberration strength s of src/optics/spherical.rs for a sample of signed CoC.
     pub fn sa_strength(&self, coc_px: f32) -> f64 {
         if self.sa_lsa_coc_px != 0.0 {
@@ -60,6 +74,19 @@ impl ApertureConstants {
             centre_y_px: 0.5 * self.centre_y_px,
             cats_eye_per_px: 2.0 * self.cats_eye_per_px,
             ..*self
+        }
+    }
+}
+
+/// The aperture image's storage buffer (glsl/include/aperture.glsl): [size, mean, size x size
+/// values], or [0, 0] for none.
+pub fn mask_buffer_data(mask: Option<&crate::model::aperture::ApertureMask>) -> Vec<f32> {
+    match mask {
+        None => vec![0.0, 0.0],
+        Some(m) => {
+            let mut data = vec![crate::model::aperture::MASK_SIZE as f32, m.mean];
+            data.extend_from_slice(&m.values);
+            data
         }
     }
 }
@@ -101,13 +128,14 @@ pub fn mask_value(mask: &[f32], uv: [f32; 2]) -> f32 {
 }
 
 /// Coverage over area of a sample's aperture image, with the cat's eye
-/// (aperture_weight in glsl/include/aperture.glsl).
+/// (aperture_weight in glsl/include/aperture.glsl): the edge is a linear ramp `ramp` px wide.
 pub fn aperture_weight(
     o: [f32; 2],
     r: f32,
     p: &ApertureConstants,
     sample_px: [f32; 2],
     flip: f32,
+    ramp: f32,
     mask: &[f32],
 ) -> f32 {
     let (mut cov, mut area);
@@ -118,10 +146,12 @@ pub fn aperture_weight(
         cov = mask_value(mask, [turned[0] / r, -turned[1] / r]);
         area = mask[1] * 4.0 * r * r;
     } else {
-        if o[0] * o[0] + o[1] * o[1] >= (r + 0.5) * (r + 0.5) {
+        // Nothing beyond the circumscribed circle's ramp.
+        let limit = r + 0.5 * ramp;
+        if o[0] * o[0] + o[1] * o[1] >= limit * limit {
             return 0.0;
         }
-        cov = (0.5 - aperture_sdf(o, r, p)).clamp(0.0, 1.0);
+        cov = (0.5 - aperture_sdf(o, r, p) / ramp).clamp(0.0, 1.0);
         area = aperture_area(r, p);
     }
     if p.cats_eye_per_px > 0.0 && cov > 0.0 {
@@ -129,10 +159,17 @@ pub fn aperture_weight(
         let c = [(p.centre_x_px - sample_px[0]) * k, (p.centre_y_px - sample_px[1]) * k];
         let d = (c[0] * c[0] + c[1] * c[1]).sqrt().min(2.0 * r);
         let dist = ((o[0] - c[0]).powi(2) + (o[1] - c[1]).powi(2)).sqrt();
-        cov = cov.min((0.5 - (dist - r)).clamp(0.0, 1.0));
+        cov = cov.min((0.5 - (dist - r) / ramp).clamp(0.0, 1.0));
         let h = 0.5 * d / r.max(1e-6);
         let overlap = (2.0 * h.acos() - 2.0 * h * (1.0 - h * h).max(0.0).sqrt()) / std::f32::consts::PI;
         area *= overlap.max(1e-3);
     }
     cov / area
+}
+
+/// The weight of a sample of signed CoC `coc_q` at offset `o` (already flipped) for spherical
+/// aberration: sa_intensity(|o| / radius_q, sa_strength(coc_q)) of glsl/include/aperture.glsl.
+pub fn sa_weight(o: [f32; 2], radius_q: f32, coc_q: f32, p: &ApertureConstants) -> f32 {
+    let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
+    crate::optics::spherical::intensity(p.sa_strength(coc_q), r_norm as f64) as f32
 }

@@ -1,25 +1,29 @@
 //! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
-use super::aperture::{aperture_weight, ApertureConstants};
-use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use super::aperture::{aperture_weight, mask_buffer_data, sa_weight, ApertureConstants};
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
+use super::twin::finite_or_zero;
+use super::{groups_for, Decision, FrameImages, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::aperture::ApertureShape;
+use crate::model::camera::BokehMode;
 use ash::vk;
 
 pub const NAME: &str = "bokeh_gather";
 
 /// Push constants of glsl/bokeh_gather.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GatherParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GatherPush {
     pub size: [i32; 2],
     pub radius_px: i32,
     pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
 }
 
-impl GatherParams {
+impl GatherPush {
     /// `sa_max_coc_px`: the CoC diameter at which spherical aberration reaches its full amount
     /// (the user's CoC clamp, like the appendix shader's largest CoC).
     pub fn new(
@@ -29,8 +33,8 @@ impl GatherParams {
         aperture: &ApertureShape,
         sa_max_coc_px: f64,
         centre_px: [f64; 2],
-    ) -> GatherParams {
-        GatherParams {
+    ) -> GatherPush {
+        GatherPush {
             size: [width as i32, height as i32],
             radius_px: (0.5 * max_abs_coc_px).ceil() as i32 + 1,
             aperture: ApertureConstants::new(aperture, sa_max_coc_px, centre_px, width, height),
@@ -40,100 +44,187 @@ impl GatherParams {
 }
 
 /// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
-/// `aperture_mask`: the buffer data of src/model/aperture.rs ([0, 0] for none).
-pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherParams, aperture_mask: &[f32]) -> Vec<f32> {
+/// `aperture_mask`: the buffer data of [`super::aperture::mask_buffer_data`] ([0, 0] for none).
+pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherPush, aperture_mask: &[f32]) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
     let mut out = vec![0.0f32; rgba.len()];
-    let finite = |v: f32| if v.is_finite() { v.clamp(-3.0e38, 3.0e38) } else { 0.0 };
     for y in 0..h {
         for x in 0..w {
-            let coc_p = coc_px[(y * w + x) as usize];
-            let radius_p = (0.5 * coc_p.abs()).max(0.5);
-            let (mut bg, mut fg) = ([0.0f32; 4], [0.0f32; 4]);
-            let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
-            for dy in -p.radius_px..=p.radius_px {
-                for dx in -p.radius_px..=p.radius_px {
-                    // Clamp to edge, like the shader.
-                    let (ux, uy) = (x + dx, y + dy);
-                    let (qx, qy) = (ux.clamp(0, w - 1), uy.clamp(0, h - 1));
-                    let qi = (qy * w + qx) as usize;
-                    let coc_q = coc_px[qi];
-                    let radius_q = (0.5 * coc_q.abs()).max(0.5);
-                    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-                    if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
-                        continue;
-                    }
-                    let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
-                    let o = [-dx as f32 * flip, -dy as f32 * flip];
-                    let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
-                    let cov_over_area = aperture_weight(o, reach, &p.aperture, sample_px, flip, aperture_mask);
-                    let s = p.aperture.sa_strength(coc_q);
-                    let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
-                    let sa = crate::optics::spherical::intensity(s, r_norm as f64) as f32;
-                    let wgt = cov_over_area * sa;
-                    if wgt <= 0.0 {
-                        continue;
-                    }
-                    let f = ((coc_p - coc_q) / p.layer_transition_px).clamp(0.0, 1.0);
-                    for c in 0..4 {
-                        let v = finite(rgba[qi * 4 + c]);
-                        fg[c] += f * wgt * v;
-                        bg[c] += (1.0 - f) * wgt * v;
-                    }
-                    fg_w += f * wgt;
-                    bg_w += (1.0 - f) * wgt;
-                }
-            }
-            let alpha = fg_w.clamp(0.0, 1.0);
+            let texel = gather_exact(
+                rgba,
+                coc_px,
+                [w, h],
+                [x, y],
+                p.radius_px,
+                &p.aperture,
+                p.layer_transition_px,
+                aperture_mask,
+            );
             let o = (y * w + x) as usize * 4;
-            for c in 0..4 {
-                let b = if bg_w > 0.0 { bg[c] / bg_w } else { 0.0 };
-                let f = if fg_w > 0.0 { fg[c] / fg_w } else { 0.0 };
-                out[o + c] = b + (f - b) * alpha;
-            }
+            out[o..o + 4].copy_from_slice(&texel);
         }
     }
     out
 }
 
-pub struct BokehGatherPass {
-    pipeline: ComputePipeline,
+/// The exact gather at pixel `p` over samples within `r` px (gather_exact in
+/// glsl/include/gather.glsl): RGBA `color` and signed `coc_px` of a `size[0] x size[1]` image.
+#[allow(clippy::too_many_arguments)]
+pub fn gather_exact(
+    color: &[f32],
+    coc_px: &[f32],
+    size: [i32; 2],
+    p: [i32; 2],
+    r: i32,
+    aperture: &ApertureConstants,
+    layer_transition_px: f32,
+    aperture_mask: &[f32],
+) -> [f32; 4] {
+    let (w, h) = (size[0], size[1]);
+    let coc_p = coc_px[(p[1] * w + p[0]) as usize];
+    let radius_p = (0.5 * coc_p.abs()).max(0.5);
+    let (mut bg, mut fg) = ([0.0f32; 4], [0.0f32; 4]);
+    let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
+    for dy in -r..=r {
+        for dx in -r..=r {
+            // Clamp to edge, like the shader.
+            let (ux, uy) = (p[0] + dx, p[1] + dy);
+            let qi = (uy.clamp(0, h - 1) * w + ux.clamp(0, w - 1)) as usize;
+            let coc_q = coc_px[qi];
+            let radius_q = (0.5 * coc_q.abs()).max(0.5);
+            let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+            if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
+                continue;
+            }
+            let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
+            let o = [-dx as f32 * flip, -dy as f32 * flip];
+            let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
+            let wgt = aperture_weight(o, reach, aperture, sample_px, flip, 1.0, aperture_mask)
+                * sa_weight(o, radius_q, coc_q, aperture);
+            if wgt <= 0.0 {
+                continue;
+            }
+            let f = ((coc_p - coc_q) / layer_transition_px).clamp(0.0, 1.0);
+            for c in 0..4 {
+                let v = finite_or_zero(color[qi * 4 + c]);
+                fg[c] += f * wgt * v;
+                bg[c] += (1.0 - f) * wgt * v;
+            }
+            fg_w += f * wgt;
+            bg_w += (1.0 - f) * wgt;
+        }
+    }
+    let alpha = fg_w.clamp(0.0, 1.0);
+    std::array::from_fn(|c| {
+        let b = if bg_w > 0.0 { bg[c] / bg_w } else { 0.0 };
+        let f = if fg_w > 0.0 { fg[c] / fg_w } else { 0.0 };
+        b + (f - b) * alpha
+    })
 }
 
-impl BokehGatherPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<BokehGatherPass> {
-        let bindings = [
-            vk::DescriptorType::STORAGE_IMAGE,
-            vk::DescriptorType::STORAGE_IMAGE,
-            vk::DescriptorType::STORAGE_IMAGE,
-            vk::DescriptorType::STORAGE_BUFFER,
-        ];
-        let size = std::mem::size_of::<GatherParams>() as u32;
-        Ok(BokehGatherPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+/// glsl/bokeh_gather.comp.
+pub struct GatherShader;
+
+impl Shader for GatherShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] =
+        &[image("color_in"), image("coc_px"), image("color_out"), buffer("ApertureMask")];
+    type Push = GatherPush;
+}
+
+impl Twin for GatherShader {
+    fn cpu(push: &GatherPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let mask: Vec<f32> = b[3].words().iter().map(|&w| f32::from_bits(w)).collect();
+        let out = gather_cpu(&b[0].image().texels, &b[1].image().texels, push, &mask);
+        b[2].image_mut().texels = out;
+    }
+}
+
+/// One run: the constants, the aperture image's buffer, and the channel it is for.
+#[derive(Clone, Debug)]
+pub struct GatherParams {
+    pub push: GatherPush,
+    pub aperture_mask: Vec<f32>,
+    pub channel: Option<Channel>,
+}
+
+/// The reference depth of field (`--bokeh reference`).
+pub struct BokehGather {
+    kernel: Kernel<GatherShader>,
+}
+
+impl GatherParams {
+    /// One run for all channels, without an aperture image (see [`GatherPush::new`]).
+    pub fn new(
+        width: u32,
+        height: u32,
+        max_abs_coc_px: f64,
+        aperture: &ApertureShape,
+        sa_max_coc_px: f64,
+        centre_px: [f64; 2],
+    ) -> GatherParams {
+        GatherParams {
+            push: GatherPush::new(width, height, max_abs_coc_px, aperture, sa_max_coc_px, centre_px),
+            aperture_mask: mask_buffer_data(None),
+            channel: None,
+        }
+    }
+}
+
+impl Pass for BokehGather {
+    const NAME: &'static str = NAME;
+    type Params = GatherParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<GatherParams> {
+        let (f, camera) = (&input.facts, input.camera);
+        if camera.bokeh != BokehMode::Reference {
+            return Decision::not_chosen();
+        }
+        if !f.dof_visible() {
+            return Decision::skip("no pixel is defocused by more than a pixel");
+        }
+        let (w, h) = input.size();
+        let max_abs_coc_px = f.max_abs_coc_px();
+        let mut push =
+            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+        push.aperture = push.aperture.with_pitch(camera, f.pixel_pitch_mm);
+        let why = format!(
+            "--bokeh reference: largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px, exact gather of radius {} px everywhere, {}",
+            push.radius_px,
+            input.aperture_text()
+        );
+        let aperture_mask = mask_buffer_data(camera.aperture_mask.as_ref());
+        let runs = input
+            .dof_runs()
+            .into_iter()
+            .map(|(channel, _)| GatherParams { push, aperture_mask: aperture_mask.clone(), channel })
+            .collect();
+        Decision::run_each(runs, why)
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        color: &GpuImage,
-        coc: &GpuImage,
-        output: &GpuImage,
-        aperture_mask: &GpuBuffer,
-        params: &GatherParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(BokehGather { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &GatherParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
+        let (color, coc) = (images.color().clone(), images.coc(p.channel)?.clone());
+        let output =
+            rec.create_image("color (depth of field)", images.width, images.height, vk::Format::R32G32B32A32_SFLOAT)?;
+        let mask = rec.upload_buffer("aperture image", &p.aperture_mask)?;
         // coc: written by the CoC pass just before: wait for it (read-after-write).
         // color: the upload's barrier already made it visible to compute reads; waiting on
         //   compute writes as well keeps this pass correct if a compute pass ever precedes it.
         // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(coc), after_compute_write(color), overwrite(output)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(color), Bind::Image(coc), Bind::Image(output), Bind::Buffer(aperture_mask)],
-            push_bytes(params),
+        rec.image_barriers(&[after_compute_write(&coc), after_compute_write(&color), overwrite(&output)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&color), Bind::Image(&coc), Bind::Image(&output), Bind::Buffer(&mask)],
+            &p.push,
             groups_for(color.width, color.height),
         )?;
         rec.end_pass();
+        images.set_color(p.channel, output);
         Ok(())
     }
 }

@@ -1,8 +1,12 @@
 //! Circle-of-confusion pass: signed CoC diameter in pixels per pixel, from planar depth
 //! (Kyaw 2013 eq 5.3). Shader: glsl/coc.comp.
 
-use super::{groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use super::barriers::overwrite;
+use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
+use super::{groups_for, Decision, FrameImages, Input, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::model::camera::{BokehMode, Camera};
+use crate::model::frame::Frame;
 use crate::optics::ThinLens;
 use ash::vk;
 
@@ -10,8 +14,8 @@ pub const NAME: &str = "coc";
 
 /// Push constants of glsl/coc.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CocParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CocPush {
     pub size: [i32; 2],
     /// v^2 / (N' P) / pixel pitch: eq 5.3 is C_px = coc_scale_px_mm * (1/S - 1/u).
     pub coc_scale_px_mm: f32,
@@ -39,7 +43,20 @@ pub fn table_data(table: Option<&crate::optics::distortion::HeightTable>) -> Vec
     }
 }
 
-impl CocParams {
+impl CocPush {
+    /// The camera's CoC on this frame (its size and optical centre), before any channel offset.
+    pub fn for_frame(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> CocPush {
+        CocPush::new(
+            &camera.lens,
+            pixel_pitch_mm,
+            camera.max_coc_px,
+            frame.width,
+            frame.height,
+            frame.centre_px,
+            camera.field_curvature.as_ref(),
+        )
+    }
+
     /// `field_curvature`: the film-plane offset (mm) of the sharp image surface against height,
     /// with the optical centre `centre_px`.
     pub fn new(
@@ -50,11 +67,11 @@ impl CocParams {
         height: u32,
         centre_px: [f64; 2],
         field_curvature: Option<&crate::optics::distortion::HeightTable>,
-    ) -> CocParams {
+    ) -> CocPush {
         let v_mm = lens.image_distance_mm();
         // Kyaw 2013 eq 5.3: C = v^2 |S - u| / (u S N' P) = v^2/(N' P) * (1/S - 1/u), signed.
         let scale_mm2 = v_mm * v_mm / (lens.effective_f_number() * lens.pupil_magnification);
-        CocParams {
+        CocPush {
             size: [width as i32, height as i32],
             coc_scale_px_mm: (scale_mm2 / pixel_pitch_mm) as f32,
             inv_focus_distance_per_mm: (1.0 / lens.focus_distance_mm) as f32,
@@ -96,46 +113,114 @@ impl CocParams {
 }
 
 /// CPU twin: the CoC of every pixel.
-pub fn coc_cpu(depth_m: &[f32], params: &CocParams, table: &[f32]) -> Vec<f32> {
-    let w = params.size[0].max(1) as u32;
-    depth_m.iter().enumerate().map(|(i, &d)| params.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
+pub fn coc_cpu(depth_m: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
+    let w = push.size[0].max(1) as u32;
+    depth_m.iter().enumerate().map(|(i, &d)| push.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
 }
 
-pub struct CocPass {
-    pipeline: ComputePipeline,
+/// glsl/coc.comp.
+pub struct CocShader;
+
+impl Shader for CocShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("depth_m"), image("coc_px"), buffer("FieldCurvature")];
+    type Push = CocPush;
 }
 
-impl CocPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<CocPass> {
-        let bindings =
-            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let pipeline =
-            ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, std::mem::size_of::<CocParams>() as u32)?;
-        Ok(CocPass { pipeline })
+impl Twin for CocShader {
+    fn cpu(push: &CocPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table: Vec<f32> = b[2].words().iter().map(|&w| f32::from_bits(w)).collect();
+        let coc = coc_cpu(&b[0].image().texels, push, &table);
+        b[1].image_mut().texels = coc;
+    }
+}
+
+/// One run of the pass: its constants, the field-curvature table, and the channel it is for
+/// (longitudinal colour runs it once per channel, each with its offset).
+#[derive(Clone, Debug)]
+pub struct CocParams {
+    pub push: CocPush,
+    pub table: Vec<f32>,
+    pub channel: Option<Channel>,
+}
+
+impl CocParams {
+    /// One run for all channels.
+    pub fn new(push: CocPush, field_curvature: Option<&crate::optics::distortion::HeightTable>) -> CocParams {
+        CocParams { push, table: table_data(field_curvature), channel: None }
+    }
+}
+
+pub struct Coc {
+    kernel: Kernel<CocShader>,
+}
+
+impl Pass for Coc {
+    const NAME: &'static str = NAME;
+    const INPUTS: &'static [Input] = &[Input::Depth];
+    type Params = CocParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<CocParams> {
+        let (f, camera) = (&input.facts, input.camera);
+        let why = format!(
+            "CoC from {:.2} px (nearest, {:.3} m) to {:.2} px (farthest, {:.3e} m) at f/{} focused at {} m",
+            f.coc_range_px.0,
+            f.depth_range_m.0,
+            f.coc_range_px.1,
+            f.depth_range_m.1,
+            camera.lens.f_number,
+            camera.lens.focus_distance_mm / 1000.0
+        );
+        if !f.dof_visible() {
+            return Decision::skip(format!(
+                "{why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible"
+            ));
+        }
+        if camera.bokeh == BokehMode::Diffraction {
+            // The focus processor maps depth to its tables itself.
+            return Decision::skip(format!("{why}; not needed by the focus processor"));
+        }
+        let base =
+            CocParams::new(CocPush::for_frame(camera, f.pixel_pitch_mm, input.frame), camera.field_curvature.as_ref());
+        let runs = input
+            .dof_runs()
+            .into_iter()
+            .map(|(channel, offset_px)| CocParams {
+                push: CocPush { coc_offset_px: offset_px, ..base.push },
+                channel,
+                ..base.clone()
+            })
+            .collect();
+        Decision::run_each(runs, why)
     }
 
-    /// `depth` (R32F metres) -> `coc` (R32F signed px).
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        depth: &GpuImage,
-        coc: &GpuImage,
-        field_curvature: &GpuBuffer,
-        params: &CocParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(Coc { kernel: Kernel::new(gpu)? })
+    }
+
+    /// Depth (R32F metres) -> a new CoC image (R32F signed px) for the run's channel.
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &CocParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
+        let depth = images.depth()?.clone();
+        let name = match p.channel {
+            None => "coc (px)".to_string(),
+            Some(c) => format!("coc (px, {c:?})"),
+        };
+        let coc = rec.create_image(&name, images.width, images.height, vk::Format::R32_SFLOAT)?;
+        // field_curvature: uploaded with its own barrier (copy -> compute read).
+        let table = rec.upload_buffer("field curvature", &p.table)?;
         // depth: written by the upload copy, whose own barrier already made it visible to
         //   compute reads in layout GENERAL; nothing to wait for here.
-        // field_curvature: uploaded with its own barrier.
         // coc: written from scratch; discard old contents.
-        rec.image_barriers(&[overwrite(coc)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(depth), Bind::Image(coc), Bind::Buffer(field_curvature)],
-            push_bytes(params),
-            groups_for(depth.width, depth.height),
+        rec.image_barriers(&[overwrite(&coc)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&depth), Bind::Image(&coc), Bind::Buffer(&table)],
+            &p.push,
+            groups_for(images.width, images.height),
         )?;
         rec.end_pass();
+        images.set_coc(p.channel, coc);
         Ok(())
     }
 }
@@ -154,7 +239,7 @@ mod tests {
         let lens = ThinLens::new(50.0, 2.0, 2000.0).unwrap();
         let pitch_mm = 0.01;
         let table = HeightTable { image_height_mm: vec![0.0, 10.0], values: vec![0.0, 0.2] };
-        let p = CocParams::new(&lens, pitch_mm, 1000.0, 2001, 1, [1000.5, 0.5], Some(&table));
+        let p = CocPush::new(&lens, pitch_mm, 1000.0, 2001, 1, [1000.5, 0.5], Some(&table));
         let data = table_data(Some(&table));
         assert!(p.coc_px_at(2.0, 1000, 0, &data).abs() < 1e-3);
         // 500 px right of the centre: h = 5 mm, delta = 0.1 mm.
@@ -164,7 +249,7 @@ mod tests {
         let got = p.coc_px_at(2.0, 1500, 0, &data) as f64;
         assert!((got / expected_px - 1.0).abs() < 1e-4, "{got} vs {expected_px}");
         // Without a table the reciprocal form is used: exactly 0 in focus.
-        let plain = CocParams::new(&lens, pitch_mm, 1000.0, 2001, 1, [1000.5, 0.5], None);
+        let plain = CocPush::new(&lens, pitch_mm, 1000.0, 2001, 1, [1000.5, 0.5], None);
         assert_eq!(plain.coc_px_at(2.0, 1500, 0, &[0.0]), 0.0);
     }
 }

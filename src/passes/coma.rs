@@ -2,17 +2,19 @@
 //! lens's coma table against image height (third-order coma; Kyaw 2013 sec 7.6 left it out).
 //! One dispatch of glsl/coma.comp; `coma_cpu` is its CPU twin.
 
-use super::{after_compute_write, groups_for, height_table_lookup, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::PlanInput;
+use super::twin::floats;
+use super::{groups_for, height_table_lookup, Decision, FrameImages, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::HeightTable;
-use ash::vk;
 
 pub const NAME: &str = "coma";
 
 /// Push constants of glsl/coma.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ComaParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ComaPush {
     pub size: [i32; 2],
     pub centre_px: [f32; 2],
     pub pixel_pitch_mm: f32,
@@ -22,9 +24,9 @@ pub struct ComaParams {
     pub pad: f32,
 }
 
-impl ComaParams {
-    pub fn new(size: [u32; 2], centre_px: [f64; 2], pixel_pitch_mm: f64, coma_mm: &HeightTable) -> ComaParams {
-        ComaParams {
+impl ComaPush {
+    pub fn new(size: [u32; 2], centre_px: [f64; 2], pixel_pitch_mm: f64, coma_mm: &HeightTable) -> ComaPush {
+        ComaPush {
             size: [size[0] as i32, size[1] as i32],
             centre_px: [centre_px[0] as f32, centre_px[1] as f32],
             pixel_pitch_mm: pixel_pitch_mm as f32,
@@ -70,7 +72,7 @@ impl Local {
 }
 
 /// CPU twin of glsl/coma.comp (same sampling, f32).
-pub fn coma_cpu(rgba: &[f32], params: &ComaParams, table: &[f32]) -> Vec<f32> {
+pub fn coma_cpu(rgba: &[f32], params: &ComaPush, table: &[f32]) -> Vec<f32> {
     let (w, h) = (params.size[0], params.size[1]);
     let load = |x: i32, y: i32| -> [f32; 4] {
         let i = (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize * 4;
@@ -139,38 +141,78 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaParams, table: &[f32]) -> Vec<f32> {
     out
 }
 
-pub struct ComaPass {
-    pipeline: ComputePipeline,
+/// glsl/coma.comp.
+pub struct ComaShader;
+
+impl Shader for ComaShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Tables")];
+    type Push = ComaPush;
 }
 
-impl ComaPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<ComaPass> {
-        let bindings =
-            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let size = std::mem::size_of::<ComaParams>() as u32;
-        Ok(ComaPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for ComaShader {
+    fn cpu(push: &ComaPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table = floats(b[2].words());
+        b[1].image_mut().texels = coma_cpu(&b[0].image().texels, push, &table);
+    }
+}
+
+/// The pass's constants and its table (heights, tangential coma in mm).
+#[derive(Clone, Debug)]
+pub struct ComaParams {
+    pub push: ComaPush,
+    pub table: Vec<f32>,
+}
+
+pub struct Coma {
+    kernel: Kernel<ComaShader>,
+}
+
+impl Pass for Coma {
+    const NAME: &'static str = NAME;
+    type Params = ComaParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<ComaParams> {
+        let (frame, pitch_mm) = (input.frame, input.facts.pixel_pitch_mm);
+        let Some(t) = &input.camera.coma else {
+            return Decision::skip("the lens file has no coma table");
+        };
+        let longest_px = t.max_abs_within(frame.farthest_corner_px() * pitch_mm) / pitch_mm;
+        // A comet shorter than a pixel is invisible (its light moves by a third of that).
+        if longest_px < 1.0 {
+            return Decision::skip(format!(
+                "the lens's comets are at most {longest_px:.3} px long in the frame (< 1 px): invisible"
+            ));
+        }
+        let why = format!(
+            "the lens's coma table: comets up to {longest_px:.1} px long in the frame at f/{}",
+            input.camera.lens.f_number
+        );
+        let push = ComaPush::new([frame.width, frame.height], frame.centre_px, pitch_mm, t);
+        Decision::run(ComaParams { push, table: table_data(t) }, why)
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        input: &GpuImage,
-        output: &GpuImage,
-        table: &GpuBuffer,
-        params: &ComaParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(Coma { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &ComaParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
+        let input = images.color().clone();
+        let output = rec.create_image("color (coma)", input.width, input.height, input.format)?;
+        let table = rec.upload_buffer("coma table", &p.table)?;
         // input: written by the previous compute pass (or the upload); it is read at the
-        // comet's samples around each pixel, so the whole image must be visible.
+        //   comet's samples around each pixel, so the whole image must be visible.
         // output: written from scratch, its old contents are not needed.
-        rec.image_barriers(&[after_compute_write(input), overwrite(output)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(input), Bind::Image(output), Bind::Buffer(table)],
-            push_bytes(params),
+        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
+            &p.push,
             groups_for(input.width, input.height),
         )?;
         rec.end_pass();
+        images.set_color(None, output);
         Ok(())
     }
 }

@@ -1,17 +1,19 @@
 //! Distortion and lateral colour from the lens's tables (Kyaw 2013 eq 6.8; the first aberration
 //! pass of sec 7.3). Shader: glsl/distortion.comp.
 
-use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::PlanInput;
+use super::twin::{bilinear, finite_or_zero, floats};
+use super::{groups_for, height_table_lookup, Decision, FrameImages, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::DistortionTables;
-use ash::vk;
 
 pub const NAME: &str = "distortion";
 
 /// Push constants of glsl/distortion.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DistortionParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DistortionPush {
     pub size: [i32; 2],
     pub centre_px: [f32; 2],
     pub pixel_pitch_mm: f32,
@@ -28,7 +30,7 @@ pub fn table_data(tables: &DistortionTables) -> Vec<f32> {
 }
 
 /// CPU twin on an RGBA image (f64 mapping, bilinear with clamp to edge like the shader).
-pub fn distortion_cpu(rgba: &[f32], params: &DistortionParams, tables: &DistortionTables) -> Vec<f32> {
+pub fn distortion_cpu(rgba: &[f32], params: &DistortionPush, tables: &DistortionTables) -> Vec<f32> {
     let (w, h) = (params.size[0], params.size[1]);
     let load = |x: i32, y: i32, c: usize| rgba[((y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) * 4) as usize + c];
     let mut out = rgba.to_vec();
@@ -52,37 +54,115 @@ pub fn distortion_cpu(rgba: &[f32], params: &DistortionParams, tables: &Distorti
     out
 }
 
-pub struct DistortionPass {
-    pipeline: ComputePipeline,
+/// glsl/distortion.comp.
+pub struct DistortionShader;
+
+impl Shader for DistortionShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Tables")];
+    type Push = DistortionPush;
 }
 
-impl DistortionPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<DistortionPass> {
-        let bindings =
-            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let size = std::mem::size_of::<DistortionParams>() as u32;
-        Ok(DistortionPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for DistortionShader {
+    /// The shader's own arithmetic: the f32 tables and the same fixed-point inverse of eq 6.8
+    /// ([`distortion_cpu`] is the f64 reference with the exact inverse).
+    fn cpu(push: &DistortionPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table = floats(b[2].words());
+        let n = push.entries as usize;
+        let input = b[0].image().clone();
+        let percent = |c: usize, r_mm: f32| {
+            let g = height_table_lookup(&table, 1, n, r_mm);
+            match c {
+                0 => g + height_table_lookup(&table, 2, n, r_mm),
+                2 => g + height_table_lookup(&table, 3, n, r_mm),
+                _ => g,
+            }
+        };
+        let out = b[1].image_mut();
+        for y in 0..push.size[1] as u32 {
+            for x in 0..push.size[0] as u32 {
+                let d = [x as f32 + 0.5 - push.centre_px[0], y as f32 + 0.5 - push.centre_px[1]];
+                let real_mm = (d[0] * d[0] + d[1] * d[1]).sqrt() * push.pixel_pitch_mm;
+                let mut texel: [f32; 4] = input.clamped(x as i32, y as i32).try_into().unwrap_or([0.0; 4]);
+                for (c, value) in texel.iter_mut().enumerate().take(3) {
+                    let mut r = real_mm;
+                    for _ in 0..12 {
+                        let next = real_mm / (1.0 + percent(c, r) / 100.0);
+                        let done = (next - r).abs() <= 2.0e-7 * real_mm;
+                        r = next;
+                        if done {
+                            break;
+                        }
+                    }
+                    let scale = if real_mm > 0.0 { r / real_mm } else { 1.0 };
+                    *value = bilinear(&input, push.centre_px[0] + d[0] * scale, push.centre_px[1] + d[1] * scale)[c];
+                }
+                out.texel_mut(x, y).copy_from_slice(&texel.map(finite_or_zero));
+            }
+        }
+    }
+}
+
+/// The pass's constants and its tables (heights, then the green, red-extra and blue-extra
+/// distortion in percent).
+#[derive(Clone, Debug)]
+pub struct DistortionParams {
+    pub push: DistortionPush,
+    pub table: Vec<f32>,
+}
+
+pub struct Distortion {
+    kernel: Kernel<DistortionShader>,
+}
+
+impl Pass for Distortion {
+    const NAME: &'static str = NAME;
+    type Params = DistortionParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<DistortionParams> {
+        match &input.camera.distortion {
+            Some(tables) if !tables.is_zero() => {
+                let frame = input.frame;
+                let why = format!(
+                    "the lens's tables: distortion up to {:.2}%, lateral colour up to {:.3}% (red) and {:.3}% (blue)",
+                    tables.green_percent.max_abs(),
+                    tables.red_extra_percent.max_abs(),
+                    tables.blue_extra_percent.max_abs()
+                );
+                let push = DistortionPush {
+                    size: [frame.width as i32, frame.height as i32],
+                    centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+                    pixel_pitch_mm: input.facts.pixel_pitch_mm as f32,
+                    entries: tables.green_percent.image_height_mm.len() as i32,
+                };
+                Decision::run(DistortionParams { push, table: table_data(tables) }, why)
+            }
+            Some(_) => Decision::skip("the lens's tables are all zero"),
+            None => Decision::skip("the lens file has no distortion or lateral-colour tables"),
+        }
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        input: &GpuImage,
-        output: &GpuImage,
-        tables: &GpuBuffer,
-        params: &DistortionParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(Distortion { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &DistortionParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
-        // input: written by the previous compute pass (or the upload): wait for those writes.
-        // tables: uploaded with its own barrier. output: written from scratch.
-        rec.image_barriers(&[after_compute_write(input), overwrite(output)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(input), Bind::Image(output), Bind::Buffer(tables)],
-            push_bytes(params),
+        let input = images.color().clone();
+        let output = rec.create_image("color (distortion)", input.width, input.height, input.format)?;
+        let table = rec.upload_buffer("distortion tables", &p.table)?;
+        // input: written by the previous compute pass (or the upload); it is sampled anywhere
+        //   in the frame, so all of it must be written and visible: wait for those writes.
+        // output: written from scratch.
+        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
+            &p.push,
             groups_for(input.width, input.height),
         )?;
         rec.end_pass();
+        images.set_color(None, output);
         Ok(())
     }
 }

@@ -2,63 +2,139 @@
 //! tiles (copy / exact small gather / half-resolution large), build the tile lists and the
 //! indirect dispatch counts. Shader: glsl/dof_classify.comp.
 
-use super::push_bytes;
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuResult, Recorder};
+use super::barriers::buffer_after_compute_write;
+use super::TILE_SIZE;
+use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_COUNT, CLASS_LARGE, CLASS_SMALL};
+use crate::gpu::{buffer, Bind, Binding, GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use ash::vk;
 
 pub const NAME: &str = "dof_classify";
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ClassifyParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ClassifyPush {
     pub tiles: [i32; 2],
+    /// Neighbours searched in each direction (largest CoC radius / tile + 1).
     pub search_tiles: i32,
+    /// Gather radius up to which a tile uses the exact full-resolution gather.
     pub small_radius_px: f32,
 }
 
-pub struct DofClassifyPass {
-    pipeline: ComputePipeline,
+/// glsl/dof_classify.comp: one invocation per tile.
+pub struct ClassifyShader;
+
+impl Shader for ClassifyShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] =
+        &[buffer("TileCoc"), buffer("Args"), buffer("TileLists"), buffer("TileRadius")];
+    type Push = ClassifyPush;
 }
 
-impl DofClassifyPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let bindings = [vk::DescriptorType::STORAGE_BUFFER; 4];
-        let size = std::mem::size_of::<ClassifyParams>() as u32;
-        Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for ClassifyShader {
+    fn cpu(pc: &ClassifyPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let tile_coc = super::twin::floats(b[0].words());
+        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let (mut radii, mut lists) = (vec![0.0f32; 2 * tile_count], vec![Vec::new(); CLASS_COUNT as usize]);
+        for t in 0..tile_count {
+            let (tx, ty) = ((t as i32) % pc.tiles[0], (t as i32) / pc.tiles[0]);
+            let (mut radius, mut fg_radius) = (0.0f32, 0.0f32);
+            for dy in -pc.search_tiles..=pc.search_tiles {
+                for dx in -pc.search_tiles..=pc.search_tiles {
+                    let (nx, ny) = (tx + dx, ty + dy);
+                    if nx < 0 || ny < 0 || nx >= pc.tiles[0] || ny >= pc.tiles[1] {
+                        continue;
+                    }
+                    let n = (ny * pc.tiles[0] + nx) as usize;
+                    let range = [tile_coc[2 * n], tile_coc[2 * n + 1]];
+                    let r_n = 0.5 * range[0].abs().max(range[1].abs());
+                    let gap = [
+                        ((dx.abs() - 1).max(0) * TILE_SIZE as i32) as f32,
+                        ((dy.abs() - 1).max(0) * TILE_SIZE as i32) as f32,
+                    ];
+                    let gap_len = (gap[0] * gap[0] + gap[1] * gap[1]).sqrt();
+                    if r_n + 1.0 > gap_len {
+                        radius = radius.max(r_n);
+                    }
+                    let fg_n = if range[0] < 0.0 { -0.5 * range[0] } else { 0.0 };
+                    if fg_n + 1.0 > gap_len {
+                        fg_radius = fg_radius.max(fg_n);
+                    }
+                }
+            }
+            let class = if radius <= 0.5 {
+                CLASS_COPY
+            } else if radius <= pc.small_radius_px {
+                CLASS_SMALL
+            } else {
+                CLASS_LARGE
+            };
+            radii[t] = radius;
+            radii[tile_count + t] = fg_radius;
+            lists[class as usize].push(t as u32);
+        }
+        let args = b[1].words_mut();
+        for (class, list) in lists.iter().enumerate() {
+            let at = class * ARGS_DISPATCH_WORDS as usize;
+            args[at] += list.len() as u32;
+            args[at + 1] = 1;
+            args[at + 2] = 1;
+        }
+        let tile_lists = b[2].words_mut();
+        for (class, list) in lists.iter().enumerate() {
+            tile_lists[class * tile_count..class * tile_count + list.len()].copy_from_slice(list);
+        }
+        b[3].words_mut().copy_from_slice(&radii.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        tile_coc: &GpuBuffer,
-        args: &GpuBuffer,
-        tile_lists: &GpuBuffer,
-        tile_radius: &GpuBuffer,
-        params: &ClassifyParams,
-    ) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        // args: zeroed by a transfer fill just before, then counted up with atomics here:
-        //   transfer write -> compute read/write.
-        // tile_coc: written by dof_tiles: compute write -> compute read.
-        rec.buffer_barriers(&[
-            vk::BufferMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-                .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-                .buffer(args.buffer)
-                .offset(0)
-                .size(vk::WHOLE_SIZE),
-            super::buffer_after_compute_write(tile_coc),
-        ]);
-        let tile_count = (params.tiles[0] * params.tiles[1]) as u32;
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Buffer(tile_coc), Bind::Buffer(args), Bind::Buffer(tile_lists), Bind::Buffer(tile_radius)],
-            push_bytes(params),
-            [tile_count.div_ceil(64), 1, 1],
-        )?;
-        rec.end_pass();
-        Ok(())
+    /// Tiles are appended to their class's list with atomics, in any order: sort each list.
+    fn canonical(pc: &ClassifyPush, b: &mut [HostData]) {
+        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let counts: Vec<usize> =
+            (0..CLASS_COUNT as usize).map(|c| b[1].words()[c * ARGS_DISPATCH_WORDS as usize] as usize).collect();
+        let lists = b[2].words_mut();
+        for (class, &count) in counts.iter().enumerate() {
+            let start = class * tile_count;
+            let end = (start + count).min(lists.len());
+            lists[start..end].sort_unstable();
+        }
     }
+}
+
+/// Record the classification of the tiles in `tile_coc` into `args` (zeroed first), the tile
+/// lists and the gather radii.
+pub fn record(
+    kernel: &Kernel<ClassifyShader>,
+    rec: &mut Recorder,
+    tile_coc: &GpuBuffer,
+    args: &GpuBuffer,
+    tile_lists: &GpuBuffer,
+    tile_radius: &GpuBuffer,
+    push: &ClassifyPush,
+) -> GpuResult<()> {
+    rec.begin_pass(NAME);
+    // The counters start at zero every frame.
+    rec.fill_buffer(args, 0);
+    // args: zeroed by the transfer fill just before, then counted up with atomics here:
+    //   transfer write -> compute read/write.
+    // tile_coc: written by dof_tiles: compute write -> compute read.
+    rec.buffer_barriers(&[
+        vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .buffer(args.buffer)
+            .offset(0)
+            .size(vk::WHOLE_SIZE),
+        buffer_after_compute_write(tile_coc),
+    ]);
+    let tile_count = (push.tiles[0] * push.tiles[1]) as u32;
+    kernel.dispatch(
+        rec,
+        &[Bind::Buffer(tile_coc), Bind::Buffer(args), Bind::Buffer(tile_lists), Bind::Buffer(tile_radius)],
+        push,
+        [tile_count.div_ceil(64), 1, 1],
+    )?;
+    rec.end_pass();
+    Ok(())
 }

@@ -2,15 +2,20 @@
 //! the exact gather for nearly sharp pixels). Shader: glsl/dof_composite.comp.
 
 use super::aperture::ApertureConstants;
-use super::push_bytes;
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::barriers::{after_compute_write, write_after_write};
+use super::bokeh_gather::gather_exact;
+use super::twin::floats;
+use super::TILE_SIZE;
+use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
+use crate::gpu::{
+    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
+};
 
 pub const NAME: &str = "dof_composite";
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CompositeParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CompositePush {
     pub size: [i32; 2],
     pub half_size: [i32; 2],
     pub tiles: [i32; 2],
@@ -19,10 +24,116 @@ pub struct CompositeParams {
     pub layer_transition_px: f32,
 }
 
-pub struct DofCompositePass {
-    pipeline: ComputePipeline,
+/// glsl/dof_composite.comp: one workgroup per large tile.
+pub struct CompositeShader;
+
+impl Shader for CompositeShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[
+        image("color_in"),
+        image("coc_px"),
+        image("bg_half"),
+        image("fg_half"),
+        image("color_out"),
+        buffer("TileLists"),
+        buffer("ApertureMask"),
+        image("coc_half"),
+        image("fg_big_half"),
+        buffer("TileRadius"),
+    ];
+    type Push = CompositePush;
 }
 
+fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
+    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+fn mix4(a: &[f32], b: &[f32], t: f32) -> [f32; 4] {
+    std::array::from_fn(|k| a[k] * (1.0 - t) + b[k] * t)
+}
+
+impl Twin for CompositeShader {
+    fn cpu(pc: &CompositePush, groups: [u32; 3], b: &mut [HostData]) {
+        let (color, coc) = (b[0].image().clone(), b[1].image().clone());
+        let (bg_half, fg_half) = (b[2].image().clone(), b[3].image().clone());
+        let (lists, mask, radii) = (b[5].words().to_vec(), floats(b[6].words()), floats(b[9].words()));
+        let (coc_half, fg_big_half) = (b[7].image().clone(), b[8].image().clone());
+        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let out = b[4].image_mut();
+        // Bilinear from four half-resolution texels (edge texels continue).
+        let bilinear = |img: &crate::gpu::HostImage, h0: [i32; 2], f: [f32; 2]| {
+            let top = mix4(img.clamped(h0[0], h0[1]), img.clamped(h0[0] + 1, h0[1]), f[0]);
+            let bottom = mix4(img.clamped(h0[0], h0[1] + 1), img.clamped(h0[0] + 1, h0[1] + 1), f[0]);
+            mix4(&top, &bottom, f[1])
+        };
+        for group in 0..groups[0] as usize {
+            let t = lists[CLASS_LARGE as usize * tile_count + group] as usize;
+            let origin = [(t % pc.tiles[0] as usize) as u32 * TILE_SIZE, (t / pc.tiles[0] as usize) as u32 * TILE_SIZE];
+            for y in origin[1]..origin[1] + TILE_SIZE {
+                for x in origin[0]..origin[0] + TILE_SIZE {
+                    let p = [x as i32, y as i32];
+                    if p[0] >= pc.size[0] || p[1] >= pc.size[1] {
+                        continue;
+                    }
+                    let h = [(x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5];
+                    let h0 = [h[0].floor() as i32, h[1].floor() as i32];
+                    let f = [h[0] - h0[0] as f32, h[1] - h0[1] as f32];
+                    // Joint bilateral upsampling of the background.
+                    let coc_here = coc.clamped(p[0], p[1])[0];
+                    let (mut bg, mut bg_weight) = ([0.0f32; 4], 0.0f32);
+                    for j in 0..2 {
+                        for i in 0..2 {
+                            let q = [h0[0] + i, h0[1] + j];
+                            let bilinear_w =
+                                (if i == 0 { 1.0 - f[0] } else { f[0] }) * (if j == 0 { 1.0 - f[1] } else { f[1] });
+                            let similar = 1.0 / (1.0 + (coc_half.clamped(q[0], q[1])[0] - coc_here).abs());
+                            let texel = bg_half.clamped(q[0], q[1]);
+                            for k in 0..4 {
+                                bg[k] += bilinear_w * similar * texel[k];
+                            }
+                            bg_weight += bilinear_w * similar;
+                        }
+                    }
+                    if bg_weight > 0.0 {
+                        bg = bg.map(|v| v / bg_weight);
+                    } else {
+                        bg.copy_from_slice(bg_half.clamped(h0[0], h0[1]));
+                    }
+                    let mut fg = bilinear(&fg_half, h0, f);
+                    let radius_p = 0.5 * coc_here.abs();
+                    let blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
+                    let mut base = bg;
+                    if blurred < 1.0 {
+                        let fg_radius = radii[tile_count + t];
+                        let r = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() as i32 + 1;
+                        let mut exact = gather_exact(
+                            &color.texels,
+                            &coc.texels,
+                            pc.size,
+                            p,
+                            r,
+                            &pc.aperture,
+                            pc.layer_transition_px,
+                            &mask,
+                        );
+                        let big = bilinear(&fg_big_half, h0, f);
+                        for k in 0..3 {
+                            exact[k] = exact[k] * (1.0 - big[3]) + big[k] * big[3];
+                        }
+                        base = mix4(&exact, &bg, blurred);
+                        fg[3] *= blurred;
+                    }
+                    let texel: [f32; 4] =
+                        std::array::from_fn(|k| if k < 3 { base[k] * (1.0 - fg[3]) + fg[k] * fg[3] } else { base[3] });
+                    out.texel_mut(x, y).copy_from_slice(&texel);
+                }
+            }
+        }
+    }
+}
+
+/// The resources of the composite.
 pub struct CompositeBindings<'a> {
     pub color: &'a GpuImage,
     pub coc: &'a GpuImage,
@@ -37,63 +148,44 @@ pub struct CompositeBindings<'a> {
     pub tile_radius: &'a GpuBuffer,
 }
 
-impl DofCompositePass {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 5];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 2]);
-        bindings.extend([vk::DescriptorType::STORAGE_IMAGE; 2]);
-        bindings.push(vk::DescriptorType::STORAGE_BUFFER);
-        let size = std::mem::size_of::<CompositeParams>() as u32;
-        Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
-    }
-
-    pub fn record(&self, rec: &mut Recorder, b: &CompositeBindings<'_>, params: &CompositeParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        // bg_half, fg_half: written by dof_half_gather (read-after-write).
-        // color (the colour less the sprites' energy) and coc_half: written by dof_downsample
-        //   (coc_half was already waited for by dof_half_gather; the extra dependency is free).
-        // output: the full-resolution tile passes wrote other tiles of it; the write-after-write
-        //   dependency keeps sync validation (which tracks whole images) and any driver honest.
-        rec.image_barriers(&[
-            super::after_compute_write(b.color),
-            super::after_compute_write(b.coc_half),
-            super::after_compute_write(b.bg_half),
-            super::after_compute_write(b.fg_half),
-            super::after_compute_write(b.fg_big_half),
-            write_after_write(b.output),
-        ]);
-        rec.dispatch_indirect(
-            &self.pipeline,
-            &[
-                Bind::Image(b.color),
-                Bind::Image(b.coc),
-                Bind::Image(b.bg_half),
-                Bind::Image(b.fg_half),
-                Bind::Image(b.output),
-                Bind::Buffer(b.tile_lists),
-                Bind::Buffer(b.aperture_mask),
-                Bind::Image(b.coc_half),
-                Bind::Image(b.fg_big_half),
-                Bind::Buffer(b.tile_radius),
-            ],
-            push_bytes(params),
-            b.args,
-            2 * 12,
-        )?;
-        rec.end_pass();
-        Ok(())
-    }
-}
-
-/// An image an earlier compute pass wrote and this pass writes again (other pixels or the same).
-pub(crate) fn write_after_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
-    vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .old_layout(vk::ImageLayout::GENERAL)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .image(image.image)
-        .subresource_range(crate::gpu::color_range())
+pub fn record(
+    kernel: &Kernel<CompositeShader>,
+    rec: &mut Recorder,
+    b: &CompositeBindings<'_>,
+    push: &CompositePush,
+) -> GpuResult<()> {
+    rec.begin_pass(NAME);
+    // bg_half, fg_half, fg_big_half: written by dof_half_gather (read-after-write).
+    // color (the colour less the sprites' energy) and coc_half: written by dof_downsample
+    //   (coc_half was already waited for by dof_half_gather; the extra dependency is free).
+    // output: the full-resolution tile passes wrote other tiles of it; the write-after-write
+    //   dependency keeps sync validation (which tracks whole images) and any driver honest.
+    rec.image_barriers(&[
+        after_compute_write(b.color),
+        after_compute_write(b.coc_half),
+        after_compute_write(b.bg_half),
+        after_compute_write(b.fg_half),
+        after_compute_write(b.fg_big_half),
+        write_after_write(b.output),
+    ]);
+    kernel.dispatch_indirect(
+        rec,
+        &[
+            Bind::Image(b.color),
+            Bind::Image(b.coc),
+            Bind::Image(b.bg_half),
+            Bind::Image(b.fg_half),
+            Bind::Image(b.output),
+            Bind::Buffer(b.tile_lists),
+            Bind::Buffer(b.aperture_mask),
+            Bind::Image(b.coc_half),
+            Bind::Image(b.fg_big_half),
+            Bind::Buffer(b.tile_radius),
+        ],
+        push,
+        b.args,
+        (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64,
+    )?;
+    rec.end_pass();
+    Ok(())
 }

@@ -1,16 +1,21 @@
 //! Tiled depth of field: the fixed-cost half-resolution gather of large-CoC tiles.
 //! Shader: glsl/dof_half_gather.comp.
 
-use super::aperture::ApertureConstants;
-use super::push_bytes;
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::aperture::{aperture_weight, sa_weight, ApertureConstants};
+use super::barriers::{after_compute_write, overwrite};
+use super::twin::floats;
+use super::TILE_SIZE;
+use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
+use crate::gpu::{
+    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
+};
+use std::f32::consts::PI;
 
 pub const NAME: &str = "dof_half_gather";
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HalfGatherParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HalfGatherPush {
     pub half_size: [i32; 2],
     pub tiles: [i32; 2],
     pub rings: i32,
@@ -21,62 +26,156 @@ pub struct HalfGatherParams {
     pub small_radius_px: f32,
 }
 
-pub struct DofHalfGatherPass {
-    pipeline: ComputePipeline,
+/// glsl/dof_half_gather.comp: one 8x8 workgroup per large tile.
+pub struct HalfGatherShader;
+
+impl Shader for HalfGatherShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[
+        image("color_half"),
+        image("coc_half"),
+        image("bg_half"),
+        image("fg_half"),
+        buffer("TileLists"),
+        buffer("TileRadius"),
+        buffer("ApertureMask"),
+        image("fg_big_half"),
+    ];
+    type Push = HalfGatherPush;
 }
 
-impl DofHalfGatherPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 4];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
-        bindings.push(vk::DescriptorType::STORAGE_IMAGE);
-        let size = std::mem::size_of::<HalfGatherParams>() as u32;
-        Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
-    }
+/// Interleaved gradient noise of the shader, in f32: the rotation of the rings at a pixel.
+pub fn ring_jitter(x: i32, y: i32) -> f32 {
+    let fract = |v: f32| v - v.floor();
+    fract(52.982_918 * fract(x as f32 * 0.067_110_56 + y as f32 * 0.005_837_15))
+}
 
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        color_half: &GpuImage,
-        coc_half: &GpuImage,
-        bg_half: &GpuImage,
-        fg_half: &GpuImage,
-        fg_big_half: &GpuImage,
-        tile_lists: &GpuBuffer,
-        tile_radius: &GpuBuffer,
-        args: &GpuBuffer,
-        aperture_mask: &GpuBuffer,
-        params: &HalfGatherParams,
-    ) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        // color_half, coc_half: written by dof_downsample (read-after-write).
-        // bg_half, fg_half, fg_big_half: written from scratch (only the large tiles' pixels; the rest is
-        //   never read).
-        rec.image_barriers(&[
-            super::after_compute_write(color_half),
-            super::after_compute_write(coc_half),
-            super::overwrite(bg_half),
-            super::overwrite(fg_half),
-            super::overwrite(fg_big_half),
-        ]);
-        rec.dispatch_indirect(
-            &self.pipeline,
-            &[
-                Bind::Image(color_half),
-                Bind::Image(coc_half),
-                Bind::Image(bg_half),
-                Bind::Image(fg_half),
-                Bind::Buffer(tile_lists),
-                Bind::Buffer(tile_radius),
-                Bind::Buffer(aperture_mask),
-                Bind::Image(fg_big_half),
-            ],
-            push_bytes(params),
-            args,
-            2 * 12,
-        )?;
-        rec.end_pass();
-        Ok(())
+impl Twin for HalfGatherShader {
+    fn cpu(pc: &HalfGatherPush, groups: [u32; 3], b: &mut [HostData]) {
+        let (color, coc) = (b[0].image().clone(), b[1].image().clone());
+        let (lists, radii, mask) = (b[4].words().to_vec(), floats(b[5].words()), floats(b[6].words()));
+        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let half_tile = TILE_SIZE / 2;
+        let (mut bg_out, mut fg_out, mut big_out) = (b[2].image().clone(), b[3].image().clone(), b[7].image().clone());
+        for group in 0..groups[0] as usize {
+            let t = lists[CLASS_LARGE as usize * tile_count + group] as usize;
+            let origin = [(t % pc.tiles[0] as usize) as u32 * half_tile, (t / pc.tiles[0] as usize) as u32 * half_tile];
+            for hy in origin[1]..origin[1] + half_tile {
+                for hx in origin[0]..origin[0] + half_tile {
+                    let (x, y) = (hx as i32, hy as i32);
+                    if x >= pc.half_size[0] || y >= pc.half_size[1] {
+                        continue;
+                    }
+                    let ap = &pc.aperture;
+                    // Half-resolution units: CoC diameters and distances halve.
+                    let coc_p = 0.5 * coc.clamped(x, y)[0];
+                    let radius_p = (0.5 * coc_p.abs()).max(0.5);
+                    let extent = 0.5 * radii[t] + 1.0;
+                    let spacing = extent / pc.rings as f32;
+                    let ramp = spacing.max(1.0);
+                    let jitter = ring_jitter(x, y);
+                    let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+                    let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
+                    for k in 0..=pc.rings {
+                        let n = if k == 0 { 1 } else { 6 * k };
+                        let rho = k as f32 * spacing;
+                        let tap_area =
+                            if k == 0 { PI * 0.25 * spacing * spacing } else { PI * spacing * spacing / 3.0 };
+                        for j in 0..n {
+                            let theta = (j as f32 + jitter) * 2.0 * PI / n as f32;
+                            let qu = [x + (rho * theta.cos()).round() as i32, y + (rho * theta.sin()).round() as i32];
+                            let coc_q = 0.5 * coc.clamped(qu[0], qu[1])[0];
+                            let radius_q = (0.5 * coc_q.abs()).max(0.5);
+                            let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+                            let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
+                            let o = [(x - qu[0]) as f32 * flip, (y - qu[1]) as f32 * flip];
+                            let sample = [qu[0] as f32 + 0.5, qu[1] as f32 + 0.5];
+                            let w = tap_area
+                                * aperture_weight(o, reach, ap, sample, flip, ramp, &mask)
+                                * sa_weight(o, radius_q, coc_q, ap);
+                            if w <= 0.0 {
+                                continue;
+                            }
+                            let c = color.clamped(qu[0], qu[1]);
+                            let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
+                            for ch in 0..4 {
+                                fg[ch] += f * w * c[ch];
+                                bg[ch] += (1.0 - f) * w * c[ch];
+                            }
+                            fg_w += f * w;
+                            bg_w += (1.0 - f) * w;
+                            if radius_q > pc.small_radius_px {
+                                for ch in 0..4 {
+                                    big[ch] += f * w * c[ch];
+                                }
+                                big_w += f * w;
+                            }
+                        }
+                    }
+                    let background: Vec<f32> =
+                        if bg_w > 0.0 { bg.iter().map(|v| v / bg_w).collect() } else { color.clamped(x, y).to_vec() };
+                    let layer = |sum: [f32; 4], weight: f32| {
+                        let rgb: [f32; 3] = std::array::from_fn(|ch| if weight > 0.0 { sum[ch] / weight } else { 0.0 });
+                        [rgb[0], rgb[1], rgb[2], weight.clamp(0.0, 1.0)]
+                    };
+                    bg_out.texel_mut(hx, hy).copy_from_slice(&background);
+                    fg_out.texel_mut(hx, hy).copy_from_slice(&layer(fg, fg_w));
+                    big_out.texel_mut(hx, hy).copy_from_slice(&layer(big, big_w));
+                }
+            }
+        }
+        b[2] = HostData::Image(bg_out);
+        b[3] = HostData::Image(fg_out);
+        b[7] = HostData::Image(big_out);
     }
+}
+
+/// The resources of the half-resolution gather.
+pub struct HalfGatherBindings<'a> {
+    pub color_half: &'a GpuImage,
+    pub coc_half: &'a GpuImage,
+    pub bg_half: &'a GpuImage,
+    pub fg_half: &'a GpuImage,
+    pub fg_big_half: &'a GpuImage,
+    pub tile_lists: &'a GpuBuffer,
+    pub tile_radius: &'a GpuBuffer,
+    pub args: &'a GpuBuffer,
+    pub aperture_mask: &'a GpuBuffer,
+}
+
+pub fn record(
+    kernel: &Kernel<HalfGatherShader>,
+    rec: &mut Recorder,
+    b: &HalfGatherBindings<'_>,
+    push: &HalfGatherPush,
+) -> GpuResult<()> {
+    rec.begin_pass(NAME);
+    // color_half, coc_half: written by dof_downsample (read-after-write).
+    // bg_half, fg_half, fg_big_half: written from scratch (only the large tiles' pixels; the
+    //   rest is never read).
+    rec.image_barriers(&[
+        after_compute_write(b.color_half),
+        after_compute_write(b.coc_half),
+        overwrite(b.bg_half),
+        overwrite(b.fg_half),
+        overwrite(b.fg_big_half),
+    ]);
+    kernel.dispatch_indirect(
+        rec,
+        &[
+            Bind::Image(b.color_half),
+            Bind::Image(b.coc_half),
+            Bind::Image(b.bg_half),
+            Bind::Image(b.fg_half),
+            Bind::Buffer(b.tile_lists),
+            Bind::Buffer(b.tile_radius),
+            Bind::Buffer(b.aperture_mask),
+            Bind::Image(b.fg_big_half),
+        ],
+        push,
+        b.args,
+        (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64,
+    )?;
+    rec.end_pass();
+    Ok(())
 }

@@ -3,26 +3,86 @@
 //! tile lists of dof_classify. Shader: glsl/dof_tile_gather.comp.
 
 use super::aperture::ApertureConstants;
-use super::push_bytes;
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::bokeh_gather::gather_exact;
+use super::twin::{finite_or_zero, floats};
+use super::TILE_SIZE;
+use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_SMALL};
+use crate::gpu::{
+    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
+};
 
 pub const NAME: &str = "dof_tile_gather";
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TileGatherParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TileGatherPush {
     pub size: [i32; 2],
     pub tiles: [i32; 2],
+    /// Which list: CLASS_COPY or CLASS_SMALL.
     pub tile_class: i32,
     pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
 }
 
-pub struct DofTileGatherPass {
-    pipeline: ComputePipeline,
+/// glsl/dof_tile_gather.comp: one workgroup per tile of the class's list.
+pub struct TileGatherShader;
+
+impl Shader for TileGatherShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[
+        image("color_in"),
+        image("coc_px"),
+        image("color_out"),
+        buffer("TileLists"),
+        buffer("TileRadius"),
+        buffer("ApertureMask"),
+    ];
+    type Push = TileGatherPush;
 }
 
+impl Twin for TileGatherShader {
+    fn cpu(pc: &TileGatherPush, groups: [u32; 3], b: &mut [HostData]) {
+        let (color, coc) = (b[0].image().clone(), b[1].image().clone());
+        let (lists, radii, mask) = (b[3].words().to_vec(), floats(b[4].words()), floats(b[5].words()));
+        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let out = b[2].image_mut();
+        for group in 0..groups[0] as usize {
+            let t = lists[pc.tile_class as usize * tile_count + group] as usize;
+            let origin = [(t % pc.tiles[0] as usize) as u32 * TILE_SIZE, (t / pc.tiles[0] as usize) as u32 * TILE_SIZE];
+            for y in origin[1]..origin[1] + TILE_SIZE {
+                for x in origin[0]..origin[0] + TILE_SIZE {
+                    if x as i32 >= pc.size[0] || y as i32 >= pc.size[1] {
+                        continue;
+                    }
+                    let texel = if pc.tile_class == CLASS_COPY as i32 {
+                        color.clamped(x as i32, y as i32).iter().map(|&v| finite_or_zero(v)).collect::<Vec<_>>()
+                    } else {
+                        // Samples behind p reach no farther than p's own CoC; only foreground
+                        // samples can reach farther, and the tile knows the largest of those.
+                        let radius_p = 0.5 * coc.clamped(x as i32, y as i32)[0].abs();
+                        let fg_radius = radii[tile_count + t];
+                        let r = radii[t].min(radius_p.max(fg_radius)).ceil() as i32 + 1;
+                        let p = [x as i32, y as i32];
+                        gather_exact(
+                            &color.texels,
+                            &coc.texels,
+                            pc.size,
+                            p,
+                            r,
+                            &pc.aperture,
+                            pc.layer_transition_px,
+                            &mask,
+                        )
+                        .to_vec()
+                    };
+                    out.texel_mut(x, y).copy_from_slice(&texel);
+                }
+            }
+        }
+    }
+}
+
+/// The resources of the full-resolution tile passes.
 pub struct TileGatherBindings<'a> {
     pub color: &'a GpuImage,
     pub coc: &'a GpuImage,
@@ -33,31 +93,28 @@ pub struct TileGatherBindings<'a> {
     pub aperture_mask: &'a GpuBuffer,
 }
 
-impl DofTileGatherPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let mut bindings = vec![vk::DescriptorType::STORAGE_IMAGE; 3];
-        bindings.extend([vk::DescriptorType::STORAGE_BUFFER; 3]);
-        let size = std::mem::size_of::<TileGatherParams>() as u32;
-        Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+/// Record the copy tiles and the small-CoC tiles (two indirect dispatches over their lists).
+/// The caller made the classification visible (see `tiled_dof`).
+pub fn record(
+    kernel: &Kernel<TileGatherShader>,
+    rec: &mut Recorder,
+    b: &TileGatherBindings<'_>,
+    push: &TileGatherPush,
+) -> GpuResult<()> {
+    let binds = [
+        Bind::Image(b.color),
+        Bind::Image(b.coc),
+        Bind::Image(b.output),
+        Bind::Buffer(b.tile_lists),
+        Bind::Buffer(b.tile_radius),
+        Bind::Buffer(b.aperture_mask),
+    ];
+    // The two dispatches write disjoint tiles of `output`: no barrier between them.
+    for (class, label) in [(CLASS_COPY, "dof_copy_tiles"), (CLASS_SMALL, "dof_small_tiles")] {
+        rec.begin_pass(label);
+        let p = TileGatherPush { tile_class: class as i32, ..*push };
+        kernel.dispatch_indirect(rec, &binds, &p, b.args, (class * ARGS_DISPATCH_WORDS * 4) as u64)?;
+        rec.end_pass();
     }
-
-    /// Record the copy tiles and the small-CoC tiles (two indirect dispatches). The caller has
-    /// made the classification visible (see `tiled_dof`).
-    pub fn record(&self, rec: &mut Recorder, b: &TileGatherBindings<'_>, params: &TileGatherParams) -> GpuResult<()> {
-        let binds = [
-            Bind::Image(b.color),
-            Bind::Image(b.coc),
-            Bind::Image(b.output),
-            Bind::Buffer(b.tile_lists),
-            Bind::Buffer(b.tile_radius),
-            Bind::Buffer(b.aperture_mask),
-        ];
-        for (class, label) in [(0, "dof_copy_tiles"), (1, "dof_small_tiles")] {
-            rec.begin_pass(label);
-            let p = TileGatherParams { tile_class: class, ..*params };
-            rec.dispatch_indirect(&self.pipeline, &binds, push_bytes(&p), b.args, class as u64 * 12)?;
-            rec.end_pass();
-        }
-        Ok(())
-    }
+    Ok(())
 }

@@ -1,43 +1,68 @@
-//! Tiled depth of field, step 1: the signed CoC range of every 16x16 tile. Shader: glsl/dof_tiles.comp.
+//! Tiled depth of field, step 1: the signed CoC range of every 16x16 tile.
+//! Shader: glsl/dof_tiles.comp.
 
-use super::{after_compute_write, push_bytes, TILE_SIZE};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::barriers::after_compute_write;
+use crate::gpu::{
+    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
+};
 
 pub const NAME: &str = "dof_tiles";
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TilesParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TilesPush {
     pub size: [i32; 2],
     pub tiles: [i32; 2],
 }
 
-pub struct DofTilesPass {
-    pipeline: ComputePipeline,
+/// glsl/dof_tiles.comp: one workgroup per tile.
+pub struct TilesShader;
+
+impl Shader for TilesShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("coc_px"), buffer("TileCoc")];
+    type Push = TilesPush;
 }
 
-impl DofTilesPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let bindings = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let size = std::mem::size_of::<TilesParams>() as u32;
-        Ok(Self { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for TilesShader {
+    fn cpu(push: &TilesPush, groups: [u32; 3], b: &mut [HostData]) {
+        let coc = b[0].image().clone();
+        let tile_size = super::TILE_SIZE;
+        let words = b[1].words_mut();
+        for ty in 0..groups[1] {
+            for tx in 0..groups[0] {
+                let (mut lo, mut hi) = (3.0e38f32, -3.0e38f32);
+                for y in ty * tile_size..(ty + 1) * tile_size {
+                    for x in tx * tile_size..(tx + 1) * tile_size {
+                        if (x as i32) < push.size[0] && (y as i32) < push.size[1] {
+                            let c = coc.clamped(x as i32, y as i32)[0];
+                            lo = lo.min(c);
+                            hi = hi.max(c);
+                        }
+                    }
+                }
+                let t = (ty as i32 * push.tiles[0] + tx as i32) as usize;
+                words[2 * t] = lo.to_bits();
+                words[2 * t + 1] = hi.to_bits();
+            }
+        }
     }
+}
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        coc: &GpuImage,
-        tile_coc: &GpuBuffer,
-        params: &TilesParams,
-    ) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        // coc: written by the CoC pass (read-after-write). tile_coc is fully overwritten and no
-        // earlier pass of this recording touched it, so it needs no barrier.
-        rec.image_barriers(&[after_compute_write(coc)]);
-        let groups = [coc.width.div_ceil(TILE_SIZE), coc.height.div_ceil(TILE_SIZE), 1];
-        rec.dispatch(&self.pipeline, &[Bind::Image(coc), Bind::Buffer(tile_coc)], push_bytes(params), groups)?;
-        rec.end_pass();
-        Ok(())
-    }
+/// Record the tile reduction: `coc` -> `tile_coc` ((min, max) per tile).
+pub fn record(
+    kernel: &Kernel<TilesShader>,
+    rec: &mut Recorder,
+    coc: &GpuImage,
+    tile_coc: &GpuBuffer,
+    push: &TilesPush,
+) -> GpuResult<()> {
+    rec.begin_pass(NAME);
+    // coc: written by the CoC pass (read-after-write). tile_coc is fully overwritten and no
+    // earlier pass of this recording touched it, so it needs no barrier.
+    rec.image_barriers(&[after_compute_write(coc)]);
+    let groups = [push.tiles[0] as u32, push.tiles[1] as u32, 1];
+    kernel.dispatch(rec, &[Bind::Image(coc), Bind::Buffer(tile_coc)], push, groups)?;
+    rec.end_pass();
+    Ok(())
 }

@@ -3,17 +3,19 @@
 //! first; then either the characteristic curve (toe, straight part, shoulder on log exposure)
 //! or nothing more, keeping scene-referred linear values for compositing.
 
-use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuImage, GpuResult, Recorder};
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::PlanInput;
+use super::{groups_for, Decision, FrameImages, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::model::camera::FilmMode;
 use crate::optics::film::FilmCurve;
-use ash::vk;
 
 pub const NAME: &str = "film";
 
 /// Push constants of glsl/film.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FilmParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FilmPush {
     pub size: [i32; 2],
     pub exposure_gain: f32,
     pub use_curve: i32,
@@ -58,10 +60,10 @@ pub fn gaussian(x: u32, y: u32, c: u32, seed: u32) -> f32 {
     (-2.0 * u1.ln()).sqrt() * (2.0 * std::f32::consts::PI * u2).cos()
 }
 
-impl FilmParams {
-    pub fn new(width: u32, height: u32, exposure_gain: f64, curve: Option<&FilmCurve>) -> FilmParams {
+impl FilmPush {
+    pub fn new(width: u32, height: u32, exposure_gain: f64, curve: Option<&FilmCurve>) -> FilmPush {
         let c = curve.copied().unwrap_or_else(FilmCurve::default_filmic);
-        FilmParams {
+        FilmPush {
             size: [width as i32, height as i32],
             exposure_gain: exposure_gain as f32,
             use_curve: curve.is_some() as i32,
@@ -79,8 +81,8 @@ impl FilmParams {
     }
 
     /// The same, through a tabled characteristic curve.
-    pub fn with_table(self, table: &crate::optics::film::FilmTable) -> FilmParams {
-        FilmParams { use_curve: 2, table_entries: table.log10_sensor_value.len() as i32, ..self }
+    pub fn with_table(self, table: &crate::optics::film::FilmTable) -> FilmPush {
+        FilmPush { use_curve: 2, table_entries: table.log10_sensor_value.len() as i32, ..self }
     }
 
     /// CPU twin of the shader for channel `c` of pixel (x, y), in f32 like the shader.
@@ -134,7 +136,7 @@ impl FilmParams {
 }
 
 /// CPU twin on an RGBA image.
-pub fn film_cpu(rgba: &[f32], params: &FilmParams, table: &[f32]) -> Vec<f32> {
+pub fn film_cpu(rgba: &[f32], params: &FilmPush, table: &[f32]) -> Vec<f32> {
     let w = params.size[0].max(1) as u32;
     rgba.chunks_exact(4)
         .enumerate()
@@ -151,37 +153,102 @@ pub fn film_cpu(rgba: &[f32], params: &FilmParams, table: &[f32]) -> Vec<f32> {
         .collect()
 }
 
-pub struct FilmPass {
-    pipeline: ComputePipeline,
+/// glsl/film.comp.
+pub struct FilmShader;
+
+impl Shader for FilmShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Table")];
+    type Push = FilmPush;
 }
 
-impl FilmPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<FilmPass> {
-        let bindings =
-            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let size = std::mem::size_of::<FilmParams>() as u32;
-        Ok(FilmPass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for FilmShader {
+    fn cpu(push: &FilmPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table: Vec<f32> = b[2].words().iter().map(|&w| f32::from_bits(w)).collect();
+        b[1].image_mut().texels = film_cpu(&b[0].image().texels, push, &table);
+    }
+}
+
+/// The pass's constants and its characteristic-curve table.
+#[derive(Clone, Debug)]
+pub struct FilmParams {
+    pub push: FilmPush,
+    pub table: Vec<f32>,
+}
+
+pub struct Film {
+    kernel: Kernel<FilmShader>,
+}
+
+impl Pass for Film {
+    const NAME: &'static str = NAME;
+    type Params = FilmParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<FilmParams> {
+        let camera = input.camera;
+        let gain = camera.exposure_gain();
+        let (curve, film_table) = match &camera.film {
+            FilmMode::Curve(c) => (Some(*c), None),
+            FilmMode::Table(t) => (Some(FilmCurve::default_filmic()), Some(t.clone())),
+            FilmMode::Linear => (None, None),
+        };
+        let noise_sigma = camera.noise_sigma();
+        if curve.is_none() && gain == 1.0 && noise_sigma == 0.0 {
+            return Decision::skip("linear film with exposure off and no grain: the sensor value is the scene value");
+        }
+        let exposure = if camera.exposure {
+            format!(
+                "exposure gain {gain:.4} (ISO {}, {} s, f/{}, N' {:.2})",
+                camera.iso,
+                camera.shutter_s,
+                camera.lens.f_number,
+                camera.lens.effective_f_number()
+            )
+        } else {
+            "exposure off".into()
+        };
+        let response = match (&curve, &film_table) {
+            (_, Some(t)) => format!("characteristic curve from a table of {} entries", t.log10_sensor_value.len()),
+            (Some(_), None) => "characteristic curve".into(),
+            (None, None) => "linear (scene-referred)".into(),
+        };
+        let grain = if noise_sigma > 0.0 {
+            format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
+        } else {
+            String::new()
+        };
+        let (w, h) = input.size();
+        let mut push = FilmPush::new(w, h, gain, curve.as_ref());
+        if let Some(t) = &film_table {
+            push = push.with_table(t);
+        }
+        push.noise_sigma = noise_sigma as f32;
+        push.seed = camera.seed;
+        let table = table_data(film_table.as_deref());
+        Decision::run(FilmParams { push, table }, format!("{exposure}, {response}{grain}"))
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        input: &GpuImage,
-        output: &GpuImage,
-        table: &crate::gpu::GpuBuffer,
-        params: &FilmParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(Film { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &FilmParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
-        // input: written by the previous compute pass (or the upload): wait for those writes.
+        let input = images.color().clone();
+        let output = rec.create_image("color (film)", input.width, input.height, input.format)?;
+        let table = rec.upload_buffer("film table", &p.table)?;
+        // input: written by the previous compute pass (or the upload, whose own barrier made it
+        //   visible to compute reads): wait for those writes.
         // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(input), overwrite(output)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(input), Bind::Image(output), Bind::Buffer(table)],
-            push_bytes(params),
+        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
+            &p.push,
             groups_for(input.width, input.height),
         )?;
         rec.end_pass();
+        images.set_color(None, output);
         Ok(())
     }
 }

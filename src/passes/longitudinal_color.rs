@@ -5,9 +5,11 @@
 //! the planner records it only for lenses with a longitudinal-colour entry whose offset is
 //! visible.
 
-use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
+use super::{groups_for, Decision, FrameImages, Pass};
+use crate::gpu::{image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::model::camera::BokehMode;
 
 pub const NAME: &str = "longitudinal_color";
 
@@ -21,35 +23,79 @@ pub fn join_cpu(red: &[f32], green: &[f32], blue: &[f32]) -> Vec<f32> {
     out
 }
 
-pub struct LongitudinalColorPass {
-    pipeline: ComputePipeline,
+/// glsl/longitudinal_color.comp; its push constants are the image size.
+pub struct JoinShader;
+
+impl Shader for JoinShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("red_run"), image("green_run"), image("blue_run"), image("color_out")];
+    type Push = [i32; 2];
 }
 
-impl LongitudinalColorPass {
-    pub fn new(gpu: &Gpu) -> GpuResult<LongitudinalColorPass> {
-        let bindings = [vk::DescriptorType::STORAGE_IMAGE; 4];
-        let pipeline = ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, 8)?;
-        Ok(LongitudinalColorPass { pipeline })
+impl Twin for JoinShader {
+    fn cpu(_size: &[i32; 2], _groups: [u32; 3], b: &mut [HostData]) {
+        let joined = join_cpu(&b[0].image().texels, &b[1].image().texels, &b[2].image().texels);
+        b[3].image_mut().texels = joined;
+    }
+}
+
+/// Joins the per-channel depth-of-field runs.
+pub struct LongitudinalColor {
+    kernel: Kernel<JoinShader>,
+}
+
+impl Pass for LongitudinalColor {
+    const NAME: &'static str = NAME;
+    /// The image size.
+    type Params = [i32; 2];
+
+    fn plan(input: &PlanInput<'_>) -> Decision<[i32; 2]> {
+        let (camera, f) = (input.camera, &input.facts);
+        let (Some([red_mm, blue_mm]), Some([r, b])) = (camera.longitudinal_color_mm, f.channel_offsets_px) else {
+            return Decision::skip("the lens file has no longitudinal_color");
+        };
+        let shifts = format!(
+            "red focuses {red_mm:+.4} mm and blue {blue_mm:+.4} mm from green: CoC offsets {r:+.2} / {b:+.2} px"
+        );
+        if !f.channel_offsets_visible() {
+            Decision::skip(format!("{shifts}, at most {VISIBLE_COC_PX} px: invisible"))
+        } else if camera.bokeh == BokehMode::Diffraction {
+            Decision::skip(format!("{shifts}; the focus processor does not model it"))
+        } else {
+            let (w, h) = input.size();
+            Decision::run(
+                [w as i32, h as i32],
+                format!("{shifts}: the depth of field runs once per channel (3x its cost)"),
+            )
+        }
     }
 
-    pub fn record(&self, rec: &mut Recorder, runs: [&GpuImage; 3], output: &GpuImage) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(LongitudinalColor { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, size: &[i32; 2]) -> GpuResult<()> {
         rec.begin_pass(NAME);
+        let runs = [Channel::Red, Channel::Green, Channel::Blue].map(|c| images.channel_color(c).cloned());
+        let [red, green, blue] = runs;
+        let (red, green, blue) = (red?, green?, blue?);
+        let output = rec.create_image("color (depth of field)", images.width, images.height, red.format)?;
         // The three runs were written by the depth-of-field passes before; the output is
         // written from scratch.
         rec.image_barriers(&[
-            after_compute_write(runs[0]),
-            after_compute_write(runs[1]),
-            after_compute_write(runs[2]),
-            overwrite(output),
+            after_compute_write(&red),
+            after_compute_write(&green),
+            after_compute_write(&blue),
+            overwrite(&output),
         ]);
-        let size = [output.width as i32, output.height as i32];
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(runs[0]), Bind::Image(runs[1]), Bind::Image(runs[2]), Bind::Image(output)],
-            push_bytes(&size),
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&red), Bind::Image(&green), Bind::Image(&blue), Bind::Image(&output)],
+            size,
             groups_for(output.width, output.height),
         )?;
         rec.end_pass();
+        images.set_color(None, output);
         Ok(())
     }
 }

@@ -1,9 +1,19 @@
-//! One module per compute pass. Each owns its pipeline, descriptor layout and push constants,
-//! records its dispatch with the barriers it needs (written out by hand, with the reason), and
-//! has a CPU twin used as its test oracle on small images.
+//! The passes, and the one shape every pass has.
+//!
+//! A pass is a module (and its shader `glsl/<name>.comp`; several for the tiled depth of field)
+//! that implements [`Pass`]: it plans itself from the frame and the camera (run or skip, and the
+//! reason `--explain` prints), builds its own push constants and buffer data, creates its
+//! pipelines, and records its dispatches with hand-written barriers, each commented with why.
+//! Its shaders are declared once ([`Shader`](crate::gpu::Shader): bindings and push constants,
+//! checked against the SPIR-V when the pipeline is created) and each has a CPU twin
+//! ([`Twin`](crate::gpu::Twin)) that the tests run every dispatch against.
+//!
+//! [`PASS_ORDER`] lists every pass in the order the renderer records them: adding a pass is its
+//! module, its shader and one line there.
 
 pub mod aperture;
 pub mod astigmatism;
+pub mod barriers;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod coma;
@@ -18,11 +28,273 @@ pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
 pub mod longitudinal_color;
+pub mod scene;
 pub mod tiled_dof;
 pub mod vignette;
 
-use crate::gpu::GpuImage;
-use ash::vk;
+pub use scene::{Channel, PlanInput, SceneFacts};
+
+use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Recorder};
+use std::any::Any;
+use std::sync::Arc;
+
+/// The pass order: every pass the renderer can record, in recording order. Depth of field
+/// comes first (it needs the pinhole image and its depth, before anything moves pixels), then the
+/// lens's aberrations of the image, then the light's falloff and the film.
+pub static PASS_ORDER: &[PassEntry] = &[
+    entry::<coc::Coc>(),
+    entry::<bokeh_gather::BokehGather>(),
+    entry::<tiled_dof::TiledDof>(),
+    entry::<diffraction::Diffraction>(),
+    entry::<longitudinal_color::LongitudinalColor>(),
+    entry::<distortion::Distortion>(),
+    entry::<astigmatism::Astigmatism>(),
+    entry::<coma::Coma>(),
+    entry::<vignette::Vignette>(),
+    entry::<film::Film>(),
+];
+
+/// A frame input beyond the colour that a pass reads (the renderer uploads only what the
+/// running passes need).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Input {
+    /// Planar depth in metres.
+    Depth,
+}
+
+/// One compute pass: see the module documentation.
+pub trait Pass: Sized + Send + Sync + 'static {
+    /// Its name in the plan, `--explain`, `--profile` and the debug labels.
+    const NAME: &'static str;
+    /// The frame inputs it reads besides the colour.
+    const INPUTS: &'static [Input] = &[];
+    /// One run's push constants and buffer data, decided by [`Pass::plan`].
+    type Params: std::fmt::Debug + Send + Sync + 'static;
+
+    /// Run (once, or once per channel) or skip, and why.
+    fn plan(input: &PlanInput<'_>) -> Decision<Self::Params>;
+
+    /// Its pipelines; created only when a plan runs the pass.
+    fn new(gpu: &Gpu) -> GpuResult<Self>;
+
+    /// Record one run: barriers (with the reason for each) and dispatches. Reads the frame's
+    /// images it needs from `images` and replaces those it writes.
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, params: &Self::Params) -> GpuResult<()>;
+}
+
+/// What a pass's plan decided.
+#[derive(Debug)]
+pub struct Decision<P> {
+    /// One entry per run; empty: skipped.
+    pub runs: Vec<P>,
+    /// The `--explain` line.
+    pub why: String,
+    /// False for a method the user did not choose (another `--bokeh`): not listed by `--explain`.
+    pub listed: bool,
+}
+
+impl<P> Decision<P> {
+    pub fn run(params: P, why: impl Into<String>) -> Self {
+        Decision { runs: vec![params], why: why.into(), listed: true }
+    }
+
+    /// Several runs (one per channel, for longitudinal colour).
+    pub fn run_each(runs: Vec<P>, why: impl Into<String>) -> Self {
+        Decision { runs, why: why.into(), listed: true }
+    }
+
+    pub fn skip(why: impl Into<String>) -> Self {
+        Decision { runs: Vec::new(), why: why.into(), listed: true }
+    }
+
+    /// Not chosen by the user: skipped without a line in `--explain`.
+    pub fn not_chosen() -> Self {
+        Decision { runs: Vec::new(), why: String::new(), listed: false }
+    }
+}
+
+/// A pass of [`PASS_ORDER`], its type erased so the order is one list.
+pub struct PassEntry {
+    pub name: &'static str,
+    pub inputs: &'static [Input],
+    plan: fn(&PlanInput<'_>) -> PlannedPass,
+    create: fn(&Gpu) -> GpuResult<Box<dyn RecordPass>>,
+}
+
+/// The entry of pass `P`.
+pub const fn entry<P: Pass>() -> PassEntry {
+    PassEntry { name: P::NAME, inputs: P::INPUTS, plan: plan_erased::<P>, create: create_erased::<P> }
+}
+
+fn plan_erased<P: Pass>(input: &PlanInput<'_>) -> PlannedPass {
+    let d = P::plan(input);
+    PlannedPass {
+        name: P::NAME,
+        why: d.why,
+        listed: d.listed,
+        runs: d.runs.into_iter().map(|p| Box::new(p) as Box<dyn Any + Send + Sync>).collect(),
+    }
+}
+
+fn create_erased<P: Pass>(gpu: &Gpu) -> GpuResult<Box<dyn RecordPass>> {
+    Ok(Box::new(P::new(gpu)?))
+}
+
+/// A created pass, recording runs whose parameters it downcasts.
+pub trait RecordPass: Send + Sync {
+    fn record_run(
+        &self,
+        rec: &mut Recorder,
+        images: &mut FrameImages,
+        params: &(dyn Any + Send + Sync),
+    ) -> GpuResult<()>;
+}
+
+impl<P: Pass> RecordPass for P {
+    fn record_run(
+        &self,
+        rec: &mut Recorder,
+        images: &mut FrameImages,
+        params: &(dyn Any + Send + Sync),
+    ) -> GpuResult<()> {
+        match params.downcast_ref::<P::Params>() {
+            Some(p) => self.record(rec, images, p),
+            None => Err(GpuError::Internal(format!("pass {}: a run's parameters are of another pass", P::NAME))),
+        }
+    }
+}
+
+impl PassEntry {
+    pub fn plan(&self, input: &PlanInput<'_>) -> PlannedPass {
+        (self.plan)(input)
+    }
+
+    pub fn create(&self, gpu: &Gpu) -> GpuResult<Box<dyn RecordPass>> {
+        (self.create)(gpu)
+    }
+}
+
+/// One pass of a plan: whether and how often it runs, why, and each run's parameters.
+#[derive(Debug)]
+pub struct PlannedPass {
+    pub name: &'static str,
+    pub why: String,
+    pub listed: bool,
+    runs: Vec<Box<dyn Any + Send + Sync>>,
+}
+
+impl PlannedPass {
+    /// A line of the plan for an effect no pass of this version renders.
+    pub fn not_built(name: &'static str, why: String) -> PlannedPass {
+        PlannedPass { name, why, listed: true, runs: Vec::new() }
+    }
+
+    pub fn runs(&self) -> bool {
+        !self.runs.is_empty()
+    }
+
+    pub fn run_params(&self) -> impl Iterator<Item = &(dyn Any + Send + Sync)> {
+        self.runs.iter().map(|r| r.as_ref())
+    }
+
+    /// The runs' parameters, if this is pass `P`.
+    pub fn params<P: Pass>(&self) -> impl Iterator<Item = &P::Params> {
+        self.runs.iter().filter_map(|r| r.downcast_ref::<P::Params>())
+    }
+
+    pub fn params_mut<P: Pass>(&mut self) -> impl Iterator<Item = &mut P::Params> {
+        self.runs.iter_mut().filter_map(|r| r.downcast_mut::<P::Params>())
+    }
+
+    /// Make pass `P` run with these parameters (tests that force a pass the planner skipped).
+    pub fn set_runs<P: Pass>(&mut self, runs: Vec<P::Params>, why: impl Into<String>) {
+        self.runs = runs.into_iter().map(|p| Box::new(p) as Box<dyn Any + Send + Sync>).collect();
+        self.why = why.into();
+        self.listed = true;
+    }
+}
+
+/// The frame's images on the GPU while a plan is recorded, by role. A pass that changes the
+/// colour reads [`FrameImages::color`] and replaces it with its own output image: each pass
+/// writes images of its own, so no pass overwrites what an earlier one still has to read.
+pub struct FrameImages {
+    pub width: u32,
+    pub height: u32,
+    color: Arc<GpuImage>,
+    depth: Option<Arc<GpuImage>>,
+    /// Signed CoC (px) of each run: one for all channels, or one per channel.
+    coc: Vec<(Option<Channel>, Arc<GpuImage>)>,
+    /// Longitudinal colour: one channel's depth of field, joined by the longitudinal_color pass.
+    channel_color: Vec<(Channel, Arc<GpuImage>)>,
+}
+
+impl FrameImages {
+    pub fn new(color: Arc<GpuImage>, depth: Option<Arc<GpuImage>>) -> FrameImages {
+        FrameImages {
+            width: color.width,
+            height: color.height,
+            color,
+            depth,
+            coc: Vec::new(),
+            channel_color: Vec::new(),
+        }
+    }
+
+    /// The current colour (RGBA32F).
+    pub fn color(&self) -> &Arc<GpuImage> {
+        &self.color
+    }
+
+    /// A pass's output becomes the colour; for a per-channel run of the depth of field
+    /// (`channel` set) it is kept for the longitudinal_color pass instead.
+    pub fn set_color(&mut self, channel: Option<Channel>, image: Arc<GpuImage>) {
+        match channel {
+            None => self.color = image,
+            Some(c) => self.channel_color.push((c, image)),
+        }
+    }
+
+    /// One channel's depth of field (longitudinal colour).
+    pub fn channel_color(&self, channel: Channel) -> GpuResult<&Arc<GpuImage>> {
+        self.channel_color
+            .iter()
+            .find(|(c, _)| *c == channel)
+            .map(|(_, i)| i)
+            .ok_or_else(|| missing(&format!("the {channel:?} channel's depth of field")))
+    }
+
+    /// Planar depth in metres (R32F), for passes that declare [`Input::Depth`].
+    pub fn depth(&self) -> GpuResult<&Arc<GpuImage>> {
+        self.depth.as_ref().ok_or_else(|| missing("the depth"))
+    }
+
+    /// The signed CoC of a run (R32F px), written by the coc pass.
+    pub fn coc(&self, channel: Option<Channel>) -> GpuResult<&Arc<GpuImage>> {
+        self.coc.iter().find(|(c, _)| *c == channel).map(|(_, i)| i).ok_or_else(|| missing("the CoC"))
+    }
+
+    /// The CoC read back by `keep_coc`: the only run's, or green's.
+    pub fn main_coc(&self) -> Option<&Arc<GpuImage>> {
+        self.coc(None).or_else(|_| self.coc(Some(Channel::Green))).ok()
+    }
+
+    pub fn set_coc(&mut self, channel: Option<Channel>, image: Arc<GpuImage>) {
+        self.coc.retain(|(c, _)| *c != channel);
+        self.coc.push((channel, image));
+    }
+}
+
+fn missing(what: &str) -> GpuError {
+    GpuError::Internal(format!("{what} image is needed but no earlier pass made it"))
+}
+
+/// Workgroup edge of every 2D pass (TILE_SIZE in glsl/include/common.glsl).
+pub const TILE_SIZE: u32 = crate::gpu::shaders::common::TILE_SIZE;
+
+/// Workgroups covering a width x height image.
+pub fn groups_for(width: u32, height: u32) -> [u32; 3] {
+    [width.div_ceil(TILE_SIZE), height.div_ceil(TILE_SIZE), 1]
+}
 
 /// Linear lookup in a height-table buffer (`n` heights, then columns of `n` values), the twin of
 /// glsl/include/height_table.glsl.
@@ -39,57 +311,36 @@ pub fn height_table_lookup(table: &[f32], column: usize, n: usize, h_mm: f32) ->
     table[column * n + n - 1]
 }
 
-/// Workgroup edge of every 2D pass (TILE_SIZE in glsl/include/common.glsl).
-pub const TILE_SIZE: u32 = 16;
+/// The twins' image helpers: the shaders' `load_clamped` + bilinear sampling at a position in
+/// pixel units (texel centres at +0.5), and `finite_or_zero` (glsl/include/common.glsl).
+pub mod twin {
+    use crate::gpu::HostImage;
 
-/// Workgroups covering a width x height image.
-pub fn groups_for(width: u32, height: u32) -> [u32; 3] {
-    [width.div_ceil(TILE_SIZE), height.div_ceil(TILE_SIZE), 1]
-}
+    /// Bilinear sample of an RGBA image at `(x, y)`, edge texels continuing beyond the frame.
+    pub fn bilinear(image: &HostImage, x: f32, y: f32) -> [f32; 4] {
+        let (tx, ty) = (x - 0.5, y - 0.5);
+        let (ix, iy) = (tx.floor() as i32, ty.floor() as i32);
+        let (fx, fy) = (tx - ix as f32, ty - iy as f32);
+        let (a, b) = (image.clamped(ix, iy), image.clamped(ix + 1, iy));
+        let (c, d) = (image.clamped(ix, iy + 1), image.clamped(ix + 1, iy + 1));
+        std::array::from_fn(|k| {
+            let top = a[k] + (b[k] - a[k]) * fx;
+            let bottom = c[k] + (d[k] - c[k]) * fx;
+            top + (bottom - top) * fy
+        })
+    }
 
-/// The bytes of a `#[repr(C)]` push-constant block made only of 4-byte fields.
-pub(crate) fn push_bytes<T: Copy>(value: &T) -> &[u8] {
-    // SAFETY: callers pass #[repr(C)] structs of i32/f32 fields, which have no padding bytes.
-    unsafe { std::slice::from_raw_parts((value as *const T).cast::<u8>(), std::mem::size_of::<T>()) }
-}
+    /// NaN and Inf become 0; the rest is clamped to +-3e38.
+    pub fn finite_or_zero(v: f32) -> f32 {
+        if v.is_finite() {
+            v.clamp(-3.0e38, 3.0e38)
+        } else {
+            0.0
+        }
+    }
 
-/// Barrier for an image a pass is about to overwrite completely: its old contents are discarded
-/// (UNDEFINED -> GENERAL). The execution dependency on earlier compute and copy work orders this
-/// write after any earlier reads of the same image (write-after-read).
-pub(crate) fn overwrite(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
-    vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY)
-        .src_access_mask(vk::AccessFlags2::NONE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .old_layout(vk::ImageLayout::UNDEFINED)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .image(image.image)
-        .subresource_range(crate::gpu::color_range())
-}
-
-/// Barrier for an image an earlier compute pass wrote and this pass reads (read-after-write):
-/// the writes must be finished and visible to this pass's storage reads.
-pub(crate) fn after_compute_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
-    vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
-        .old_layout(vk::ImageLayout::GENERAL)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .image(image.image)
-        .subresource_range(crate::gpu::color_range())
-}
-
-/// Barrier for a buffer an earlier compute pass wrote and this pass reads or updates.
-pub(crate) fn buffer_after_compute_write(buffer: &crate::gpu::GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
-    vk::BufferMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .buffer(buffer.buffer)
-        .offset(0)
-        .size(vk::WHOLE_SIZE)
+    /// A buffer binding's words as f32.
+    pub fn floats(words: &[u32]) -> Vec<f32> {
+        words.iter().map(|&w| f32::from_bits(w)).collect()
+    }
 }

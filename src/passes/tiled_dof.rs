@@ -1,31 +1,33 @@
-//! The tiled depth-of-field path, in order: tiles -> classify -> (copy | exact small gather)
-//! tiles, and for large-CoC tiles downsample (+ highlight sprites) -> half-resolution fixed-tap
-//! gather -> composite -> sprites. Its cost is nearly flat in the CoC radius: full-resolution
-//! work is bounded by `small_radius_px`, the half-resolution gather has a fixed tap count, and
-//! only highlights are scattered. Each step is its own pass module; this file only owns the
-//! buffers they share and the barriers between the classification and its indirect dispatches.
+//! The tiled depth-of-field path (`--bokeh tiled`, the default), in order: tiles -> classify ->
+//! (copy | exact small gather) tiles, and for large-CoC tiles downsample (+ highlight sprites)
+//! -> half-resolution fixed-tap gather -> composite -> sprites. Its cost is nearly flat in the
+//! CoC radius: full-resolution work is bounded by `small_radius_px`, the half-resolution gather
+//! has a fixed tap count, and only highlights are scattered. Each step is its own module with
+//! its shader and CPU twin; this pass plans the path, owns the buffers the steps share and the
+//! barriers between the classification and its indirect dispatches.
 
-use super::aperture::ApertureConstants;
-use super::dof_classify::{ClassifyParams, DofClassifyPass};
-use super::dof_composite::{CompositeBindings, CompositeParams, DofCompositePass};
-use super::dof_downsample::{DofDownsamplePass, DownsampleParams};
-use super::dof_half_gather::{DofHalfGatherPass, HalfGatherParams};
-use super::dof_sprites::{DofSpritesPass, SpritesParams};
-use super::dof_tile_gather::{DofTileGatherPass, TileGatherBindings, TileGatherParams};
-use super::dof_tiles::{DofTilesPass, TilesParams};
-use super::TILE_SIZE;
-use crate::gpu::{Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
+use super::aperture::{mask_buffer_data, ApertureConstants};
+use super::barriers::{buffer_after_compute_write, overwrite};
+use super::dof_classify::{ClassifyPush, ClassifyShader};
+use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
+use super::dof_downsample::{DownsampleBindings, DownsamplePush, DownsampleShader};
+use super::dof_half_gather::{HalfGatherBindings, HalfGatherPush, HalfGatherShader};
+use super::dof_sprites::{SpritesBindings, SpritesPush, SpritesShader};
+use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShader};
+use super::dof_tiles::{TilesPush, TilesShader};
+use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
+use super::{dof_classify, dof_composite, dof_downsample, dof_half_gather, dof_sprites, dof_tile_gather, dof_tiles};
+use super::{Decision, FrameImages, Pass, TILE_SIZE};
+use crate::gpu::shaders::dof_tiles::{ARGS_WORDS, CLASS_COUNT, SPRITE_WORDS};
+use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
 use crate::model::aperture::ApertureShape;
+use crate::model::camera::BokehMode;
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
-/// Words in the args buffer (glsl/include/dof_tiles.glsl ARGS_WORDS).
-const ARGS_WORDS: u64 = 12;
-/// Bytes of one sprite (struct Sprite in glsl/include/dof_tiles.glsl).
-const SPRITE_BYTES: u64 = 32;
+pub const NAME: &str = "bokeh_tiled";
 
-/// Settings of the tiled path.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Settings of one run of the tiled path.
+#[derive(Clone, Debug, PartialEq)]
 pub struct TiledDofParams {
     pub width: u32,
     pub height: u32,
@@ -45,6 +47,10 @@ pub struct TiledDofParams {
     pub max_abs_coc_px: f32,
     /// The aperture, in full-resolution pixel units.
     pub aperture: ApertureConstants,
+    /// The aperture image's buffer ([`mask_buffer_data`]).
+    pub aperture_mask: Vec<f32>,
+    /// The channel of this run (longitudinal colour), or all.
+    pub channel: Option<Channel>,
 }
 
 impl TiledDofParams {
@@ -67,6 +73,8 @@ impl TiledDofParams {
             sprite_visibility: 0.05,
             max_abs_coc_px: max_abs_coc_px as f32,
             aperture: ApertureConstants::new(aperture, sa_max_coc_px, centre_px, width, height),
+            aperture_mask: mask_buffer_data(None),
+            channel: None,
         }
     }
 
@@ -79,83 +87,93 @@ impl TiledDofParams {
     }
 }
 
-/// The pipelines of the tiled path.
+/// The pipelines of the tiled path, one per step.
 pub struct TiledDof {
-    tiles: DofTilesPass,
-    classify: DofClassifyPass,
-    tile_gather: DofTileGatherPass,
-    downsample: DofDownsamplePass,
-    half_gather: DofHalfGatherPass,
-    composite: DofCompositePass,
-    sprites: DofSpritesPass,
+    tiles: Kernel<TilesShader>,
+    classify: Kernel<ClassifyShader>,
+    tile_gather: Kernel<TileGatherShader>,
+    downsample: Kernel<DownsampleShader>,
+    half_gather: Kernel<HalfGatherShader>,
+    composite: Kernel<CompositeShader>,
+    sprites: Kernel<SpritesShader>,
 }
 
-/// Buffers and images of one frame, kept alive until the recording is submitted.
-pub struct TiledFrame {
-    pub args: GpuBuffer,
-    pub tile_coc: GpuBuffer,
-    pub tile_lists: GpuBuffer,
-    pub tile_radius: GpuBuffer,
-    pub sprites: GpuBuffer,
-    pub images: Vec<GpuImage>,
-}
+impl Pass for TiledDof {
+    const NAME: &'static str = NAME;
+    type Params = TiledDofParams;
 
-impl TiledDof {
-    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
+    fn plan(input: &PlanInput<'_>) -> Decision<TiledDofParams> {
+        let (f, camera) = (&input.facts, input.camera);
+        if camera.bokeh != BokehMode::Tiled {
+            return Decision::not_chosen();
+        }
+        if !f.dof_visible() {
+            return Decision::skip("no pixel is defocused by more than a pixel");
+        }
+        let (w, h) = input.size();
+        let max_abs_coc_px = f.max_abs_coc_px();
+        let mut base =
+            TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+        base.aperture = base.aperture.with_pitch(camera, f.pixel_pitch_mm);
+        base.aperture_mask = mask_buffer_data(camera.aperture_mask.as_ref());
+        let why = format!(
+            "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {TILE_SIZE} px; in-focus tiles copied, CoC radius <= {} px gathered exactly, larger at half resolution ({} rings) with highlight sprites; {}",
+            base.tiles()[0],
+            base.tiles()[1],
+            base.small_radius_px,
+            base.rings,
+            input.aperture_text()
+        );
+        let runs =
+            input.dof_runs().into_iter().map(|(channel, _)| TiledDofParams { channel, ..base.clone() }).collect();
+        Decision::run_each(runs, why)
+    }
+
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
         Ok(TiledDof {
-            tiles: DofTilesPass::new(gpu)?,
-            classify: DofClassifyPass::new(gpu)?,
-            tile_gather: DofTileGatherPass::new(gpu)?,
-            downsample: DofDownsamplePass::new(gpu)?,
-            half_gather: DofHalfGatherPass::new(gpu)?,
-            composite: DofCompositePass::new(gpu)?,
-            sprites: DofSpritesPass::new(gpu)?,
+            tiles: Kernel::new(gpu)?,
+            classify: Kernel::new(gpu)?,
+            tile_gather: Kernel::new(gpu)?,
+            downsample: Kernel::new(gpu)?,
+            half_gather: Kernel::new(gpu)?,
+            composite: Kernel::new(gpu)?,
+            sprites: Kernel::new(gpu)?,
         })
     }
 
-    /// Record the whole path: `color` and `coc` in, `output` written for every pixel.
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        color: &GpuImage,
-        coc: &GpuImage,
-        output: &GpuImage,
-        aperture_mask: &GpuBuffer,
-        p: &TiledDofParams,
-    ) -> GpuResult<TiledFrame> {
-        let gpu = rec.gpu().clone();
+    /// The whole path: the colour and the run's CoC in, a new colour written for every pixel.
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &TiledDofParams) -> GpuResult<()> {
+        let (color, coc) = (images.color().clone(), images.coc(p.channel)?.clone());
         let tiles = p.tiles();
         let tile_count = (tiles[0] * tiles[1]) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let device = MemoryLocation::GpuOnly;
-        let args = gpu.create_buffer(
+        let args = rec.create_buffer(
             "dof args (indirect dispatches, sprite count)",
-            ARGS_WORDS * 4,
+            ARGS_WORDS as u64 * 4,
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            device,
         )?;
-        let tile_coc = gpu.create_buffer("dof tile CoC range", tile_count * 8, storage, device)?;
-        let tile_lists = gpu.create_buffer("dof tile lists", tile_count * 4 * 3, storage, device)?;
+        let tile_coc = rec.create_buffer("dof tile CoC range", tile_count * 8, storage)?;
+        let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * CLASS_COUNT as u64, storage)?;
         // Per tile: the gather radius, then the largest foreground radius reaching it.
-        let tile_radius = gpu.create_buffer("dof tile radius", tile_count * 4 * 2, storage, device)?;
-        let sprites = gpu.create_buffer("dof sprites", p.sprite_capacity as u64 * SPRITE_BYTES, storage, device)?;
+        let tile_radius = rec.create_buffer("dof tile radius", tile_count * 4 * 2, storage)?;
+        let sprites = rec.create_buffer("dof sprites", p.sprite_capacity as u64 * SPRITE_WORDS as u64 * 4, storage)?;
         let [hw, hh] = p.half_size();
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
-        let color_half = gpu.create_image("dof colour (half)", hw as u32, hh as u32, rgba)?;
-        let coc_half = gpu.create_image("dof coc (half)", hw as u32, hh as u32, vk::Format::R32_SFLOAT)?;
-        let bg_half = gpu.create_image("dof background (half)", hw as u32, hh as u32, rgba)?;
-        let fg_half = gpu.create_image("dof foreground (half)", hw as u32, hh as u32, rgba)?;
-        let fg_big_half = gpu.create_image("dof large-CoC foreground (half)", hw as u32, hh as u32, rgba)?;
-        let color_base = gpu.create_image("dof colour less sprites", p.width, p.height, rgba)?;
-        let aperture = p.aperture;
-        let size = [p.width as i32, p.height as i32];
+        let half_image = |rec: &mut Recorder, name: &str, format| rec.create_image(name, hw as u32, hh as u32, format);
+        let color_half = half_image(rec, "dof colour (half)", rgba)?;
+        let coc_half = half_image(rec, "dof coc (half)", vk::Format::R32_SFLOAT)?;
+        let bg_half = half_image(rec, "dof background (half)", rgba)?;
+        let fg_half = half_image(rec, "dof foreground (half)", rgba)?;
+        let fg_big_half = half_image(rec, "dof large-CoC foreground (half)", rgba)?;
+        let color_base = rec.create_image("dof colour less sprites", p.width, p.height, rgba)?;
+        let output = rec.create_image("color (depth of field)", p.width, p.height, rgba)?;
+        let aperture_mask = rec.upload_buffer("aperture image", &p.aperture_mask)?;
+        let (aperture, size, layer_transition_px) = (p.aperture, [p.width as i32, p.height as i32], 1.0);
 
-        self.tiles.record(rec, coc, &tile_coc, &TilesParams { size, tiles })?;
-        // The counters start at zero every frame.
-        rec.fill_buffer(&args, 0);
+        dof_tiles::record(&self.tiles, rec, &coc, &tile_coc, &TilesPush { size, tiles })?;
         let search_tiles = (0.5 * p.max_abs_coc_px / TILE_SIZE as f32).ceil() as i32 + 1;
-        let classify = ClassifyParams { tiles, search_tiles, small_radius_px: p.small_radius_px };
-        self.classify.record(rec, &tile_coc, &args, &tile_lists, &tile_radius, &classify)?;
+        let classify = ClassifyPush { tiles, search_tiles, small_radius_px: p.small_radius_px };
+        dof_classify::record(&self.classify, rec, &tile_coc, &args, &tile_lists, &tile_radius, &classify)?;
 
         // The classification -> everything after it: the args feed indirect dispatches
         // (DRAW_INDIRECT stage, indirect-command reads) and the sprite counter; the lists and
@@ -174,26 +192,23 @@ impl TiledDof {
             .size(vk::WHOLE_SIZE);
         rec.buffer_barriers(&[
             indirect,
-            super::buffer_after_compute_write(&tile_lists),
-            super::buffer_after_compute_write(&tile_radius),
+            buffer_after_compute_write(&tile_lists),
+            buffer_after_compute_write(&tile_radius),
         ]);
-        rec.image_barriers(&[super::overwrite(output)]);
+        rec.image_barriers(&[overwrite(&output)]);
 
-        let layer_transition_px = 1.0;
-        self.tile_gather.record(
-            rec,
-            &TileGatherBindings {
-                color,
-                coc,
-                output,
-                tile_lists: &tile_lists,
-                tile_radius: &tile_radius,
-                args: &args,
-                aperture_mask,
-            },
-            &TileGatherParams { size, tiles, tile_class: 0, aperture, layer_transition_px },
-        )?;
-        let downsample = DownsampleParams {
+        let gather_bindings = TileGatherBindings {
+            color: &color,
+            coc: &coc,
+            output: &output,
+            tile_lists: &tile_lists,
+            tile_radius: &tile_radius,
+            args: &args,
+            aperture_mask: &aperture_mask,
+        };
+        let tile_gather = TileGatherPush { size, tiles, tile_class: 0, aperture, layer_transition_px };
+        dof_tile_gather::record(&self.tile_gather, rec, &gather_bindings, &tile_gather)?;
+        let downsample = DownsamplePush {
             size,
             half_size: [hw, hh],
             small_radius_px: p.small_radius_px,
@@ -202,8 +217,17 @@ impl TiledDof {
             sprite_capacity: p.sprite_capacity as i32,
             sprite_visibility: p.sprite_visibility,
         };
-        self.downsample.record(rec, color, coc, &color_half, &coc_half, &args, &sprites, &color_base, &downsample)?;
-        let half = HalfGatherParams {
+        let downsample_bindings = DownsampleBindings {
+            color: &color,
+            coc: &coc,
+            color_half: &color_half,
+            coc_half: &coc_half,
+            args: &args,
+            sprites: &sprites,
+            color_base: &color_base,
+        };
+        dof_downsample::record(&self.downsample, rec, &downsample_bindings, &downsample)?;
+        let half = HalfGatherPush {
             half_size: [hw, hh],
             tiles,
             rings: p.rings,
@@ -212,20 +236,19 @@ impl TiledDof {
             layer_transition_px,
             small_radius_px: 0.5 * p.small_radius_px,
         };
-        self.half_gather.record(
-            rec,
-            &color_half,
-            &coc_half,
-            &bg_half,
-            &fg_half,
-            &fg_big_half,
-            &tile_lists,
-            &tile_radius,
-            &args,
-            aperture_mask,
-            &half,
-        )?;
-        let composite = CompositeParams {
+        let half_bindings = HalfGatherBindings {
+            color_half: &color_half,
+            coc_half: &coc_half,
+            bg_half: &bg_half,
+            fg_half: &fg_half,
+            fg_big_half: &fg_big_half,
+            tile_lists: &tile_lists,
+            tile_radius: &tile_radius,
+            args: &args,
+            aperture_mask: &aperture_mask,
+        };
+        dof_half_gather::record(&self.half_gather, rec, &half_bindings, &half)?;
+        let composite = CompositePush {
             size,
             half_size: [hw, hh],
             tiles,
@@ -233,33 +256,32 @@ impl TiledDof {
             aperture,
             layer_transition_px,
         };
-        self.composite.record(
-            rec,
+        let composite_bindings = CompositeBindings {
             // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
-            &CompositeBindings {
-                color: &color_base,
-                coc,
-                bg_half: &bg_half,
-                fg_half: &fg_half,
-                output,
-                tile_lists: &tile_lists,
-                args: &args,
-                aperture_mask,
-                coc_half: &coc_half,
-                fg_big_half: &fg_big_half,
-                tile_radius: &tile_radius,
-            },
-            &composite,
-        )?;
-        let sprites_params = SpritesParams { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
-        self.sprites.record(rec, coc, output, &args, &sprites, &tile_lists, aperture_mask, &sprites_params)?;
-        Ok(TiledFrame {
-            args,
-            tile_coc,
-            tile_lists,
-            tile_radius,
-            sprites,
-            images: vec![color_half, coc_half, bg_half, fg_half, fg_big_half, color_base],
-        })
+            color: &color_base,
+            coc: &coc,
+            bg_half: &bg_half,
+            fg_half: &fg_half,
+            output: &output,
+            tile_lists: &tile_lists,
+            args: &args,
+            aperture_mask: &aperture_mask,
+            coc_half: &coc_half,
+            fg_big_half: &fg_big_half,
+            tile_radius: &tile_radius,
+        };
+        dof_composite::record(&self.composite, rec, &composite_bindings, &composite)?;
+        let sprite_bindings = SpritesBindings {
+            coc: &coc,
+            output: &output,
+            args: &args,
+            sprites: &sprites,
+            tile_lists: &tile_lists,
+            aperture_mask: &aperture_mask,
+        };
+        let sprites_push = SpritesPush { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
+        dof_sprites::record(&self.sprites, rec, &sprite_bindings, &sprites_push)?;
+        images.set_color(p.channel, output);
+        Ok(())
     }
 }

@@ -2,16 +2,17 @@
 //! (Kyaw 2013 eq 4.14 / 4.9).
 //! Shader: glsl/vignette.comp.
 
-use super::{after_compute_write, groups_for, overwrite, push_bytes};
-use crate::gpu::{shaders, Bind, ComputePipeline, Gpu, GpuBuffer, GpuImage, GpuResult, Recorder};
-use ash::vk;
+use super::barriers::{after_compute_write, overwrite};
+use super::scene::{PlanInput, VISIBLE_FALLOFF};
+use super::{groups_for, Decision, FrameImages, Pass};
+use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "vignette";
 
 /// Push constants of glsl/vignette.comp.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct VignetteParams {
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VignettePush {
     pub size: [i32; 2],
     pub centre_px: [f32; 2],
     pub pixel_pitch_mm: f32,
@@ -28,7 +29,7 @@ pub fn table_data(table: Option<&crate::optics::distortion::HeightTable>) -> Vec
     }
 }
 
-impl VignetteParams {
+impl VignettePush {
     /// The falloff at pixel (x, y): the table (`table_data` layout) or cos^4(theta) with
     /// tan(theta) = r / v; the shader's formula in f32.
     pub fn falloff(&self, x: u32, y: u32, table: &[f32]) -> f32 {
@@ -50,7 +51,7 @@ impl VignetteParams {
 }
 
 /// CPU twin on an RGBA image.
-pub fn vignette_cpu(rgba: &[f32], params: &VignetteParams, table: &[f32]) -> Vec<f32> {
+pub fn vignette_cpu(rgba: &[f32], params: &VignettePush, table: &[f32]) -> Vec<f32> {
     let w = params.size[0] as u32;
     rgba.chunks_exact(4)
         .enumerate()
@@ -61,38 +62,84 @@ pub fn vignette_cpu(rgba: &[f32], params: &VignetteParams, table: &[f32]) -> Vec
         .collect()
 }
 
-pub struct VignettePass {
-    pipeline: ComputePipeline,
+/// glsl/vignette.comp.
+pub struct VignetteShader;
+
+impl Shader for VignetteShader {
+    const NAME: &'static str = NAME;
+    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Table")];
+    type Push = VignettePush;
 }
 
-impl VignettePass {
-    pub fn new(gpu: &Gpu) -> GpuResult<VignettePass> {
-        let bindings =
-            [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
-        let size = std::mem::size_of::<VignetteParams>() as u32;
-        Ok(VignettePass { pipeline: ComputePipeline::new(gpu, NAME, shaders::spirv(NAME)?, &bindings, size)? })
+impl Twin for VignetteShader {
+    fn cpu(push: &VignettePush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table: Vec<f32> = b[2].words().iter().map(|&w| f32::from_bits(w)).collect();
+        b[1].image_mut().texels = vignette_cpu(&b[0].image().texels, push, &table);
+    }
+}
+
+/// The pass's constants and its relative-illumination table.
+#[derive(Clone, Debug)]
+pub struct VignetteParams {
+    pub push: VignettePush,
+    pub table: Vec<f32>,
+}
+
+pub struct Vignette {
+    kernel: Kernel<VignetteShader>,
+}
+
+impl Pass for Vignette {
+    const NAME: &'static str = NAME;
+    type Params = VignetteParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<VignetteParams> {
+        let (camera, frame) = (input.camera, input.frame);
+        let push = VignettePush {
+            size: [frame.width as i32, frame.height as i32],
+            centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+            pixel_pitch_mm: input.facts.pixel_pitch_mm as f32,
+            image_distance_mm: camera.lens.image_distance_mm() as f32,
+            entries: camera.relative_illumination.as_ref().map_or(0, |t| t.image_height_mm.len() as i32),
+        };
+        let table = table_data(camera.relative_illumination.as_ref());
+        let falloff_name = if camera.relative_illumination.is_some() {
+            "the lens's relative illumination"
+        } else {
+            "cos^4 natural vignetting"
+        };
+        let corner = push.corner_falloff(&table) as f64;
+        if !camera.vignetting {
+            Decision::skip("turned off (--no-vignetting)")
+        } else if 1.0 - corner <= VISIBLE_FALLOFF {
+            Decision::skip(format!("{falloff_name} at the corners is {corner:.6}: invisible"))
+        } else {
+            let why = format!("{falloff_name}: {:.1}% of the centre's light at the farthest corner", corner * 100.0);
+            Decision::run(VignetteParams { push, table }, why)
+        }
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        input: &GpuImage,
-        output: &GpuImage,
-        table: &GpuBuffer,
-        params: &VignetteParams,
-    ) -> GpuResult<()> {
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(Vignette { kernel: Kernel::new(gpu)? })
+    }
+
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &VignetteParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
+        let input = images.color().clone();
+        let output = rec.create_image("color (vignetting)", input.width, input.height, input.format)?;
+        let table = rec.upload_buffer("relative illumination", &p.table)?;
         // input: written by the previous compute pass (or the upload, made visible to compute by
         //   its own barrier; the extra dependency is then harmless): wait for those writes.
         // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(input), overwrite(output)]);
-        rec.dispatch(
-            &self.pipeline,
-            &[Bind::Image(input), Bind::Image(output), Bind::Buffer(table)],
-            push_bytes(params),
+        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
+        self.kernel.dispatch(
+            rec,
+            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
+            &p.push,
             groups_for(input.width, input.height),
         )?;
         rec.end_pass();
+        images.set_color(None, output);
         Ok(())
     }
 }

@@ -40,7 +40,7 @@ fn methods() -> Vec<Method> {
             name: format!("tiled, {rings} rings, exact up to {small_radius_px} px"),
             mode: BokehMode::Tiled,
             adjust: Box::new(move |p: &mut Plan| {
-                if let Some(t) = p.tiled.as_mut() {
+                for t in p.params_mut::<crate::passes::tiled_dof::TiledDof>() {
                     t.rings = rings;
                     t.small_radius_px = small_radius_px;
                 }

@@ -1,0 +1,60 @@
+//! The barriers passes record between each other, named for the hazard they resolve. Each pass
+//! still writes out which of these it records and why, next to the call.
+
+use crate::gpu::{GpuBuffer, GpuImage};
+use ash::vk;
+
+/// An image a pass is about to overwrite completely: its old contents are discarded
+/// (UNDEFINED -> GENERAL). The execution dependency on earlier compute and copy work orders this
+/// write after any earlier reads of the same image (write-after-read).
+pub fn overwrite(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::NONE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .old_layout(vk::ImageLayout::UNDEFINED)
+        .new_layout(vk::ImageLayout::GENERAL)
+        .image(image.image)
+        .subresource_range(crate::gpu::color_range())
+}
+
+/// An image an earlier compute pass wrote and this pass reads (read-after-write): the writes
+/// must be finished and visible to this pass's storage reads.
+pub fn after_compute_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+        .old_layout(vk::ImageLayout::GENERAL)
+        .new_layout(vk::ImageLayout::GENERAL)
+        .image(image.image)
+        .subresource_range(crate::gpu::color_range())
+}
+
+/// An image an earlier compute pass wrote and this pass writes again, other texels or the same
+/// (write-after-write; and read-modify-write).
+pub fn write_after_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .old_layout(vk::ImageLayout::GENERAL)
+        .new_layout(vk::ImageLayout::GENERAL)
+        .image(image.image)
+        .subresource_range(crate::gpu::color_range())
+}
+
+/// A buffer an earlier compute pass wrote and this pass reads or updates.
+pub fn buffer_after_compute_write(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
+    vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .buffer(buffer.buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)
+}

@@ -1,0 +1,128 @@
+//! What every pass plans from: the frame, the camera, and the facts several passes share,
+//! computed once (the pixel pitch, the depth range, the signed CoC range, longitudinal colour).
+
+use super::coc;
+use crate::model::camera::{BokehMode, Camera};
+use crate::model::frame::Frame;
+
+/// A CoC whose diameter is at most this many pixels is invisible.
+pub const VISIBLE_COC_PX: f64 = 1.0;
+/// Vignetting weaker than this relative falloff at the corners is invisible.
+pub const VISIBLE_FALLOFF: f64 = 1.0e-4;
+
+/// A colour channel with a depth of field of its own (longitudinal colour).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channel {
+    Red,
+    Green,
+    Blue,
+}
+
+/// The input of every pass's plan.
+pub struct PlanInput<'a> {
+    pub frame: &'a Frame,
+    pub camera: &'a Camera,
+    pub facts: SceneFacts,
+}
+
+/// Facts about the frame under the camera that several passes plan from.
+#[derive(Clone, Debug)]
+pub struct SceneFacts {
+    /// Pixel pitch on the film (mm) for the frame's display window.
+    pub pixel_pitch_mm: f64,
+    /// Nearest and farthest depth in the frame (m).
+    pub depth_range_m: (f32, f32),
+    /// Signed CoC range over the frame in pixels: after the user's clamp, with field curvature
+    /// (every pixel evaluated) and the longitudinal colour offsets when those are visible.
+    pub coc_range_px: (f64, f64),
+    /// Longitudinal colour: the red and blue channels' CoC offsets (px), when the lens has it.
+    pub channel_offsets_px: Option<[f64; 2]>,
+}
+
+impl SceneFacts {
+    pub fn new(frame: &Frame, camera: &Camera) -> SceneFacts {
+        let (dw, dh) = frame.display_size();
+        let pitch_mm = camera.pixel_pitch_mm(dw, dh);
+        // The CoC is monotonic in depth, so the nearest and farthest depths bound it.
+        let depth_range_m = frame.depth_m.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+        let coc_px = |d_m: f32| {
+            let c = camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
+            c.clamp(-camera.max_coc_px, camera.max_coc_px)
+        };
+        let mut coc_range_px =
+            if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(depth_range_m.0), coc_px(depth_range_m.1)) };
+        // With field curvature the CoC also depends on the image height: evaluate every pixel
+        // with the CoC pass's CPU twin.
+        if let Some(field_curvature) = &camera.field_curvature {
+            let push = coc::CocPush::for_frame(camera, pitch_mm, frame);
+            let table = coc::table_data(Some(field_curvature));
+            coc_range_px = coc::coc_cpu(&frame.depth_m, &push, &table)
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c as f64), hi.max(c as f64)));
+        }
+        // Longitudinal colour shifts the red and blue CoC by constants: an in-focus point gets
+        // red and blue disks of those diameters. Visible when one exceeds a pixel.
+        let channel_offsets_px = camera.longitudinal_color_coc_px(pitch_mm);
+        if let Some([r, b]) = channel_offsets_px.filter(|o| offsets_visible(*o)) {
+            let clamp = |c: f64| c.clamp(-camera.max_coc_px, camera.max_coc_px);
+            coc_range_px = (clamp(coc_range_px.0 + r.min(b).min(0.0)), clamp(coc_range_px.1 + r.max(b).max(0.0)));
+        }
+        SceneFacts { pixel_pitch_mm: pitch_mm, depth_range_m, coc_range_px, channel_offsets_px }
+    }
+
+    /// The largest |CoC| diameter in the frame (px).
+    pub fn max_abs_coc_px(&self) -> f64 {
+        self.coc_range_px.0.abs().max(self.coc_range_px.1.abs())
+    }
+
+    /// Some pixel is defocused by more than a pixel.
+    pub fn dof_visible(&self) -> bool {
+        self.max_abs_coc_px() > VISIBLE_COC_PX
+    }
+
+    /// Longitudinal colour offsets exceed a pixel.
+    pub fn channel_offsets_visible(&self) -> bool {
+        self.channel_offsets_px.is_some_and(offsets_visible)
+    }
+}
+
+fn offsets_visible([r, b]: [f64; 2]) -> bool {
+    r.abs().max(b.abs()) > VISIBLE_COC_PX
+}
+
+impl<'a> PlanInput<'a> {
+    pub fn new(frame: &'a Frame, camera: &'a Camera) -> PlanInput<'a> {
+        PlanInput { frame, camera, facts: SceneFacts::new(frame, camera) }
+    }
+
+    /// The runs of the depth of field: one for all channels, or, when longitudinal colour is
+    /// visible (and the method models it), one per channel with its CoC offset (px).
+    pub fn dof_runs(&self) -> Vec<(Option<Channel>, f32)> {
+        let per_channel = self.facts.dof_visible()
+            && self.facts.channel_offsets_visible()
+            && self.camera.bokeh != BokehMode::Diffraction;
+        match self.facts.channel_offsets_px {
+            Some([r, b]) if per_channel => {
+                vec![(Some(Channel::Red), r as f32), (Some(Channel::Green), 0.0), (Some(Channel::Blue), b as f32)]
+            }
+            _ => vec![(None, 0.0)],
+        }
+    }
+
+    /// The aperture's description in `--explain`.
+    pub fn aperture_text(&self) -> String {
+        let camera = self.camera;
+        if camera.aperture_mask.is_some() {
+            "the user's aperture image".to_string()
+        } else if camera.aperture.blades >= 3 {
+            format!("{}-bladed aperture", camera.aperture.blades)
+        } else {
+            "circular aperture".into()
+        }
+    }
+
+    /// The frame's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.frame.width, self.frame.height)
+    }
+}
