@@ -412,11 +412,12 @@ fn open_other(path: &Option<PathBuf>, same: &Path, what: &str) -> Result<Option<
 /// Loads color, depth and (when present or required) velocity; see the module docs for
 /// the channel names and conventions.
 pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
-    let unit_m = if src.depth_unit_m == 0.0 { 1.0 } else { src.depth_unit_m };
+    let unit_m = src.depth_unit_m;
     if !(unit_m.is_finite() && unit_m > 0.0) {
         return Err(IoError::InvalidArgument {
-            what: "depth_unit_m".into(),
-            reason: format!("{} m per depth unit; it must be a positive, finite number of metres", src.depth_unit_m),
+            field: "depth_unit_m",
+            value: unit_m,
+            allowed: "a positive number of metres per depth unit",
         });
     }
     let cf = ExrFile::open(&src.color_path, "color")?;
@@ -560,7 +561,7 @@ mod tests {
     }
 
     fn sources(color: &Path) -> PassSources {
-        PassSources { color_path: color.into(), ..Default::default() }
+        PassSources::new(color)
     }
 
     fn assert_const(im: &Image, expected: &[f32]) {
@@ -732,8 +733,15 @@ mod tests {
         let msg = err(&src);
         assert!(msg.starts_with(&format!("velocity: no velocity channel in \"{}\"", c.display())), "{msg}");
         assert!(msg.ends_with("channels found: B, G, R"), "{msg}");
-        let src = PassSources { depth_unit_m: -1.0, ..sources(&c) };
-        assert!(err(&src).contains("depth_unit_m"));
+        for unit_m in [-1.0, 0.0, f64::NAN] {
+            let src = PassSources { depth_unit_m: unit_m, ..sources(&c) };
+            let e = load_passes(&src).unwrap_err();
+            assert_eq!(e.field(), Some("depth_unit_m"));
+            assert_eq!(
+                e.to_string(),
+                format!("depth_unit_m must be a positive number of metres per depth unit, got {unit_m}")
+            );
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -6,6 +6,7 @@
 //! - [`exr_write`]: writes RGBA or arbitrary channels as half or float32 EXR.
 //! - [`png`]: writes an 8-bit sRGB preview.
 //! - [`lens_file`], [`film_file`]: realcam's TOML lens and film files, every field checked.
+//! - [`lens_analysis`]: a lens file's or a prescription's trace, and the lens file its tables make.
 //! - [`lensfun`]: lenses of the lensfun database converted into lens files.
 //!
 //! Both writers write a temporary file next to the target and rename it onto the target
@@ -15,6 +16,7 @@
 pub mod exr_read;
 pub mod exr_write;
 pub mod film_file;
+pub mod lens_analysis;
 pub mod lens_file;
 pub mod lensfun;
 pub mod png;
@@ -54,8 +56,9 @@ pub enum IoError {
     SizeMismatch { a: String, a_path: PathBuf, a_size: (u32, u32), b: String, b_path: PathBuf, b_size: (u32, u32) },
     #[error("depth: channel {channel} in \"{}\" has {count} invalid pixel(s) (NaN or negative depth); the first is pixel (x={x}, y={y}) of the data window with {value_m} m", .path.display())]
     InvalidDepth { path: PathBuf, channel: String, x: usize, y: usize, value_m: f32, count: u64 },
-    #[error("invalid argument {what}: {reason}")]
-    InvalidArgument { what: String, reason: String },
+    /// A setting of [`PassSources`] out of range, by its field name.
+    #[error("{field} must be {allowed}, got {value}")]
+    InvalidArgument { field: &'static str, value: f64, allowed: &'static str },
     #[error("cannot write \"{}\": the image has {got} channel(s) per pixel, expected {expected}", .path.display())]
     WrongChannelCount { path: PathBuf, expected: String, got: u32 },
     #[error("cannot write \"{}\": channel {channel} holds {got} values, expected {expected} (width x height x channels)", .path.display())]
@@ -113,8 +116,10 @@ pub enum DepthKind {
     Ray,
 }
 
-/// Where the passes of a frame are, and how to read them.
-#[derive(Clone, Debug, Default)]
+/// Where the passes of a frame are, and how to read them. [`PassSources::new`] takes every
+/// pass from one file, channels found by name, depth in metres; set what differs with
+/// `..PassSources::new(color_path)`.
+#[derive(Clone, Debug)]
 pub struct PassSources {
     pub color_path: PathBuf,
     /// None: look in `color_path` (multilayer file).
@@ -127,10 +132,42 @@ pub struct PassSources {
     pub depth_channel: Option<String>,
     /// Override: comma list of 2 channel names (x, y) or 4 (Blender X,Y,Z,W).
     pub velocity_channels: Option<String>,
-    /// Metres per depth unit in the file (1.0 = metres, 0.01 = centimetres); 0.0 is treated as 1.0.
+    /// Metres per depth unit in the file (1.0 = metres, 0.01 = centimetres).
     pub depth_unit_m: f64,
     /// The user asked for velocity: missing velocity is an error.
     pub require_velocity: bool,
+}
+
+impl Default for PassSources {
+    /// No color file yet; the rest as [`PassSources::new`].
+    fn default() -> Self {
+        PassSources::new(PathBuf::new())
+    }
+}
+
+impl PassSources {
+    pub fn new(color_path: impl Into<PathBuf>) -> PassSources {
+        PassSources {
+            color_path: color_path.into(),
+            depth_path: None,
+            velocity_path: None,
+            color_channels: None,
+            depth_channel: None,
+            velocity_channels: None,
+            depth_unit_m: 1.0,
+            require_velocity: false,
+        }
+    }
+}
+
+impl IoError {
+    /// The field of [`PassSources`] the error is about, if it is about one.
+    pub fn field(&self) -> Option<&'static str> {
+        match self {
+            IoError::InvalidArgument { field, .. } => Some(field),
+            _ => None,
+        }
+    }
 }
 
 /// The passes of one frame, as loaded by [`load_passes`].

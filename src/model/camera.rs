@@ -1,20 +1,115 @@
 //! The camera a render uses: lens, aperture, sensor, shutter, ISO, film. Built from a lens file
 //! and the user's settings, checked against what the lens allows.
 
+use crate::io::film_file::{FilmFile, FilmFileError};
 use crate::io::lens_file::LensFile;
 use crate::model::aperture::ApertureShape;
 use crate::optics::film::FilmCurve;
 use crate::optics::sensor::SensorFit;
 use crate::optics::{OpticsError, Sensor, ThinLens};
+use std::path::Path;
 
+/// Why [`Camera::new`] refused a request. A refused setting is named by its field, with the
+/// value and what is allowed.
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
     #[error(transparent)]
     Optics(#[from] OpticsError),
-    #[error("{what} is outside what the lens {lens:?} allows ({allowed}); pass --force to use it anyway")]
-    OutOfRange { what: String, lens: String, allowed: String },
-    #[error("{0}")]
-    Invalid(String),
+    /// A setting the lens does not allow; [`CameraRequest::force`] lets it through.
+    #[error("{} is outside what the lens {lens:?} allows ({allowed})", .field.quantity(*.value))]
+    OutOfRange { field: CameraField, value: f64, lens: String, allowed: String },
+    /// A setting no camera takes.
+    #[error("{} must be {allowed}, got {value}", .field.label())]
+    Invalid { field: CameraField, value: f64, allowed: &'static str },
+}
+
+impl CameraError {
+    /// The request's field the error is about; None for an optics error.
+    pub fn field(&self) -> Option<CameraField> {
+        match self {
+            CameraError::Optics(_) => None,
+            CameraError::OutOfRange { field, .. } | CameraError::Invalid { field, .. } => Some(*field),
+        }
+    }
+}
+
+/// A field of [`CameraRequest`] that [`Camera::new`] checks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CameraField {
+    FocalLengthMm,
+    FNumber,
+    FocusDistanceM,
+    ShutterS,
+    Iso,
+    NitsPerUnit,
+    Blades,
+    SphericalAberration,
+    CatsEye,
+    MaxCocPx,
+    Grain,
+}
+
+impl CameraField {
+    pub const ALL: [CameraField; 11] = [
+        CameraField::FocalLengthMm,
+        CameraField::FNumber,
+        CameraField::FocusDistanceM,
+        CameraField::ShutterS,
+        CameraField::Iso,
+        CameraField::NitsPerUnit,
+        CameraField::Blades,
+        CameraField::SphericalAberration,
+        CameraField::CatsEye,
+        CameraField::MaxCocPx,
+        CameraField::Grain,
+    ];
+
+    /// The field's name in [`CameraRequest`].
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraField::FocalLengthMm => "focal_length_mm",
+            CameraField::FNumber => "f_number",
+            CameraField::FocusDistanceM => "focus_distance_m",
+            CameraField::ShutterS => "shutter_s",
+            CameraField::Iso => "iso",
+            CameraField::NitsPerUnit => "nits_per_unit",
+            CameraField::Blades => "blades",
+            CameraField::SphericalAberration => "spherical_aberration",
+            CameraField::CatsEye => "cats_eye",
+            CameraField::MaxCocPx => "max_coc_px",
+            CameraField::Grain => "grain",
+        }
+    }
+
+    /// The setting in words, as messages name it.
+    pub fn label(self) -> &'static str {
+        match self {
+            CameraField::FocalLengthMm => "focal length",
+            CameraField::FNumber => "f-number",
+            CameraField::FocusDistanceM => "focus distance",
+            CameraField::ShutterS => "shutter time",
+            CameraField::Iso => "ISO",
+            CameraField::NitsPerUnit => "nits per unit",
+            CameraField::Blades => "number of aperture blades",
+            CameraField::SphericalAberration => "spherical aberration",
+            CameraField::CatsEye => "cat's eye",
+            CameraField::MaxCocPx => "maximum CoC diameter",
+            CameraField::Grain => "grain",
+        }
+    }
+
+    /// A value of this setting in words, with its unit: `f/2.8`, `focus distance 0.3 m`.
+    pub fn quantity(self, value: f64) -> String {
+        let unit = match self {
+            CameraField::FNumber => return format!("f/{value}"),
+            CameraField::FocalLengthMm => " mm",
+            CameraField::FocusDistanceM => " m",
+            CameraField::ShutterS => " s",
+            CameraField::MaxCocPx => " px",
+            _ => "",
+        };
+        format!("{} {value}{unit}", self.label())
+    }
 }
 
 /// Which depth-of-field method renders the bokeh.
@@ -44,12 +139,45 @@ pub enum FilmMode {
     Table(std::sync::Arc<crate::optics::film::FilmTable>),
 }
 
+/// The built-in film responses, by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FilmPreset {
+    /// [`FilmCurve::default_filmic`].
+    #[default]
+    Filmic,
+    /// [`FilmCurve::preset`] `contrast`.
+    Contrast,
+    /// [`FilmCurve::preset`] `soft`.
+    Soft,
+    /// [`FilmMode::Linear`].
+    Linear,
+}
+
 impl FilmMode {
     /// A film file's response.
     pub fn from_file(film: &crate::io::film_file::FilmFile) -> FilmMode {
         match &film.response {
             crate::io::film_file::FilmResponse::Curve(c) => FilmMode::Curve(*c),
             crate::io::film_file::FilmResponse::Table(t) => FilmMode::Table(std::sync::Arc::new(t.clone())),
+        }
+    }
+
+    /// A built-in response.
+    pub fn preset(preset: FilmPreset) -> FilmMode {
+        let curve = |name: &str| FilmMode::Curve(FilmCurve::preset(name).unwrap_or_else(FilmCurve::default_filmic));
+        match preset {
+            FilmPreset::Filmic => FilmMode::Curve(FilmCurve::default_filmic()),
+            FilmPreset::Contrast => curve("contrast"),
+            FilmPreset::Soft => curve("soft"),
+            FilmPreset::Linear => FilmMode::Linear,
+        }
+    }
+
+    /// The response of the film file at `film_file` when there is one, else the preset's.
+    pub fn choose(preset: FilmPreset, film_file: Option<&Path>) -> Result<FilmMode, FilmFileError> {
+        match film_file {
+            Some(path) => Ok(FilmMode::from_file(&FilmFile::load(path)?)),
+            None => Ok(FilmMode::preset(preset)),
         }
     }
 }
@@ -93,88 +221,167 @@ pub struct Camera {
     pub longitudinal_color_mm: Option<[f64; 2]>,
 }
 
-/// What the user asked for; `None` takes the lens file's or the default.
-#[derive(Clone, Debug, Default)]
+/// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
+/// command line's defaults; set what differs with `..CameraRequest::default()`.
+#[derive(Clone, Debug)]
 pub struct CameraRequest {
+    /// The lens file's when None.
     pub focal_length_mm: Option<f64>,
+    /// The lens file's widest, but no wider than f/2.8, when None.
     pub f_number: Option<f64>,
+    /// Planar, from the lens.
     pub focus_distance_m: f64,
+    /// A sensor format name or `WxH` in mm ([`Sensor::parse`]); full frame when None.
     pub sensor: Option<String>,
+    /// Horizontal when None.
     pub sensor_fit: Option<SensorFit>,
     pub shutter_s: f64,
     pub iso: f64,
+    /// Luminance in cd/m^2 of one scene unit; sets the absolute exposure.
     pub nits_per_unit: f64,
+    /// Aperture blades, 0 for circular; the lens file's when None.
     pub blades: Option<u32>,
+    /// The lens file's when None.
     pub blade_rotation_deg: Option<f64>,
     /// Spherical aberration amount (-1..1); the lens file's when None.
     pub spherical_aberration: Option<f64>,
     /// Cat's eye at the frame corners (0..1); the lens file's when None.
     pub cats_eye: Option<f64>,
+    /// Apply the exposure gain (ISO, shutter, f-number).
     pub exposure: bool,
+    /// Apply natural vignetting.
     pub vignetting: bool,
+    /// The filmic curve when None.
     pub film: Option<FilmMode>,
+    /// Clamp on |CoC| in pixels.
     pub max_coc_px: f64,
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
+    /// Sensor noise at ISO 100 ([`Camera::grain`]); 0: none.
+    pub grain: f64,
+    /// Seed of the noise.
+    pub seed: u32,
+}
+
+impl Default for CameraRequest {
+    /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
+    /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
+    /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
+    /// 64 px, tiled bokeh, no grain.
+    fn default() -> Self {
+        CameraRequest {
+            focal_length_mm: None,
+            f_number: None,
+            focus_distance_m: 2.0,
+            sensor: None,
+            sensor_fit: None,
+            shutter_s: 1.0 / 50.0,
+            iso: 100.0,
+            nits_per_unit: 160.0,
+            blades: None,
+            blade_rotation_deg: None,
+            spherical_aberration: None,
+            cats_eye: None,
+            exposure: true,
+            vignetting: true,
+            film: None,
+            max_coc_px: 64.0,
+            force: false,
+            bokeh: BokehMode::Tiled,
+            grain: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+impl CameraRequest {
+    /// Depth of field alone: no exposure gain, vignetting or film curve, so pixel values stay
+    /// scene values, and no spherical aberration or cat's eye in the bokeh (which the
+    /// diffraction reference does not model); the rest as [`Default`].
+    pub fn blur_only() -> CameraRequest {
+        CameraRequest {
+            spherical_aberration: Some(0.0),
+            cats_eye: Some(0.0),
+            exposure: false,
+            vignetting: false,
+            film: Some(FilmMode::Linear),
+            ..CameraRequest::default()
+        }
+    }
+
+    /// This request with the focal length, f-number and focus distance given.
+    pub fn with_lens(self, focal_length_mm: f64, f_number: f64, focus_distance_m: f64) -> CameraRequest {
+        CameraRequest { focal_length_mm: Some(focal_length_mm), f_number: Some(f_number), focus_distance_m, ..self }
+    }
+}
+
+/// `lens_file` as a thin lens (its pupil magnification and transmittance) at a setting; the
+/// lens file's focal length and widest aperture where none is given. Not checked against the
+/// lens's range.
+pub fn thin_lens(
+    lens_file: &LensFile,
+    focal_length_mm: Option<f64>,
+    f_number: Option<f64>,
+    focus_distance_m: f64,
+) -> Result<ThinLens, OpticsError> {
+    ThinLens::new(
+        focal_length_mm.unwrap_or(lens_file.focal_length_mm),
+        f_number.unwrap_or(lens_file.f_number_min),
+        focus_distance_m * 1000.0,
+    )?
+    .with_pupil_magnification(lens_file.pupil_magnification)?
+    .with_transmittance(lens_file.transmittance)
 }
 
 impl Camera {
     pub fn new(lens_file: &LensFile, req: &CameraRequest) -> Result<Camera, CameraError> {
         let focal_length_mm = req.focal_length_mm.unwrap_or(lens_file.focal_length_mm);
         let f_number = req.f_number.unwrap_or(lens_file.f_number_min.max(2.8));
-        let focus_distance_mm = req.focus_distance_m * 1000.0;
-        let name = lens_file.name.clone();
-        let out_of_range =
-            |what: String, allowed: String| CameraError::OutOfRange { what, lens: name.clone(), allowed };
+        let out_of_range = |field: CameraField, value: f64, allowed: String| {
+            Err(CameraError::OutOfRange { field, value, lens: lens_file.name.clone(), allowed })
+        };
         if !req.force {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
-                return Err(out_of_range(
-                    format!("f/{f_number}"),
-                    format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max),
-                ));
+                let allowed = format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max);
+                return out_of_range(CameraField::FNumber, f_number, allowed);
             }
             if req.focus_distance_m < lens_file.focus_min_m {
-                return Err(out_of_range(
-                    format!("focus distance {} m", req.focus_distance_m),
-                    format!("closest focus {} m", lens_file.focus_min_m),
-                ));
+                let allowed = format!("closest focus {} m", lens_file.focus_min_m);
+                return out_of_range(CameraField::FocusDistanceM, req.focus_distance_m, allowed);
             }
             if (focal_length_mm - lens_file.focal_length_mm).abs() > 1e-9 {
-                return Err(out_of_range(
-                    format!("focal length {focal_length_mm} mm"),
-                    format!("a prime of {} mm", lens_file.focal_length_mm),
-                ));
+                let allowed = format!("a prime of {} mm", lens_file.focal_length_mm);
+                return out_of_range(CameraField::FocalLengthMm, focal_length_mm, allowed);
             }
         }
-        let lens = ThinLens::new(focal_length_mm, f_number, focus_distance_mm)?
-            .with_pupil_magnification(lens_file.pupil_magnification)?
-            .with_transmittance(lens_file.transmittance)?;
+        let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
         let sensor = Sensor::parse(req.sensor.as_deref().unwrap_or("full-frame"))?;
-        for (what, v) in [("shutter", req.shutter_s), ("ISO", req.iso), ("nits per unit", req.nits_per_unit)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(CameraError::Invalid(format!("{what} must be a positive number, got {v}")));
+        let require = |field: CameraField, value: f64, ok: bool, allowed: &'static str| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(CameraError::Invalid { field, value, allowed })
             }
+        };
+        require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
+        require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
+        require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
+        require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
+        if let Some(c) = req.cats_eye {
+            require(CameraField::CatsEye, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
         }
-        if !(req.max_coc_px.is_finite() && req.max_coc_px >= 0.0) {
-            return Err(CameraError::Invalid(format!("--max-coc must be >= 0 px, got {}", req.max_coc_px)));
+        if let Some(a) = req.spherical_aberration {
+            require(CameraField::SphericalAberration, a, (-1.0..=1.0).contains(&a), "in [-1, 1]")?;
         }
         let blades = req.blades.unwrap_or(lens_file.aperture.blades);
-        if let Some(c) = req.cats_eye {
-            if !(0.0..=1.0).contains(&c) {
-                return Err(CameraError::Invalid(format!("--cats-eye {c}: use a value in [0, 1]")));
-            }
-        }
-        if let Some(sa) = req.spherical_aberration {
-            if !(-1.0..=1.0).contains(&sa) {
-                return Err(CameraError::Invalid(format!(
-                    "--spherical-aberration {sa}: use a value in [-1, 1] or 'uniform'"
-                )));
-            }
-        }
-        if blades == 1 || blades == 2 || blades > 32 {
-            return Err(CameraError::Invalid(format!("--blades {blades}: use 0 (circular) or 3..32")));
-        }
+        require(
+            CameraField::Blades,
+            blades.into(),
+            blades == 0 || (3..=32).contains(&blades),
+            "0 (circular) or 3..32",
+        )?;
+        require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
@@ -184,7 +391,7 @@ impl Camera {
                 curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
-                // The user's --cats-eye holds at the frame corner; the lens file's may name its height.
+                // A requested cat's eye holds at the frame corner; the lens file's may name its height.
                 cats_eye_at_mm: if req.cats_eye.is_some() { None } else { lens_file.aperture.cats_eye_at_mm },
                 // Traced LSA goes as the pupil height squared (third order); an amount the user
                 // asks for replaces it.
@@ -205,8 +412,8 @@ impl Camera {
             bokeh: req.bokeh,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
-            grain: 0.0,
-            seed: 0,
+            grain: req.grain,
+            seed: req.seed,
             relative_illumination: lens_file.tables.as_ref().and_then(|t| t.relative_illumination(f_number)),
             field_curvature: lens_file.tables.as_ref().and_then(|t| t.field_curvature()),
             astigmatism: lens_file.tables.as_ref().and_then(|t| {
@@ -278,5 +485,143 @@ impl Camera {
                 },
             ),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(req: &CameraRequest) -> Result<Camera, CameraError> {
+        Camera::new(&LensFile::default_lens(), req)
+    }
+
+    #[test]
+    fn the_default_request_is_the_command_line_default() {
+        let c = camera(&CameraRequest::default()).unwrap();
+        assert_eq!((c.lens.focal_length_mm, c.lens.f_number, c.lens.focus_distance_mm), (50.0, 2.8, 2000.0));
+        assert_eq!((c.sensor.width_mm, c.sensor.height_mm, c.sensor_fit), (36.0, 24.0, SensorFit::Horizontal));
+        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc_px), (0.02, 100.0, 160.0, 64.0));
+        assert!(c.exposure && c.vignetting);
+        assert_eq!(c.film, FilmMode::Curve(FilmCurve::default_filmic()));
+        assert_eq!((c.bokeh, c.grain, c.seed), (BokehMode::Tiled, 0.0, 0));
+    }
+
+    #[test]
+    fn blur_only_keeps_scene_values_and_a_plain_aperture() {
+        let req = CameraRequest::blur_only().with_lens(35.0, 4.0, 3.0);
+        let c = camera(&CameraRequest { force: true, ..req }).unwrap();
+        assert_eq!((c.lens.focal_length_mm, c.lens.f_number, c.lens.focus_distance_mm), (35.0, 4.0, 3000.0));
+        assert!(!c.exposure && !c.vignetting);
+        assert_eq!(c.exposure_gain(), 1.0);
+        assert_eq!(c.film, FilmMode::Linear);
+        assert_eq!((c.aperture.spherical_aberration, c.aperture.cats_eye), (0.0, 0.0));
+    }
+
+    #[test]
+    fn invalid_settings_name_the_field_the_value_and_what_is_allowed() {
+        let cases = [
+            (
+                CameraRequest { iso: -5.0, ..Default::default() },
+                CameraField::Iso,
+                "ISO must be a positive number, got -5",
+            ),
+            (
+                CameraRequest { shutter_s: 0.0, ..Default::default() },
+                CameraField::ShutterS,
+                "shutter time must be a positive number, got 0",
+            ),
+            (
+                CameraRequest { max_coc_px: -1.0, ..Default::default() },
+                CameraField::MaxCocPx,
+                "maximum CoC diameter must be >= 0 px, got -1",
+            ),
+            (
+                CameraRequest { cats_eye: Some(1.5), ..Default::default() },
+                CameraField::CatsEye,
+                "cat's eye must be in [0, 1], got 1.5",
+            ),
+            (
+                CameraRequest { spherical_aberration: Some(f64::NAN), ..Default::default() },
+                CameraField::SphericalAberration,
+                "spherical aberration must be in [-1, 1], got NaN",
+            ),
+            (
+                CameraRequest { blades: Some(2), ..Default::default() },
+                CameraField::Blades,
+                "number of aperture blades must be 0 (circular) or 3..32, got 2",
+            ),
+            (
+                CameraRequest { grain: -0.5, ..Default::default() },
+                CameraField::Grain,
+                "grain must be a non-negative number, got -0.5",
+            ),
+        ];
+        for (req, field, message) in cases {
+            let err = camera(&req).unwrap_err();
+            assert!(matches!(err, CameraError::Invalid { .. }), "{err:?}");
+            assert_eq!(err.field(), Some(field));
+            assert_eq!(err.to_string(), message);
+        }
+        for blades in [0, 3, 32] {
+            camera(&CameraRequest { blades: Some(blades), ..Default::default() }).unwrap();
+        }
+    }
+
+    #[test]
+    fn settings_outside_the_lens_need_force() {
+        let lens = "\"realcam standard 50 mm f/1.4\"";
+        let cases = [
+            (CameraRequest { f_number: Some(1.0), ..Default::default() }, CameraField::FNumber, "f/1", "f/1.4 to f/16"),
+            (
+                CameraRequest { focus_distance_m: 0.3, ..Default::default() },
+                CameraField::FocusDistanceM,
+                "focus distance 0.3 m",
+                "closest focus 0.45 m",
+            ),
+            (
+                CameraRequest { focal_length_mm: Some(85.0), ..Default::default() },
+                CameraField::FocalLengthMm,
+                "focal length 85 mm",
+                "a prime of 50 mm",
+            ),
+        ];
+        for (req, field, what, allowed) in cases {
+            let err = camera(&req).unwrap_err();
+            assert!(matches!(err, CameraError::OutOfRange { .. }), "{err:?}");
+            assert_eq!(err.field(), Some(field));
+            assert_eq!(err.to_string(), format!("{what} is outside what the lens {lens} allows ({allowed})"));
+            camera(&CameraRequest { force: true, ..req }).unwrap();
+        }
+    }
+
+    #[test]
+    fn field_names_are_distinct() {
+        let names: std::collections::BTreeSet<_> = CameraField::ALL.iter().map(|f| f.name()).collect();
+        assert_eq!(names.len(), CameraField::ALL.len());
+    }
+
+    #[test]
+    fn a_film_file_replaces_the_preset() {
+        let films = Path::new(env!("CARGO_MANIFEST_DIR")).join("films");
+        assert_eq!(FilmMode::choose(FilmPreset::Linear, None).unwrap(), FilmMode::Linear);
+        assert_eq!(
+            FilmMode::choose(FilmPreset::default(), None).unwrap(),
+            FilmMode::Curve(FilmCurve::default_filmic())
+        );
+        let soft = FilmMode::Curve(FilmCurve::preset("soft").unwrap());
+        assert_eq!(FilmMode::preset(FilmPreset::Soft), soft);
+        assert_eq!(FilmMode::choose(FilmPreset::Linear, Some(&films.join("soft.toml"))).unwrap(), soft);
+        let err = FilmMode::choose(FilmPreset::Linear, Some(&films.join("missing.toml"))).unwrap_err();
+        assert!(err.to_string().contains("missing.toml"), "{err}");
+    }
+
+    #[test]
+    fn thin_lens_takes_the_lens_file_where_nothing_is_given() {
+        let file = LensFile::default_lens();
+        let lens = thin_lens(&file, None, None, 3.0).unwrap();
+        assert_eq!((lens.focal_length_mm, lens.f_number, lens.focus_distance_mm), (50.0, 1.4, 3000.0));
+        assert_eq!((lens.pupil_magnification, lens.transmittance), (file.pupil_magnification, file.transmittance));
+        assert!(thin_lens(&file, Some(50.0), Some(2.0), 0.03).is_err());
     }
 }

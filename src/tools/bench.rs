@@ -4,7 +4,7 @@
 
 use crate::gpu::{Gpu, GpuResult, Profile};
 use crate::io::lens_file::LensFile;
-use crate::model::camera::{BokehMode, Camera, CameraRequest, FilmMode};
+use crate::model::camera::{BokehMode, Camera, CameraRequest};
 use crate::model::frame::Frame;
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
@@ -38,24 +38,13 @@ pub struct BenchOptions {
 /// (so every radius up to 190 px is reachable at any resolution); the plane's distance sets the CoC.
 fn bench_camera(width: u32, height: u32, bokeh: BokehMode) -> Camera {
     let request = CameraRequest {
-        focal_length_mm: Some(50.0),
-        f_number: Some(1.4),
-        focus_distance_m: 0.5,
         sensor: Some(format!("{}x{}", width as f64 * PIXEL_PITCH_MM, height as f64 * PIXEL_PITCH_MM)),
-        sensor_fit: None,
-        shutter_s: 0.02,
-        iso: 100.0,
-        nits_per_unit: 160.0,
         blades: Some(7),
         blade_rotation_deg: Some(0.0),
-        spherical_aberration: Some(0.0),
-        cats_eye: Some(0.0),
-        exposure: false,
-        vignetting: false,
-        film: Some(FilmMode::Linear),
         max_coc_px: 256.0,
         force: true,
         bokeh,
+        ..CameraRequest::blur_only().with_lens(50.0, 1.4, 0.5)
     };
     // Fixed, valid numbers: this cannot fail.
     Camera::new(&LensFile::default_lens(), &request).unwrap_or_else(|e| panic!("bench camera: {e}"))

@@ -3,7 +3,7 @@
 
 use realcam::gpu::{Gpu, GpuOptions, Profile};
 use realcam::io::lens_file::LensFile;
-use realcam::model::camera::{Camera, CameraRequest, FilmMode};
+use realcam::model::camera::{Camera, CameraRequest};
 use realcam::model::frame::Frame;
 use realcam::pipeline::planner::{plan, Plan};
 use realcam::pipeline::render::Renderer;
@@ -31,24 +31,11 @@ pub fn assert_validation_clean(gpu: &Gpu) {
 /// values stay scene values. 9.6 mm wide sensor (pitch 0.0375 mm at 256 px).
 pub fn dof_camera(focal_length_mm: f64, f_number: f64, focus_m: f64, blades: u32) -> Camera {
     let request = CameraRequest {
-        focal_length_mm: Some(focal_length_mm),
-        f_number: Some(f_number),
-        focus_distance_m: focus_m,
         sensor: Some("9.6x5.4".into()),
-        sensor_fit: None,
-        shutter_s: 1.0 / 50.0,
-        iso: 100.0,
-        nits_per_unit: 160.0,
         blades: Some(blades),
         blade_rotation_deg: Some(0.0),
-        spherical_aberration: Some(0.0),
-        cats_eye: Some(0.0),
-        exposure: false,
-        vignetting: false,
-        film: Some(FilmMode::Linear),
-        max_coc_px: 64.0,
         force: true,
-        bokeh: Default::default(),
+        ..CameraRequest::blur_only().with_lens(focal_length_mm, f_number, focus_m)
     };
     Camera::new(&LensFile::default_lens(), &request).expect("valid test camera")
 }
@@ -71,10 +58,8 @@ pub fn render_plan(gpu: &Gpu, frame: &Frame, plan: &Plan) -> (Vec<f32>, Profile)
 pub fn testdata_frame(name: &str, camera: &Camera) -> Frame {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("testdata");
     let sources = realcam::io::PassSources {
-        color_path: dir.join(format!("{name}_color.exr")),
         depth_path: Some(dir.join(format!("{name}_depth.exr"))),
-        depth_unit_m: 1.0,
-        ..Default::default()
+        ..realcam::io::PassSources::new(dir.join(format!("{name}_color.exr")))
     };
     let passes = realcam::io::load_passes(&sources).unwrap_or_else(|e| panic!("{e}"));
     Frame::from_passes(passes, camera, realcam::io::DepthKind::Planar)

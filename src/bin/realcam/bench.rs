@@ -1,0 +1,54 @@
+//! `realcam bench`: GPU time per pass of the depth-of-field methods against the CoC radius.
+
+use crate::common::{command_line, progress_bar, write_text, GpuArgs};
+use anyhow::{Context, Result};
+use clap::Args;
+use realcam::model::settings::parse_size_px;
+use realcam::tools::bench::{markdown, BenchOptions};
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Resolutions, e.g. 1280x720,1920x1080.
+    #[arg(long, default_value = "1280x720,1920x1080", value_delimiter = ',')]
+    resolutions: Vec<String>,
+    /// Largest CoC radii in pixels.
+    #[arg(long = "radii", default_value = "4,8,16,32,64", value_delimiter = ',')]
+    radii_px: Vec<f64>,
+    /// Timed runs per configuration (after one warm-up); the median is reported.
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Run the reference only up to this CoC radius (its cost grows with the radius squared).
+    #[arg(long = "reference-max-radius", default_value_t = 16.0)]
+    reference_max_radius_px: f64,
+    /// Also write the Markdown table here.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let resolutions =
+        args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
+    let gpu = args.gpu.open()?;
+    let options = BenchOptions {
+        resolutions,
+        radii_px: args.radii_px.clone(),
+        runs: args.runs,
+        reference_max_radius_px: args.reference_max_radius_px,
+    };
+    let total = (options.resolutions.len() * options.radii_px.len()) as u64;
+    let bar = progress_bar(total * 2);
+    let rows = realcam::tools::bench::run(&gpu, &options, |step| {
+        bar.set_message(step.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    let table = markdown(&gpu.info().to_string(), &command_line(), &rows);
+    print!("{table}");
+    if let Some(out) = &args.out {
+        write_text(out, &table)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,148 @@
+//! What several subcommands share: the lens and its setting, the GPU, writing text files,
+//! progress bars.
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use realcam::gpu::{Gpu, GpuOptions};
+use realcam::io::lens_file::LensFile;
+use realcam::model::camera::CameraRequest;
+use realcam::optics::sensor::SensorFit;
+use std::path::{Path, PathBuf};
+
+/// The lens of a command: a lens file, or a lens of the lensfun database.
+#[derive(Args)]
+pub struct LensChoice {
+    /// Lens file (TOML, see lenses/); the built-in default lens when neither this nor
+    /// --lens-lensfun is given.
+    #[arg(long)]
+    pub lens: Option<PathBuf>,
+    /// A lens of the lensfun database by model name (as `realcam lens import-lensfun` converts
+    /// it with its defaults; for a zoom, its shortest calibrated focal length).
+    #[arg(long = "lens-lensfun", value_name = "MODEL", conflicts_with = "lens")]
+    pub lens_lensfun: Option<String>,
+}
+
+impl LensChoice {
+    pub fn load(&self) -> Result<LensFile> {
+        Ok(match (&self.lens, &self.lens_lensfun) {
+            (Some(p), _) => LensFile::load(p)?,
+            (None, Some(model)) => {
+                let options = realcam::io::lensfun::ImportOptions::default();
+                realcam::io::lensfun::import_lens_file(model, &options, None)
+                    .with_context(|| format!("--lens-lensfun {model:?}"))?
+            }
+            (None, None) => LensFile::default_lens(),
+        })
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FitArg {
+    Horizontal,
+    Vertical,
+    Auto,
+}
+
+impl From<FitArg> for SensorFit {
+    fn from(fit: FitArg) -> SensorFit {
+        match fit {
+            FitArg::Horizontal => SensorFit::Horizontal,
+            FitArg::Vertical => SensorFit::Vertical,
+            FitArg::Auto => SensorFit::Auto,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct LensArgs {
+    /// Lens file (TOML, see lenses/) or --lens-lensfun MODEL; the built-in default lens when absent.
+    #[command(flatten)]
+    pub lens: LensChoice,
+    /// Focal length in mm (must match a prime lens file unless --force).
+    #[arg(long = "focal-length")]
+    pub focal_length_mm: Option<f64>,
+    /// f-number N.
+    #[arg(long = "fstop")]
+    pub f_number: Option<f64>,
+    /// Focus distance in metres (planar, from the lens).
+    #[arg(long = "focus", default_value_t = CameraRequest::default().focus_distance_m)]
+    pub focus_m: f64,
+    /// Sensor: full-frame (36x24), super35, aps-c, aps-c-canon, m43, 1in, apsh, medium-format, or WxH in mm.
+    #[arg(long, default_value = "full-frame")]
+    pub sensor: String,
+    /// Which image dimension the sensor width maps to (Blender's sensor fit).
+    #[arg(long = "sensor-fit", value_enum, default_value = "horizontal")]
+    pub sensor_fit: FitArg,
+    /// Allow settings outside the lens file's range.
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl LensArgs {
+    /// `base` with the lens setting, the sensor and --force of these flags.
+    pub fn request(&self, base: CameraRequest) -> CameraRequest {
+        CameraRequest {
+            focal_length_mm: self.focal_length_mm,
+            f_number: self.f_number,
+            focus_distance_m: self.focus_m,
+            sensor: Some(self.sensor.clone()),
+            sensor_fit: Some(self.sensor_fit.into()),
+            force: self.force,
+            ..base
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct GpuArgs {
+    /// Enable the Khronos validation layer with synchronization validation (also REALCAM_VALIDATE=1).
+    #[arg(long)]
+    pub validate: bool,
+    /// Vulkan device: index from `realcam devices` or part of its name (also REALCAM_DEVICE).
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+impl GpuArgs {
+    /// The GPU, with validation and the device as the flags and the environment ask; prints it.
+    pub fn open(&self) -> Result<Gpu> {
+        let mut options = GpuOptions::from_env();
+        options.validation |= self.validate;
+        if self.device.is_some() {
+            options.device = self.device.clone();
+        }
+        let gpu = Gpu::new(&options)?;
+        eprintln!("device: {}", gpu.info());
+        Ok(gpu)
+    }
+}
+
+/// Writes `text` to a temporary file beside `path`, then renames it onto `path`; a failed
+/// write leaves an existing `path` as it was.
+pub fn write_text_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let tmp = dir.join(format!(".realcam-{}.tmp", std::process::id()));
+    std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// [`write_text_atomically`], the error naming the path.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_text_atomically(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// A progress bar of `len` steps, showing each step's message.
+pub fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// The command line as typed, for the reports that record it.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}

@@ -1,0 +1,124 @@
+//! The library's errors name the fields they are about (`max_coc_px`, `f_number`); the user
+//! set those with flags. [`FLAGS`] is the one table from field to flag, and [`NameFlags`]
+//! shows a library error with the flag that sets its field.
+
+use anyhow::anyhow;
+use realcam::io::lens_analysis::LensAnalysisError;
+use realcam::io::IoError;
+use realcam::model::camera::{CameraError, CameraField};
+
+/// The flag that sets each field a library error can name.
+const FLAGS: [(&str, &str); 14] = [
+    ("focal_length_mm", "--focal-length"),
+    ("f_number", "--fstop"),
+    ("focus_distance_m", "--focus"),
+    ("shutter_s", "--shutter"),
+    ("iso", "--iso"),
+    ("nits_per_unit", "--nits-per-unit"),
+    ("blades", "--blades"),
+    ("spherical_aberration", "--spherical-aberration"),
+    ("cats_eye", "--cats-eye"),
+    ("max_coc_px", "--max-coc"),
+    ("grain", "--grain"),
+    ("force", "--force"),
+    ("depth_unit_m", "--depth-unit"),
+    ("tables_path", "--write-tables"),
+];
+
+/// The flag of a library field (the field's own name if it has none).
+pub fn flag(field: &str) -> &str {
+    FLAGS.iter().find(|(f, _)| *f == field).map_or(field, |(_, flag)| flag)
+}
+
+/// A library error that names the field it is about.
+pub trait FieldError: std::error::Error + Send + Sync + 'static {
+    fn field_name(&self) -> Option<&'static str>;
+
+    /// The field that would let the refused value through, if one would.
+    fn overridden_by(&self) -> Option<&'static str> {
+        None
+    }
+}
+
+impl FieldError for CameraError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field().map(CameraField::name)
+    }
+
+    fn overridden_by(&self) -> Option<&'static str> {
+        matches!(self, CameraError::OutOfRange { .. }).then_some("force")
+    }
+}
+
+impl FieldError for IoError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field()
+    }
+}
+
+impl FieldError for LensAnalysisError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field()
+    }
+}
+
+/// `result.name_flags()?`: a library error as the command line shows it, with the flag of the
+/// field it names: `ISO must be a positive number, got -5 (--iso)`, or for a setting outside
+/// the lens's range `...; pass --force to use it anyway`.
+pub trait NameFlags<T> {
+    fn name_flags(self) -> anyhow::Result<T>;
+}
+
+impl<T, E: FieldError> NameFlags<T> for Result<T, E> {
+    fn name_flags(self) -> anyhow::Result<T> {
+        self.map_err(|e| match (e.overridden_by(), e.field_name()) {
+            (Some(by), _) => anyhow!("{e}; pass {} to use it anyway", flag(by)),
+            (None, Some(field)) => anyhow!("{:#} ({})", anyhow::Error::from(e), flag(field)),
+            (None, None) => e.into(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// Every long flag of the command line, all subcommands.
+    fn long_flags(command: &clap::Command, out: &mut Vec<String>) {
+        out.extend(command.get_arguments().filter_map(|a| a.get_long()).map(|l| format!("--{l}")));
+        command.get_subcommands().for_each(|c| long_flags(c, out));
+    }
+
+    #[test]
+    fn every_field_has_a_flag_of_the_command_line() {
+        let mut flags = Vec::new();
+        long_flags(&crate::Cli::command(), &mut flags);
+        for (field, flag) in FLAGS {
+            assert!(flags.iter().any(|f| f == flag), "{field}: {flag} is no flag of realcam");
+        }
+        for field in CameraField::ALL {
+            assert_ne!(flag(field.name()), field.name(), "{field:?} has no flag");
+        }
+    }
+
+    #[test]
+    fn errors_show_the_flag() {
+        let lens = realcam::io::lens_file::LensFile::default_lens();
+        let camera = |req| realcam::model::camera::Camera::new(&lens, &req).name_flags().map(|_| ()).unwrap_err();
+        let req = realcam::model::camera::CameraRequest { max_coc_px: -1.0, ..Default::default() };
+        assert_eq!(camera(req).to_string(), "maximum CoC diameter must be >= 0 px, got -1 (--max-coc)");
+        let req = realcam::model::camera::CameraRequest { f_number: Some(1.0), ..Default::default() };
+        assert_eq!(
+            camera(req).to_string(),
+            "f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/16); \
+             pass --force to use it anyway"
+        );
+        let passes = realcam::io::PassSources { depth_unit_m: 0.0, ..realcam::io::PassSources::new("c.exr") };
+        let err = realcam::io::load_passes(&passes).name_flags().map(|_| ()).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "depth_unit_m must be a positive number of metres per depth unit, got 0 (--depth-unit)"
+        );
+    }
+}

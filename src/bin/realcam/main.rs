@@ -1,0 +1,81 @@
+//! The realcam command line. Only argument handling lives here; the work is in the library.
+//! One module per subcommand; [`common`] holds the argument groups they share, [`flags`] the
+//! flag of each library field that library errors name.
+
+mod accuracy;
+mod bench;
+mod common;
+mod compare;
+mod devices;
+mod dof;
+mod flags;
+mod lens;
+mod render;
+mod synth;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "realcam", version, about = "A realistic camera for rendered images (Vulkan compute)")]
+#[command(args_override_self = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render color + depth (+ velocity) EXR passes through a camera.
+    Render(Box<render::RenderArgs>),
+    /// Print focusing, field of view, exposure and depth-of-field numbers for a lens setting.
+    Dof(dof::DofArgs),
+    /// List the Vulkan devices.
+    Devices,
+    /// Lenses: analyse a prescription by real ray tracing (paraxial data, distortion, field
+    /// curves, spherical aberration, coma, relative illumination, colour) and write its tables
+    /// into a lens file; import a lens from the lensfun database.
+    Lens {
+        #[command(subcommand)]
+        command: lens::LensCommand,
+    },
+    /// Every depth-of-field method on your frame against the diffraction reference: GPU time,
+    /// RMSE, PSNR, energy and FLIP, as Markdown, CSV and an SVG plot of error against time.
+    Accuracy(accuracy::AccuracyArgs),
+    /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
+    /// defocused), with the fast path's error against the reference.
+    Bench(bench::BenchArgs),
+    /// Error of an image against a reference (RMSE, PSNR, energy), e.g. against a ray-traced
+    /// ground truth.
+    Compare {
+        /// The image to judge (EXR).
+        test: PathBuf,
+        /// The reference (EXR).
+        reference: PathBuf,
+    },
+    /// Write the deterministic synthetic test scenes (testdata/ is made with this).
+    Synth {
+        /// Output directory.
+        #[arg(long, default_value = "testdata")]
+        out: PathBuf,
+    },
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render::run(&args),
+        Command::Dof(args) => dof::run(&args),
+        Command::Devices => devices::run(),
+        Command::Lens { command } => lens::run(&command),
+        Command::Accuracy(args) => accuracy::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::Compare { test, reference } => compare::run(&test, &reference),
+        Command::Synth { out } => synth::run(&out),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

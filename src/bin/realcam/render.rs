@@ -1,0 +1,270 @@
+//! `realcam render`: color + depth (+ velocity) passes through a camera.
+
+use crate::common::{write_text_atomically, GpuArgs, LensArgs};
+use crate::flags::NameFlags;
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
+use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
+use realcam::model::frame::Frame;
+use realcam::model::settings::{parse_shutter_s, parse_spherical_aberration};
+use realcam::pipeline::render::Renderer;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FilmArg {
+    /// The characteristic curve (toe, straight part, shoulder): display-referred.
+    Filmic,
+    /// A steeper curve with a harder shoulder (slide-film-like).
+    Contrast,
+    /// A flatter curve with a long toe and shoulder.
+    Soft,
+    /// Scene-referred linear sensor values, for compositing.
+    Linear,
+}
+
+impl From<FilmArg> for FilmPreset {
+    fn from(film: FilmArg) -> FilmPreset {
+        match film {
+            FilmArg::Filmic => FilmPreset::Filmic,
+            FilmArg::Contrast => FilmPreset::Contrast,
+            FilmArg::Soft => FilmPreset::Soft,
+            FilmArg::Linear => FilmPreset::Linear,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum BokehArg {
+    /// Tiled gather-scatter: cost nearly flat in the CoC radius.
+    Tiled,
+    /// Exact aperture sprite of every pixel (the geometric reference; cost grows with CoC^2).
+    Reference,
+    /// Potmesil & Chakravarty's diffraction focus processor (the accuracy reference; slow).
+    Diffraction,
+}
+
+impl From<BokehArg> for BokehMode {
+    fn from(bokeh: BokehArg) -> BokehMode {
+        match bokeh {
+            BokehArg::Tiled => BokehMode::Tiled,
+            BokehArg::Reference => BokehMode::Reference,
+            BokehArg::Diffraction => BokehMode::Diffraction,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DepthKindArg {
+    /// Distance along the view axis (Blender/Cycles Z).
+    Planar,
+    /// Distance from the camera along each pixel's ray.
+    Ray,
+}
+
+impl From<DepthKindArg> for DepthKind {
+    fn from(kind: DepthKindArg) -> DepthKind {
+        match kind {
+            DepthKindArg::Planar => DepthKind::Planar,
+            DepthKindArg::Ray => DepthKind::Ray,
+        }
+    }
+}
+
+#[derive(Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RenderArgs {
+    /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
+    #[arg(long)]
+    color: PathBuf,
+    /// Depth pass EXR (a Z channel); default: look in the color file.
+    #[arg(long)]
+    depth: Option<PathBuf>,
+    /// Velocity pass EXR; default: use one in the color file if present.
+    #[arg(long)]
+    velocity: Option<PathBuf>,
+    #[command(flatten)]
+    lens: LensArgs,
+    /// Shutter time in seconds, e.g. 0.02 or 1/50.
+    #[arg(long, default_value = "1/50")]
+    shutter: String,
+    #[arg(long, default_value_t = CameraRequest::default().iso)]
+    iso: f64,
+    /// Luminance in cd/m^2 of a scene value of 1.0. The default exposes a scene value of 0.18 as
+    /// ISO 12232 middle grey at 1/50 s, ISO 100, f/2.
+    #[arg(long = "nits-per-unit", default_value_t = CameraRequest::default().nits_per_unit)]
+    nits_per_unit: f64,
+    /// Aperture blades (0 = circular); default from the lens file.
+    #[arg(long)]
+    blades: Option<u32>,
+    /// Aperture rotation in degrees; default from the lens file.
+    #[arg(long = "blade-rotation")]
+    blade_rotation_deg: Option<f64>,
+    /// Spherical aberration in the bokeh: an amount in [-1, 1] (> 0 under-corrected: soft
+    /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
+    #[arg(long = "spherical-aberration")]
+    spherical_aberration: Option<String>,
+    /// An aperture image (PNG or EXR, grey levels = transmission) used as the iris shape instead
+    /// of the blades; upright for background bokeh, turned by --blade-rotation.
+    #[arg(long = "aperture-image")]
+    aperture_image: Option<PathBuf>,
+    /// Cat's eye (optical vignetting of the bokeh) at the frame corners, 0..1; default from the lens file.
+    #[arg(long = "cats-eye")]
+    cats_eye: Option<f64>,
+    /// Depth-of-field method.
+    #[arg(long, value_enum, default_value = "tiled")]
+    bokeh: BokehArg,
+    /// Film response.
+    #[arg(long, value_enum, default_value = "filmic")]
+    film: FilmArg,
+    /// A film file (TOML, see films/): its characteristic curve, parametric or tabled,
+    /// instead of --film.
+    #[arg(long = "film-file", value_name = "FILE")]
+    film_file: Option<PathBuf>,
+    /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO)); 0: none.
+    #[arg(long, default_value_t = CameraRequest::default().grain)]
+    grain: f64,
+    /// Seed of the sensor noise (the same seed gives the same noise).
+    #[arg(long, default_value_t = CameraRequest::default().seed)]
+    seed: u32,
+    /// Do not apply the exposure gain (ISO, shutter, f-number): sensor value = scene value.
+    #[arg(long = "no-exposure")]
+    no_exposure: bool,
+    /// Do not apply natural (cos^4) vignetting.
+    #[arg(long = "no-vignetting")]
+    no_vignetting: bool,
+    /// Clamp on the CoC diameter in pixels.
+    #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
+    max_coc_px: f64,
+    /// What the depth values measure.
+    #[arg(long = "depth-kind", value_enum, default_value = "planar")]
+    depth_kind: DepthKindArg,
+    /// Metres per depth unit in the file (0.01 for centimetres).
+    #[arg(long = "depth-unit", default_value_t = PassSources::default().depth_unit_m)]
+    depth_unit_m: f64,
+    /// Color channel override: a layer prefix (ViewLayer.Combined) or a list "R,G,B[,A]".
+    #[arg(long = "color-channels")]
+    color_channels: Option<String>,
+    /// Depth channel override (exact name).
+    #[arg(long = "depth-channel")]
+    depth_channel: Option<String>,
+    /// Velocity channel override: "x,y" or Blender "X,Y,Z,W".
+    #[arg(long = "velocity-channels")]
+    velocity_channels: Option<String>,
+    /// Output EXR.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write 32-bit float EXR instead of half.
+    #[arg(long)]
+    float: bool,
+    /// Also write an sRGB 8-bit PNG preview here.
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// Print the planned passes and why each runs or is skipped.
+    #[arg(long)]
+    explain: bool,
+    /// Print GPU time per pass (timestamp queries).
+    #[arg(long)]
+    profile: bool,
+    /// Write the per-pass GPU times as a Chrome trace JSON (opens in Perfetto).
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+impl RenderArgs {
+    /// The camera these flags ask for.
+    fn camera(&self) -> Result<Camera> {
+        let lens_file = self.lens.lens.load()?;
+        let shutter_s = parse_shutter_s(&self.shutter).with_context(|| format!("--shutter {:?}", self.shutter))?;
+        let film = FilmMode::choose(self.film.into(), self.film_file.as_deref())?;
+        let spherical_aberration = match &self.spherical_aberration {
+            Some(text) => {
+                Some(parse_spherical_aberration(text).with_context(|| format!("--spherical-aberration {text:?}"))?)
+            }
+            None => None,
+        };
+        let request = self.lens.request(CameraRequest {
+            shutter_s,
+            iso: self.iso,
+            nits_per_unit: self.nits_per_unit,
+            blades: self.blades,
+            blade_rotation_deg: self.blade_rotation_deg,
+            spherical_aberration,
+            cats_eye: self.cats_eye,
+            exposure: !self.no_exposure,
+            vignetting: !self.no_vignetting,
+            film: Some(film),
+            max_coc_px: self.max_coc_px,
+            bokeh: self.bokeh.into(),
+            grain: self.grain,
+            seed: self.seed,
+            ..CameraRequest::default()
+        });
+        let mut camera = Camera::new(&lens_file, &request).name_flags()?;
+        if let Some(path) = &self.aperture_image {
+            camera.aperture_mask = Some(realcam::model::aperture::ApertureMask::load(path)?);
+        }
+        Ok(camera)
+    }
+
+    /// Where the passes are, as these flags say.
+    fn sources(&self) -> PassSources {
+        PassSources {
+            color_path: self.color.clone(),
+            depth_path: self.depth.clone(),
+            velocity_path: self.velocity.clone(),
+            color_channels: self.color_channels.clone(),
+            depth_channel: self.depth_channel.clone(),
+            velocity_channels: self.velocity_channels.clone(),
+            depth_unit_m: self.depth_unit_m,
+            require_velocity: self.velocity.is_some(),
+        }
+    }
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let camera = args.camera()?;
+    let passes = io::load_passes(&args.sources()).name_flags()?;
+    let channel_report = passes.channel_report.clone();
+    let frame = Frame::from_passes(passes, &camera, args.depth_kind.into());
+    let plan = realcam::pipeline::planner::plan(&frame, &camera);
+    if args.explain {
+        eprintln!("inputs:\n{}", indent(&channel_report));
+        eprintln!("{}", plan.explain());
+    }
+
+    let gpu = args.gpu.open()?;
+    let renderer = Renderer::new(&gpu, &plan)?;
+    let rendered = renderer.render(&frame, &plan, false)?;
+    if args.profile {
+        eprint!("{}", rendered.profile.table());
+    }
+    if let Some(trace) = &args.trace {
+        write_text_atomically(trace, &rendered.profile.chrome_trace_json())
+            .with_context(|| format!("writing the trace {}", trace.display()))?;
+    }
+    if gpu.validation_message_count() > 0 {
+        bail!("{} Vulkan validation messages (see above)", gpu.validation_message_count());
+    }
+
+    let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
+    let exr_options = ExrWriteOptions {
+        float32: args.float,
+        display_window: Some(frame.display_window),
+        data_origin: frame.data_origin,
+        attributes: camera.attributes(),
+    };
+    io::write_exr_rgba(&args.output, &image, &exr_options)?;
+    eprintln!("wrote {}", args.output.display());
+    if let Some(png) = &args.png {
+        io::write_png_srgb(png, &image)?;
+        eprintln!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+fn indent(text: &str) -> String {
+    text.lines().map(|l| format!("  {l}\n")).collect()
+}

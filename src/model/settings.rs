@@ -1,0 +1,93 @@
+//! Settings written as text: a shutter time (`1/50` or `0.02`), a spherical aberration amount
+//! (a number or `uniform`), an image size (`1920x1080`). A message says what is wrong with the
+//! text; whoever got the text names where it came from (`--shutter "0": must be a positive time
+//! in seconds`).
+
+use std::num::ParseFloatError;
+
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SettingError {
+    #[error(transparent)]
+    Number(#[from] ParseFloatError),
+    #[error("must be a positive time in seconds")]
+    NotAPositiveTime,
+    #[error("a number in [-1, 1] or 'uniform'")]
+    SphericalAberration(#[source] ParseFloatError),
+    #[error("{text:?} is not WIDTHxHEIGHT")]
+    NotASize { text: String },
+}
+
+/// A shutter time in seconds, as a fraction (`1/50`) or a decimal (`0.02`); it must be
+/// positive and finite.
+pub fn parse_shutter_s(text: &str) -> Result<f64, SettingError> {
+    let shutter_s = match text.split_once('/') {
+        Some((a, b)) => a.trim().parse::<f64>()? / b.trim().parse::<f64>()?,
+        None => text.trim().parse()?,
+    };
+    if shutter_s.is_finite() && shutter_s > 0.0 {
+        Ok(shutter_s)
+    } else {
+        Err(SettingError::NotAPositiveTime)
+    }
+}
+
+/// A spherical aberration amount: a number, or `uniform` (0, no aberration). The range
+/// (-1..1) is checked where the camera is built.
+pub fn parse_spherical_aberration(text: &str) -> Result<f64, SettingError> {
+    match text {
+        "uniform" => Ok(0.0),
+        _ => text.trim().parse().map_err(SettingError::SphericalAberration),
+    }
+}
+
+/// An image size `WIDTHxHEIGHT` in pixels, both at least 1.
+pub fn parse_size_px(text: &str) -> Result<(u32, u32), SettingError> {
+    let size = text.split_once('x').and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse().ok()?)));
+    match size {
+        Some((width, height)) if width > 0 && height > 0 => Ok((width, height)),
+        _ => Err(SettingError::NotASize { text: text.to_string() }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shutter_times_as_fractions_and_decimals() {
+        assert_eq!(parse_shutter_s("1/50"), Ok(0.02));
+        assert_eq!(parse_shutter_s(" 1 / 4 "), Ok(0.25));
+        assert_eq!(parse_shutter_s("0.02"), Ok(0.02));
+        assert_eq!(parse_shutter_s("2"), Ok(2.0));
+        for bad in ["0", "-1", "1/0", "0/0", "-1/50", "inf"] {
+            assert_eq!(parse_shutter_s(bad), Err(SettingError::NotAPositiveTime), "{bad}");
+        }
+        for bad in ["abc", "1/abc", "", "1/50/2"] {
+            let err = parse_shutter_s(bad).unwrap_err();
+            assert!(matches!(err, SettingError::Number(_)), "{bad}: {err:?}");
+        }
+        assert_eq!(parse_shutter_s("abc").unwrap_err().to_string(), "invalid float literal");
+        assert_eq!(SettingError::NotAPositiveTime.to_string(), "must be a positive time in seconds");
+    }
+
+    #[test]
+    fn spherical_aberration_is_a_number_or_uniform() {
+        assert_eq!(parse_spherical_aberration("uniform"), Ok(0.0));
+        assert_eq!(parse_spherical_aberration(" -0.5"), Ok(-0.5));
+        // Out of range parses; the camera refuses it.
+        assert_eq!(parse_spherical_aberration("3"), Ok(3.0));
+        let err = parse_spherical_aberration("strong").unwrap_err();
+        assert!(matches!(err, SettingError::SphericalAberration(_)));
+        assert_eq!(err.to_string(), "a number in [-1, 1] or 'uniform'");
+    }
+
+    #[test]
+    fn image_sizes() {
+        assert_eq!(parse_size_px("1920x1080"), Ok((1920, 1080)));
+        assert_eq!(parse_size_px(" 64 x 48 "), Ok((64, 48)));
+        for bad in ["1920", "0x10", "10x0", "axb", "-1x5", "1920X1080", ""] {
+            assert_eq!(parse_size_px(bad), Err(SettingError::NotASize { text: bad.into() }), "{bad}");
+        }
+        assert_eq!(parse_size_px("abc").unwrap_err().to_string(), "\"abc\" is not WIDTHxHEIGHT");
+    }
+}
