@@ -384,42 +384,6 @@ impl LensAnalysis {
     }
 }
 
-impl DerivedTables {
-    /// The `[tables]` section and `longitudinal_color` of a lens file, as TOML text.
-    pub fn to_toml(&self, source: &str) -> String {
-        let row = |v: &[f64], prec: usize| -> String {
-            let items: Vec<String> = v.iter().map(|x| format!("{x:.prec$}")).collect();
-            format!("[{}]", items.join(", "))
-        };
-        let mut s = String::new();
-        s.push_str(&format!("# Derived by realcam lens analyze from {source} at f/{:.3}:\n", self.f_number));
-        s.push_str("# real ray tracing in f64, d line (587.6 nm) with C (656.3) and F (486.1 nm) for colour.\n");
-        s.push_str("[longitudinal_color]\n");
-        s.push_str(&format!(
-            "red_mm = {:.6}\nblue_mm = {:.6}\n\n",
-            self.longitudinal_color_mm[0], self.longitudinal_color_mm[1]
-        ));
-        s.push_str("[longitudinal_spherical_aberration]  # fit LSA = k h^2 over the traced zones, at the rim\n");
-        s.push_str(&format!("rim_mm = {:.6}\nat_f_number = {:.4}\n\n", self.lsa_rim_mm, self.f_number));
-        s.push_str("[tables]\n");
-        s.push_str(&format!("at_f_number = {:.4}\n", self.f_number));
-        for (key, v, prec) in [
-            ("image_height_mm", &self.image_height_mm, 4),
-            ("distortion_percent", &self.distortion_percent, 5),
-            ("lateral_color_red_percent", &self.lateral_color_red_percent, 5),
-            ("lateral_color_blue_percent", &self.lateral_color_blue_percent, 5),
-            ("relative_illumination", &self.relative_illumination, 5),
-            ("field_curvature_mm", &self.field_curvature_mm, 5),
-            ("tangential_blur_mm", &self.tangential_blur_mm, 5),
-            ("sagittal_blur_mm", &self.sagittal_blur_mm, 5),
-            ("coma_mm", &self.coma_mm, 5),
-        ] {
-            s.push_str(&format!("{key} = {}\n", row(v, prec)));
-        }
-        s
-    }
-}
-
 fn opt(v: Option<f64>, prec: usize) -> String {
     match v {
         Some(x) => format!("{x:.prec$}"),
