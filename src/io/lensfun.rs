@@ -26,7 +26,7 @@
 //! therefore h = d0 r_u (in the model's unit), and D(h) = 100 (r_d / (d0 r_u) - 1). The
 //! lateral-colour tables are the extra percent of red and blue over green at the same h.
 
-use crate::io::lens_file::{LensFile, LensFileError};
+use crate::io::lens_file::{number_text, IlluminationAt, LensFile, LensFileError, LensFileWriter, LensTables};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -741,26 +741,6 @@ fn nearest_focal<T>(items: &[T], focal: impl Fn(&T) -> f64, focal_mm: f64) -> Op
     items.iter().map(&focal).min_by(|a, b| (a - focal_mm).abs().total_cmp(&(b - focal_mm).abs()))
 }
 
-/// `x` rounded to `decimals`, written so that TOML reads it as a float ("0.0", never "-0").
-fn num(x: f64, decimals: i32) -> String {
-    let scale = 10f64.powi(decimals);
-    let v = (x * scale).round() / scale + 0.0;
-    let s = format!("{v}");
-    if s.contains('.') || s.contains('e') || s.contains("inf") || s.contains("NaN") {
-        s
-    } else {
-        format!("{s}.0")
-    }
-}
-
-fn array(values: &[f64], decimals: i32) -> String {
-    format!("[{}]", values.iter().map(|v| num(*v, decimals)).collect::<Vec<_>>().join(", "))
-}
-
-fn toml_string(s: &str) -> String {
-    toml::Value::String(s.to_string()).to_string()
-}
-
 /// The heights of the tables: `HEIGHT_SAMPLES` from 0 to `max_mm`, plus the `special` heights
 /// inside (0, max_mm) (grid points within a quarter step of one are dropped).
 fn sample_heights(max_mm: f64, special: &[f64]) -> Vec<f64> {
@@ -923,6 +903,29 @@ impl Tables {
 
     fn is_empty(&self) -> bool {
         self.distortion_percent.is_none() && self.lateral_color_percent.is_none() && self.vignetting.is_empty()
+    }
+
+    /// The `[tables]` of the lens file.
+    fn lens_tables(&self) -> LensTables {
+        let color =
+            |pick: fn(&(f64, f64)) -> f64| self.lateral_color_percent.as_ref().map(|c| c.iter().map(pick).collect());
+        LensTables {
+            image_height_mm: self.heights_mm.clone(),
+            distortion_percent: self.distortion_percent.clone(),
+            lateral_color_red_percent: color(|c| c.0),
+            lateral_color_blue_percent: color(|c| c.1),
+            relative_illumination: None,
+            tangential_blur_mm: None,
+            sagittal_blur_mm: None,
+            field_curvature_mm: None,
+            coma_mm: None,
+            at_f_number: None,
+            vignetting: self
+                .vignetting
+                .iter()
+                .map(|(f_number, values)| IlluminationAt { f_number: *f_number, relative_illumination: values.clone() })
+                .collect(),
+        }
     }
 }
 
@@ -1098,29 +1101,26 @@ fn lens_file_text(
     }
     source.push_str("); converted by realcam lens import-lensfun");
 
+    // The comment at the top of the file (the writer makes each line a comment).
     let mut t = String::new();
-    let _ = writeln!(t, "# Converted from the lensfun database by `realcam lens import-lensfun {:?}`.", entry.model);
-    let _ = writeln!(
-        t,
-        "# Entry: {} (maker {}).",
-        entry.at,
-        if entry.maker.is_empty() { "not given" } else { &entry.maker }
-    );
+    let _ = writeln!(t, "Converted from the lensfun database by `realcam lens import-lensfun {:?}`.", entry.model);
+    let _ =
+        writeln!(t, "Entry: {} (maker {}).", entry.at, if entry.maker.is_empty() { "not given" } else { &entry.maker });
     for o in others {
         let crop = o.crop_factor.map_or_else(|| "not given".to_string(), |c| c.to_string());
         let _ = writeln!(
             t,
-            "# Not used: the same model at {} (crop factor {crop}); the entry with the smallest crop\n\
-             # factor, the largest calibrated field, is used.",
+            "Not used: the same model at {} (crop factor {crop}); the entry with the smallest crop\n\
+             factor, the largest calibrated field, is used.",
             o.at
         );
     }
     let _ = writeln!(
         t,
-        "# Models: lensfun include/lensfun/lensfun.h.in, libs/lensfun/mod-coord.cpp, mod-color.cpp.\n\
-         # Calibration sensor: crop factor {crop}, aspect ratio {aspect}. r = 1 is {unit_mm:.4} mm for\n\
-         # distortion and TCA (half the shorter side, hypot(36, 24) / crop / hypot(aspect, 1) / 2) and\n\
-         # {calibrated_mm:.4} mm for vignetting (half the diagonal, hypot(36, 24) / crop / 2).",
+        "Models: lensfun include/lensfun/lensfun.h.in, libs/lensfun/mod-coord.cpp, mod-color.cpp.\n\
+         Calibration sensor: crop factor {crop}, aspect ratio {aspect}. r = 1 is {unit_mm:.4} mm for\n\
+         distortion and TCA (half the shorter side, hypot(36, 24) / crop / hypot(aspect, 1) / 2) and\n\
+         {calibrated_mm:.4} mm for vignetting (half the diagonal, hypot(36, 24) / crop / 2).",
         crop = sensor.crop_factor,
         aspect = sensor.aspect_ratio,
     );
@@ -1128,9 +1128,9 @@ fn lens_file_text(
         Some(d) => {
             let _ = writeln!(
                 t,
-                "# Distortion at {} mm ({}): {}.\n\
-                 #   distortion_percent = 100 (r_d / (d0 r_u) - 1) at each paraxial ideal height h = d0 r_u\n\
-                 #   (Kyaw 2013 eq 6.8), d0 the model's slope at the axis.",
+                "Distortion at {} mm ({}): {}.\n  \
+                 distortion_percent = 100 (r_d / (d0 r_u) - 1) at each paraxial ideal height h = d0 r_u\n  \
+                 (Kyaw 2013 eq 6.8), d0 the model's slope at the axis.",
                 d.focal_mm,
                 d.at,
                 d.model.describe()
@@ -1139,31 +1139,31 @@ fn lens_file_text(
             if (d0 - 1.0).abs() > 5e-8 {
                 let _ = writeln!(
                     t,
-                    "#   lensfun keeps r_u = 1 fixed, not the axis; here d0 = {}: the paraxial focal length\n\
-                     #   is d0 x {} mm (lensfun's real focal length), and the tables are referred to it, so\n\
-                     #   distortion is 0 at the centre.",
-                    num(d0, 6),
+                    "  lensfun keeps r_u = 1 fixed, not the axis; here d0 = {}: the paraxial focal length\n  \
+                     is d0 x {} mm (lensfun's real focal length), and the tables are referred to it, so\n  \
+                     distortion is 0 at the centre.",
+                    number_text(d0, 6),
                     d.focal_mm
                 );
             }
         }
         None => {
-            let _ = writeln!(t, "# Distortion: none in lensfun for this lens.");
+            let _ = writeln!(t, "Distortion: none in lensfun for this lens.");
         }
     }
     match selection.tca {
         Some(c) => {
             let _ = writeln!(
                 t,
-                "# TCA at {} mm ({}): {}, r the green radius.\n\
-                 #   lateral_color_*_percent = 100 (k - 1) (1 + distortion_percent / 100): red/blue over green.",
+                "TCA at {} mm ({}): {}, r the green radius.\n  \
+                 lateral_color_*_percent = 100 (k - 1) (1 + distortion_percent / 100): red/blue over green.",
                 c.focal_mm,
                 c.at,
                 c.model.describe()
             );
         }
         None => {
-            let _ = writeln!(t, "# TCA (lateral colour): none in lensfun for this lens.");
+            let _ = writeln!(t, "TCA (lateral colour): none in lensfun for this lens.");
         }
     }
     match selection.vignetting.first() {
@@ -1172,8 +1172,8 @@ fn lens_file_text(
                 selection.vignetting.iter().map(|v| format!("f/{} at {} m", v.f_number, v.distance_m)).collect();
             let _ = writeln!(
                 t,
-                "# Vignetting at {} mm ({} on), model pa: relative illumination 1 + k1 r^2 + k2 r^4 + k3 r^6;\n\
-                 #   per f-number {}: {}.",
+                "Vignetting at {} mm ({} on), model pa: relative illumination 1 + k1 r^2 + k2 r^4 + k3 r^6;\n  \
+                 per f-number {}: {}.",
                 first.focal_mm,
                 first.at,
                 match distance_m {
@@ -1184,60 +1184,45 @@ fn lens_file_text(
             );
         }
         None => {
-            let _ = writeln!(t, "# Vignetting: none in lensfun for this lens (the camera's cos^4 law applies).");
+            let _ = writeln!(t, "Vignetting: none in lensfun for this lens (the camera's cos^4 law applies).");
         }
     }
     if !tables.is_empty() {
         let _ = writeln!(
             t,
-            "# Tables: {HEIGHT_SAMPLES} heights from 0 to {target_mm:.4} mm (half the diagonal of a {diagonal_mm:.3} mm\n\
-             # target sensor), plus r = 1 and the edge of the calibrated field where they fall inside."
+            "Tables: {HEIGHT_SAMPLES} heights from 0 to {target_mm:.4} mm (half the diagonal of a {diagonal_mm:.3} mm\n\
+             target sensor), plus r = 1 and the edge of the calibrated field where they fall inside."
         );
     }
     if !tables.is_empty() && target_mm > calibrated_mm * (1.0 + 1e-9) {
         let _ = writeln!(
             t,
-            "# EXTRAPOLATED: lensfun's calibration covers heights up to {calibrated_mm:.2} mm (crop factor {});\n\
-             # the values beyond are its fitted polynomials extrapolated, not measured.",
+            "EXTRAPOLATED: lensfun's calibration covers heights up to {calibrated_mm:.2} mm (crop factor {});\n\
+             the values beyond are its fitted polynomials extrapolated, not measured.",
             sensor.crop_factor
         );
     }
     if tables.clamped {
         let _ = writeln!(
             t,
-            "# The vignetting polynomial leaves (0, 2] inside the tables: those values are clamped to\n\
-             # [{MIN_RELATIVE_ILLUMINATION}, 2]."
+            "The vignetting polynomial leaves (0, 2] inside the tables: those values are clamped to\n\
+             [{MIN_RELATIVE_ILLUMINATION}, 2]."
         );
     }
-    let _ = writeln!(t, "name = {}", toml_string(&entry.model));
-    let _ = writeln!(t, "source = {}", toml_string(&source));
-    let _ = writeln!(t, "focal_length_mm = {}", num(selection.focal_length_mm, 4));
+
     let s = settings;
-    let _ = writeln!(t, "# {}\nf_number_min = {}", s.f_number_min.note, num(s.f_number_min.value, 3));
-    let _ = writeln!(t, "# {}\nf_number_max = {}", s.f_number_max.note, num(s.f_number_max.value, 3));
-    let _ = writeln!(t, "# {}\nfocus_min_m = {}", s.focus_min_m.note, num(s.focus_min_m.value, 4));
-    let _ = writeln!(t, "\n[aperture]\n# {}\nblades = {}", s.blades.note, s.blades.value);
+    let mut w = LensFileWriter::new(&t);
+    w.string("name", &entry.model, None)
+        .string("source", &source, None)
+        .number("focal_length_mm", selection.focal_length_mm, 4, None)
+        .number("f_number_min", s.f_number_min.value, 3, Some(s.f_number_min.note))
+        .number("f_number_max", s.f_number_max.value, 3, Some(s.f_number_max.note))
+        .number("focus_min_m", s.focus_min_m.value, 4, Some(s.focus_min_m.note))
+        .integer("aperture.blades", i64::from(s.blades.value), Some(s.blades.note));
     if !tables.is_empty() {
-        let _ = writeln!(t, "\n[tables]\nimage_height_mm = {}", array(&tables.heights_mm, 4));
-        if let Some(d) = &tables.distortion_percent {
-            let _ = writeln!(t, "distortion_percent = {}", array(d, 5));
-        }
-        if let Some(lc) = &tables.lateral_color_percent {
-            let red: Vec<f64> = lc.iter().map(|v| v.0).collect();
-            let blue: Vec<f64> = lc.iter().map(|v| v.1).collect();
-            let _ = writeln!(t, "lateral_color_red_percent = {}", array(&red, 5));
-            let _ = writeln!(t, "lateral_color_blue_percent = {}", array(&blue, 5));
-        }
-        for (n, values) in &tables.vignetting {
-            let _ = writeln!(
-                t,
-                "\n[[tables.vignetting]]\nf_number = {}\nrelative_illumination = {}",
-                num(*n, 3),
-                array(values, 5)
-            );
-        }
+        w.tables(&tables.lens_tables(), None);
     }
-    t
+    w.finish()
 }
 
 #[cfg(test)]
@@ -1632,6 +1617,37 @@ mod tests {
         let options = ImportOptions { focus_min_m: Some(-1.0), ..Default::default() };
         let err = db.import("Nameless 35mm", &options).unwrap_err().to_string();
         assert!(err.contains("focus_min_m (--focus-min-m) = -1 must be a positive number"), "{err}");
+    }
+
+    #[test]
+    fn the_written_file_marks_assumptions_above_their_keys_and_reads_back() {
+        let (k1, xml) = (0.01, "<distortion model=\"poly3\" focal=\"35\" k1=\"0.01\"/>");
+        let imported = import_one(lens("Plain 35mm f/2", 1.0, "", xml), &ImportOptions::default());
+        let text = &imported.toml;
+        assert!(text.starts_with(
+            "# Converted from the lensfun database by `realcam lens import-lensfun \"Plain 35mm f/2\"`.\n"
+        ));
+        for marked in [
+            "# from the model name (lensfun has no <aperture>)\nf_number_min = 2.0\n",
+            "# ASSUMED: f/16 (or f_number_min if larger); lensfun gives no smallest aperture\nf_number_max = 16.0\n",
+            "# ASSUMED: 10 focal lengths; lensfun does not give the closest focus\nfocus_min_m = 0.35\n",
+            "[aperture]\n# ASSUMED: circular; lensfun does not give the blade count\nblades = 0\n",
+        ] {
+            assert!(text.contains(marked), "{marked:?} not in\n{text}");
+        }
+        // Read back: the heights to 4 decimals, the percentages to 5 (not to 17 digits): D at the
+        // height before it was rounded (within 0.5e-4 mm, D' = 2 D / h for D ~ h^2), rounded.
+        let t = imported.lens.tables.as_ref().expect("tables");
+        let d = t.distortion_percent.as_ref().expect("distortion");
+        for (h, d) in t.image_height_mm.iter().zip(d) {
+            assert_eq!((*h, *d), ((h * 1e4).round() / 1e4, (d * 1e5).round() / 1e5));
+            let expect = poly3_percent(k1, *h, 12.0);
+            let slack = 2.0 * expect / h.max(1.0) * 0.5e-4;
+            assert!((d - expect).abs() <= 0.5e-5 + slack + 1e-12, "{h}: {d} vs {expect}");
+        }
+        assert!(text.contains(&format!("image_height_mm = [0.0, {}, ", t.image_height_mm[1])), "{text}");
+        // Edited without changes, the file is the same text.
+        assert_eq!(LensFileWriter::edit(text).unwrap().finish(), *text);
     }
 
     #[test]

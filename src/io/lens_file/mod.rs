@@ -5,6 +5,10 @@
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
+mod write;
+
+pub use write::{number_text, rounded, with_derived_tables, LensFileWriter};
+
 #[derive(Debug, thiserror::Error)]
 pub enum LensFileError {
     #[error("lens file {path}: cannot read it: {source}")]
@@ -172,6 +176,20 @@ pub struct LensTables {
 }
 
 impl LensTables {
+    /// The tables against `image_height_mm`, each with its key.
+    pub fn columns(&self) -> [(&'static str, &Option<Vec<f64>>); 8] {
+        [
+            ("distortion_percent", &self.distortion_percent),
+            ("lateral_color_red_percent", &self.lateral_color_red_percent),
+            ("lateral_color_blue_percent", &self.lateral_color_blue_percent),
+            ("relative_illumination", &self.relative_illumination),
+            ("tangential_blur_mm", &self.tangential_blur_mm),
+            ("sagittal_blur_mm", &self.sagittal_blur_mm),
+            ("field_curvature_mm", &self.field_curvature_mm),
+            ("coma_mm", &self.coma_mm),
+        ]
+    }
+
     /// The astigmatism tables (tangential, sagittal blur in mm), if the lens file has either.
     pub fn astigmatism(
         &self,
@@ -255,7 +273,7 @@ fn one() -> f64 {
 }
 
 /// The lens used when no --lens is given (lenses/default.toml, embedded).
-pub const DEFAULT_LENS_TOML: &str = include_str!("../../lenses/default.toml");
+pub const DEFAULT_LENS_TOML: &str = include_str!("../../../lenses/default.toml");
 
 impl LensFile {
     /// The prescription the file carries (its `[[surface]]` tables), checked as
@@ -317,16 +335,7 @@ impl LensFile {
                     ),
                 );
             }
-            for (key, table) in [
-                ("distortion_percent", &t.distortion_percent),
-                ("lateral_color_red_percent", &t.lateral_color_red_percent),
-                ("lateral_color_blue_percent", &t.lateral_color_blue_percent),
-                ("relative_illumination", &t.relative_illumination),
-                ("tangential_blur_mm", &t.tangential_blur_mm),
-                ("sagittal_blur_mm", &t.sagittal_blur_mm),
-                ("field_curvature_mm", &t.field_curvature_mm),
-                ("coma_mm", &t.coma_mm),
-            ] {
+            for (key, table) in t.columns() {
                 if let Some(v) = table {
                     if v.len() != h.len() {
                         return at(
@@ -462,65 +471,6 @@ impl LensFile {
         }
         Ok(())
     }
-}
-
-/// A lens file's text with the `[tables]` and `[longitudinal_color]` a prescription implies.
-///
-/// `text` is a lens file (`is_lens_file`; its other settings and comments are kept, its
-/// tables replaced) or a bare prescription (then the settings are derived from the trace:
-/// focal length = EFL, widest aperture = the analysed f-number, P from the pupils; closest
-/// focus and blades are not in a prescription and are marked as assumptions).
-pub fn with_derived_tables(
-    text: &str,
-    is_lens_file: bool,
-    analysis: &crate::optics::prescription::LensAnalysis,
-    derived: &crate::optics::prescription::DerivedTables,
-    source: &str,
-) -> Result<String, toml_edit::TomlError> {
-    let mut doc: toml_edit::DocumentMut = if is_lens_file {
-        text.parse()?
-    } else {
-        let p = &analysis.paraxial;
-        let efl = p.efl_mm;
-        let mut head = format!(
-            "# Lens file derived by realcam lens analyze from the prescription {source}.\n\
-             # focus_min_m (10 focal lengths) and the circular aperture are assumptions: a\n\
-             # prescription does not give them. Everything else is traced.\n\
-             name = {name:?}\n\
-             source = {src:?}\n\
-             focal_length_mm = {efl:.3}\n\
-             f_number_min = {n:.3}\n\
-             f_number_max = 22.0\n\
-             focus_min_m = {focus:.3}\n\
-             pupil_magnification = {pm:.4}\n\n\
-             [aperture]\n\
-             blades = 0\n\
-             cats_eye = {k:.4}\n\
-             cats_eye_at_mm = {k_at:.4}\n\n",
-            name = analysis.name,
-            src = format!("realcam lens analyze of {source}"),
-            n = analysis.f_number,
-            focus = 10.0 * efl / 1000.0,
-            pm = p.pupil_magnification,
-            k = derived.cats_eye,
-            k_at = derived.cats_eye_at_mm,
-        );
-        // The surfaces, as written (from the first [[surface]] on).
-        if let Some(at) = text.find("[[surface]]") {
-            head.push_str(&text[at..]);
-        }
-        head.parse()?
-    };
-    doc.remove("tables");
-    doc.remove("longitudinal_color");
-    doc.remove("longitudinal_spherical_aberration");
-    // The traced cat's eye goes into the lens's [aperture].
-    if let Some(aperture) = doc.get_mut("aperture").and_then(|a| a.as_table_mut()) {
-        aperture["cats_eye"] = toml_edit::value((derived.cats_eye * 1e4).round() / 1e4);
-        aperture["cats_eye_at_mm"] = toml_edit::value((derived.cats_eye_at_mm * 1e4).round() / 1e4);
-    }
-    // Appended as text, after everything else: tables keep the order written here.
-    Ok(format!("{}\n\n{}", doc.to_string().trim_end(), derived.to_toml(source)))
 }
 
 #[cfg(test)]
