@@ -9,7 +9,7 @@ layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
 layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
 // [heights (n), green %, red extra %, blue extra %], n each.
-layout(binding = 2, std430) readonly buffer Tables { float table[]; };
+layout(binding = 2, std430) readonly buffer Table { float table[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;

@@ -27,12 +27,51 @@ pub const fn buffer(name: &'static str) -> Binding {
     Binding { name, kind: BindingKind::StorageBuffer }
 }
 
-/// A compute shader `glsl/<NAME>.comp`: its bindings in binding order and its push constants.
+/// The resources one dispatch of a shader binds, by name: a struct made by [`shader_bindings!`]
+/// (crate::shader_bindings), whose one declaration gives both the descriptor-set layout
+/// ([`ShaderBindings::DECLARATION`]) and the list bound at each dispatch.
+pub trait ShaderBindings {
+    /// The bindings of set 0 in binding order.
+    const DECLARATION: &'static [Binding];
+    /// The resources in binding order.
+    fn binds(&self) -> Vec<Bind<'_>>;
+}
+
+/// Declares the bindings of a shader once, in binding order: `field: image(glsl_name)` for a
+/// storage image, `field: buffer(BlockName)` for a storage buffer. Makes a struct of references
+/// named by the fields, implementing [`ShaderBindings`].
+#[macro_export]
+macro_rules! shader_bindings {
+    ($(#[$meta:meta])* $vis:vis struct $name:ident { $($(#[$fmeta:meta])* $field:ident: $kind:ident($glsl:ident)),* $(,)? }) => {
+        $(#[$meta])*
+        $vis struct $name<'a> {
+            $($(#[$fmeta])* pub $field: &'a $crate::shader_bindings!(@type $kind),)*
+        }
+        impl $crate::gpu::ShaderBindings for $name<'_> {
+            const DECLARATION: &'static [$crate::gpu::Binding] = &[$($crate::gpu::$kind(stringify!($glsl))),*];
+            fn binds(&self) -> Vec<$crate::gpu::Bind<'_>> {
+                vec![$($crate::shader_bindings!(@bind $kind, self.$field)),*]
+            }
+        }
+    };
+    (@type image) => { $crate::gpu::GpuImage };
+    (@type buffer) => { $crate::gpu::GpuBuffer };
+    (@bind image, $e:expr) => { $crate::gpu::Bind::Image($e) };
+    (@bind buffer, $e:expr) => { $crate::gpu::Bind::Buffer($e) };
+}
+
+/// A compute shader `glsl/<NAME>.comp`: its bindings and its push constants.
 pub trait Shader: 'static {
     const NAME: &'static str;
-    const BINDINGS: &'static [Binding];
+    /// What one dispatch binds (declared with [`shader_bindings!`](crate::shader_bindings)).
+    type Bindings<'a>: ShaderBindings;
     /// The `push_constant` block, byte for byte (`#[repr(C)]`, no padding).
     type Push: bytemuck::Pod;
+}
+
+/// The bindings of shader `S` in binding order.
+pub fn declaration<S: Shader>() -> &'static [Binding] {
+    <S::Bindings<'static> as ShaderBindings>::DECLARATION
 }
 
 /// Host copy of one binding: what a CPU twin reads and writes.
@@ -199,26 +238,34 @@ impl<S: Twin> Kernel<S> {
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
         let spirv = shaders::spirv(S::NAME)?;
         let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: S::NAME, message })?;
-        check_interface(S::NAME, S::BINDINGS, std::mem::size_of::<S::Push>() as u32, &reflected)?;
-        let pipeline = ComputePipeline::new(gpu, S::NAME, spirv, S::BINDINGS, std::mem::size_of::<S::Push>() as u32)?;
+        let push_bytes = std::mem::size_of::<S::Push>() as u32;
+        check_interface(S::NAME, declaration::<S>(), push_bytes, &reflected)?;
+        let pipeline = ComputePipeline::new(gpu, S::NAME, spirv, declaration::<S>(), push_bytes)?;
         Ok(Kernel { pipeline, _shader: PhantomData })
     }
 
-    /// Bind `binds` (in binding order), push the constants and dispatch `groups` workgroups.
-    pub fn dispatch(&self, rec: &mut Recorder, binds: &[Bind<'_>], push: &S::Push, groups: [u32; 3]) -> GpuResult<()> {
-        rec.dispatch(&self.pipeline, binds, bytemuck::bytes_of(push), groups, twin_of::<S>())
+    /// Bind the resources, push the constants and dispatch `groups` workgroups.
+    pub fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        bindings: &S::Bindings<'_>,
+        push: &S::Push,
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        rec.dispatch(&self.pipeline, &bindings.binds(), bytemuck::bytes_of(push), groups, twin_of::<S>())
     }
 
     /// Like [`Kernel::dispatch`], with the group counts read from `args` at `offset_bytes`.
     pub fn dispatch_indirect(
         &self,
         rec: &mut Recorder,
-        binds: &[Bind<'_>],
+        bindings: &S::Bindings<'_>,
         push: &S::Push,
         args: &GpuBuffer,
         offset_bytes: u64,
     ) -> GpuResult<()> {
-        rec.dispatch_indirect(&self.pipeline, binds, bytemuck::bytes_of(push), args, offset_bytes, twin_of::<S>())
+        let binds = bindings.binds();
+        rec.dispatch_indirect(&self.pipeline, &binds, bytemuck::bytes_of(push), args, offset_bytes, twin_of::<S>())
     }
 }
 

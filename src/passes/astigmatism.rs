@@ -2,11 +2,11 @@
 //! image height (Kyaw 2013 sec 6.3.3, sec 7.3). Two dispatches of one shader:
 //! glsl/astigmatism.comp.
 
-use super::barriers::{after_compute_write, overwrite};
+use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
 use super::twin::{bilinear, finite_or_zero, floats};
-use super::{groups_for, height_table_lookup, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use super::{height_table_lookup, Decision, FrameImages, Pass};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::HeightTable;
 
 pub const NAME: &str = "astigmatism";
@@ -39,7 +39,7 @@ pub struct AstigmatismShader;
 
 impl Shader for AstigmatismShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Tables")];
+    type Bindings<'a> = FilterBindings<'a>;
     type Push = AstigmatismPush;
 }
 
@@ -124,33 +124,15 @@ impl Pass for Astigmatism {
 
     /// Two dispatches: the tangential blur into an image of its own, then the sagittal blur.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &AstigmatismParams) -> GpuResult<()> {
-        let input = images.color().clone();
-        let groups = groups_for(input.width, input.height);
-        let between = rec.create_image("color (tangential blur)", input.width, input.height, input.format)?;
-        let output = rec.create_image("color (astigmatism)", input.width, input.height, input.format)?;
         rec.begin_pass("astigmatism_tangential");
-        let tables = rec.upload_buffer("astigmatism tables", &p.table)?;
-        // input: written by the previous compute pass (or the upload): wait for those writes.
-        // between: written from scratch.
-        rec.image_barriers(&[after_compute_write(&input), overwrite(&between)]);
+        let table = rec.upload_buffer("astigmatism tables", &p.table)?;
         let tangential = AstigmatismPush { direction: 0, ..p.push };
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&input), Bind::Image(&between), Bind::Buffer(&tables)],
-            &tangential,
-            groups,
-        )?;
+        let between =
+            filter::dispatch(&self.kernel, rec, images.color(), &table, &tangential, "color (tangential blur)")?;
         rec.begin_pass("astigmatism_sagittal");
-        // between: just written by the tangential blur, read around each pixel here.
-        // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(&between), overwrite(&output)]);
+        // The filter's barriers wait for the tangential blur's writes to `between`.
         let sagittal = AstigmatismPush { direction: 1, ..p.push };
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&between), Bind::Image(&output), Bind::Buffer(&tables)],
-            &sagittal,
-            groups,
-        )?;
+        let output = filter::dispatch(&self.kernel, rec, &between, &table, &sagittal, "color (astigmatism)")?;
         rec.end_pass();
         images.set_color(None, output);
         Ok(())

@@ -6,7 +6,7 @@ use super::barriers::{after_compute_write, overwrite};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::finite_or_zero;
 use super::{groups_for, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::BokehMode;
 use ash::vk;
@@ -122,13 +122,22 @@ pub fn gather_exact(
     })
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/bokeh_gather.comp.
+    pub struct GatherBindings {
+        color_in: image(color_in),
+        coc_px: image(coc_px),
+        color_out: image(color_out),
+        aperture_mask: buffer(ApertureMask),
+    }
+}
+
 /// glsl/bokeh_gather.comp.
 pub struct GatherShader;
 
 impl Shader for GatherShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] =
-        &[image("color_in"), image("coc_px"), image("color_out"), buffer("ApertureMask")];
+    type Bindings<'a> = GatherBindings<'a>;
     type Push = GatherPush;
 }
 
@@ -217,12 +226,8 @@ impl Pass for BokehGather {
         //   compute writes as well keeps this pass correct if a compute pass ever precedes it.
         // output: written from scratch.
         rec.image_barriers(&[after_compute_write(&coc), after_compute_write(&color), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&color), Bind::Image(&coc), Bind::Image(&output), Bind::Buffer(&mask)],
-            &p.push,
-            groups_for(color.width, color.height),
-        )?;
+        let bindings = GatherBindings { color_in: &color, coc_px: &coc, color_out: &output, aperture_mask: &mask };
+        self.kernel.dispatch(rec, &bindings, &p.push, groups_for(color.width, color.height))?;
         rec.end_pass();
         images.set_color(p.channel, output);
         Ok(())

@@ -4,7 +4,7 @@
 use super::barriers::overwrite;
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::camera::{BokehMode, Camera};
 use crate::model::frame::Frame;
 use crate::optics::ThinLens;
@@ -118,12 +118,21 @@ pub fn coc_cpu(depth_m: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
     depth_m.iter().enumerate().map(|(i, &d)| push.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/coc.comp.
+    pub struct CocBindings {
+        depth_m: image(depth_m),
+        coc_px: image(coc_px),
+        field_curvature: buffer(FieldCurvature),
+    }
+}
+
 /// glsl/coc.comp.
 pub struct CocShader;
 
 impl Shader for CocShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("depth_m"), image("coc_px"), buffer("FieldCurvature")];
+    type Bindings<'a> = CocBindings<'a>;
     type Push = CocPush;
 }
 
@@ -213,12 +222,8 @@ impl Pass for Coc {
         //   compute reads in layout GENERAL; nothing to wait for here.
         // coc: written from scratch; discard old contents.
         rec.image_barriers(&[overwrite(&coc)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&depth), Bind::Image(&coc), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(images.width, images.height),
-        )?;
+        let bindings = CocBindings { depth_m: &depth, coc_px: &coc, field_curvature: &table };
+        self.kernel.dispatch(rec, &bindings, &p.push, groups_for(images.width, images.height))?;
         rec.end_pass();
         images.set_coc(p.channel, coc);
         Ok(())

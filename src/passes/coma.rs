@@ -2,11 +2,11 @@
 //! lens's coma table against image height (third-order coma; Kyaw 2013 sec 7.6 left it out).
 //! One dispatch of glsl/coma.comp; `coma_cpu` is its CPU twin.
 
-use super::barriers::{after_compute_write, overwrite};
+use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
 use super::twin::floats;
-use super::{groups_for, height_table_lookup, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use super::{height_table_lookup, Decision, FrameImages, Pass};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::HeightTable;
 
 pub const NAME: &str = "coma";
@@ -146,7 +146,7 @@ pub struct ComaShader;
 
 impl Shader for ComaShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Tables")];
+    type Bindings<'a> = FilterBindings<'a>;
     type Push = ComaPush;
 }
 
@@ -197,22 +197,6 @@ impl Pass for Coma {
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &ComaParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        let input = images.color().clone();
-        let output = rec.create_image("color (coma)", input.width, input.height, input.format)?;
-        let table = rec.upload_buffer("coma table", &p.table)?;
-        // input: written by the previous compute pass (or the upload); it is read at the
-        //   comet's samples around each pixel, so the whole image must be visible.
-        // output: written from scratch, its old contents are not needed.
-        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(input.width, input.height),
-        )?;
-        rec.end_pass();
-        images.set_color(None, output);
-        Ok(())
+        filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
     }
 }

@@ -12,7 +12,7 @@ use super::barriers::{after_compute_write, overwrite};
 use super::scene::PlanInput;
 use super::twin::{finite_or_zero, floats};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::camera::BokehMode;
 use crate::optics::focus_processor::{build_tables, PsfTableSettings, PsfTables};
 use std::sync::Arc;
@@ -68,12 +68,22 @@ impl DiffractionPush {
     }
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/diffraction.comp.
+    pub struct DiffractionBindings {
+        color_in: image(color_in),
+        depth_m: image(depth_m),
+        color_out: image(color_out),
+        tables: buffer(Tables),
+    }
+}
+
 /// glsl/diffraction.comp.
 pub struct DiffractionShader;
 
 impl Shader for DiffractionShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("depth_m"), image("color_out"), buffer("Tables")];
+    type Bindings<'a> = DiffractionBindings<'a>;
     type Push = DiffractionPush;
 }
 
@@ -190,12 +200,8 @@ impl Pass for Diffraction {
         //   compute pass produced them, and costs nothing otherwise.
         // output: written from scratch; discard old contents (and order after earlier reads).
         rec.image_barriers(&[after_compute_write(&color), after_compute_write(&depth), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&color), Bind::Image(&depth), Bind::Image(&output), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(output.width, output.height),
-        )?;
+        let bindings = DiffractionBindings { color_in: &color, depth_m: &depth, color_out: &output, tables: &table };
+        self.kernel.dispatch(rec, &bindings, &p.push, groups_for(output.width, output.height))?;
         rec.end_pass();
         images.set_color(None, output);
         Ok(())

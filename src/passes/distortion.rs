@@ -1,11 +1,11 @@
 //! Distortion and lateral colour from the lens's tables (Kyaw 2013 eq 6.8; the first aberration
 //! pass of sec 7.3). Shader: glsl/distortion.comp.
 
-use super::barriers::{after_compute_write, overwrite};
+use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
 use super::twin::{bilinear, finite_or_zero, floats};
-use super::{groups_for, height_table_lookup, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use super::{height_table_lookup, Decision, FrameImages, Pass};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::DistortionTables;
 
 pub const NAME: &str = "distortion";
@@ -59,7 +59,7 @@ pub struct DistortionShader;
 
 impl Shader for DistortionShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Tables")];
+    type Bindings<'a> = FilterBindings<'a>;
     type Push = DistortionPush;
 }
 
@@ -147,22 +147,6 @@ impl Pass for Distortion {
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &DistortionParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        let input = images.color().clone();
-        let output = rec.create_image("color (distortion)", input.width, input.height, input.format)?;
-        let table = rec.upload_buffer("distortion tables", &p.table)?;
-        // input: written by the previous compute pass (or the upload); it is sampled anywhere
-        //   in the frame, so all of it must be written and visible: wait for those writes.
-        // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(input.width, input.height),
-        )?;
-        rec.end_pass();
-        images.set_color(None, output);
-        Ok(())
+        filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
     }
 }

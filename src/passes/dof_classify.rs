@@ -5,7 +5,7 @@
 use super::barriers::buffer_after_compute_write;
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_COUNT, CLASS_LARGE, CLASS_SMALL};
-use crate::gpu::{buffer, Bind, Binding, GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use ash::vk;
 
 pub const NAME: &str = "dof_classify";
@@ -20,13 +20,22 @@ pub struct ClassifyPush {
     pub small_radius_px: f32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_classify.comp.
+    pub struct ClassifyBindings {
+        tile_coc: buffer(TileCoc),
+        args: buffer(Args),
+        tile_lists: buffer(TileLists),
+        tile_radius: buffer(TileRadius),
+    }
+}
+
 /// glsl/dof_classify.comp: one invocation per tile.
 pub struct ClassifyShader;
 
 impl Shader for ClassifyShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] =
-        &[buffer("TileCoc"), buffer("Args"), buffer("TileLists"), buffer("TileRadius")];
+    type Bindings<'a> = ClassifyBindings<'a>;
     type Push = ClassifyPush;
 }
 
@@ -105,12 +114,10 @@ impl Twin for ClassifyShader {
 pub fn record(
     kernel: &Kernel<ClassifyShader>,
     rec: &mut Recorder,
-    tile_coc: &GpuBuffer,
-    args: &GpuBuffer,
-    tile_lists: &GpuBuffer,
-    tile_radius: &GpuBuffer,
+    b: &ClassifyBindings<'_>,
     push: &ClassifyPush,
 ) -> GpuResult<()> {
+    let (tile_coc, args) = (b.tile_coc, b.args);
     rec.begin_pass(NAME);
     // The counters start at zero every frame.
     rec.fill_buffer(args, 0);
@@ -129,12 +136,7 @@ pub fn record(
         buffer_after_compute_write(tile_coc),
     ]);
     let tile_count = (push.tiles[0] * push.tiles[1]) as u32;
-    kernel.dispatch(
-        rec,
-        &[Bind::Buffer(tile_coc), Bind::Buffer(args), Bind::Buffer(tile_lists), Bind::Buffer(tile_radius)],
-        push,
-        [tile_count.div_ceil(64), 1, 1],
-    )?;
+    kernel.dispatch(rec, b, push, [tile_count.div_ceil(64), 1, 1])?;
     rec.end_pass();
     Ok(())
 }

@@ -7,9 +7,7 @@ use super::bokeh_gather::gather_exact;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_composite";
 
@@ -24,23 +22,28 @@ pub struct CompositePush {
     pub layer_transition_px: f32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_composite.comp.
+    pub struct CompositeBindings {
+        color: image(color_in),
+        coc: image(coc_px),
+        bg_half: image(bg_half),
+        fg_half: image(fg_half),
+        output: image(color_out),
+        tile_lists: buffer(TileLists),
+        aperture_mask: buffer(ApertureMask),
+        coc_half: image(coc_half),
+        fg_big_half: image(fg_big_half),
+        tile_radius: buffer(TileRadius),
+    }
+}
+
 /// glsl/dof_composite.comp: one workgroup per large tile.
 pub struct CompositeShader;
 
 impl Shader for CompositeShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[
-        image("color_in"),
-        image("coc_px"),
-        image("bg_half"),
-        image("fg_half"),
-        image("color_out"),
-        buffer("TileLists"),
-        buffer("ApertureMask"),
-        image("coc_half"),
-        image("fg_big_half"),
-        buffer("TileRadius"),
-    ];
+    type Bindings<'a> = CompositeBindings<'a>;
     type Push = CompositePush;
 }
 
@@ -133,25 +136,11 @@ impl Twin for CompositeShader {
     }
 }
 
-/// The resources of the composite.
-pub struct CompositeBindings<'a> {
-    pub color: &'a GpuImage,
-    pub coc: &'a GpuImage,
-    pub bg_half: &'a GpuImage,
-    pub fg_half: &'a GpuImage,
-    pub output: &'a GpuImage,
-    pub tile_lists: &'a GpuBuffer,
-    pub args: &'a GpuBuffer,
-    pub aperture_mask: &'a GpuBuffer,
-    pub coc_half: &'a GpuImage,
-    pub fg_big_half: &'a GpuImage,
-    pub tile_radius: &'a GpuBuffer,
-}
-
 pub fn record(
     kernel: &Kernel<CompositeShader>,
     rec: &mut Recorder,
     b: &CompositeBindings<'_>,
+    args: &GpuBuffer,
     push: &CompositePush,
 ) -> GpuResult<()> {
     rec.begin_pass(NAME);
@@ -168,24 +157,7 @@ pub fn record(
         after_compute_write(b.fg_big_half),
         write_after_write(b.output),
     ]);
-    kernel.dispatch_indirect(
-        rec,
-        &[
-            Bind::Image(b.color),
-            Bind::Image(b.coc),
-            Bind::Image(b.bg_half),
-            Bind::Image(b.fg_half),
-            Bind::Image(b.output),
-            Bind::Buffer(b.tile_lists),
-            Bind::Buffer(b.aperture_mask),
-            Bind::Image(b.coc_half),
-            Bind::Image(b.fg_big_half),
-            Bind::Buffer(b.tile_radius),
-        ],
-        push,
-        b.args,
-        (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64,
-    )?;
+    kernel.dispatch_indirect(rec, b, push, args, (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64)?;
     rec.end_pass();
     Ok(())
 }

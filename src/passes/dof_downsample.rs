@@ -5,9 +5,7 @@ use super::barriers::overwrite;
 use super::groups_for;
 use super::twin::finite_or_zero;
 use crate::gpu::shaders::dof_tiles::{ARGS_SPRITES_DROPPED, ARGS_SPRITE_COUNT, SPRITE_WORDS};
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_downsample";
 
@@ -26,20 +24,25 @@ pub struct DownsamplePush {
     pub sprite_visibility: f32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_downsample.comp.
+    pub struct DownsampleBindings {
+        color: image(color_in),
+        coc: image(coc_px),
+        color_half: image(color_half),
+        coc_half: image(coc_half),
+        args: buffer(Args),
+        sprites: buffer(Sprites),
+        color_base: image(color_base),
+    }
+}
+
 /// glsl/dof_downsample.comp: one invocation per half-resolution pixel.
 pub struct DownsampleShader;
 
 impl Shader for DownsampleShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[
-        image("color_in"),
-        image("coc_px"),
-        image("color_half"),
-        image("coc_half"),
-        buffer("Args"),
-        buffer("Sprites"),
-        image("color_base"),
-    ];
+    type Bindings<'a> = DownsampleBindings<'a>;
     type Push = DownsamplePush;
 }
 
@@ -154,17 +157,6 @@ impl Twin for DownsampleShader {
     }
 }
 
-/// The resources of the downsampling step.
-pub struct DownsampleBindings<'a> {
-    pub color: &'a GpuImage,
-    pub coc: &'a GpuImage,
-    pub color_half: &'a GpuImage,
-    pub coc_half: &'a GpuImage,
-    pub args: &'a GpuBuffer,
-    pub sprites: &'a GpuBuffer,
-    pub color_base: &'a GpuImage,
-}
-
 pub fn record(
     kernel: &Kernel<DownsampleShader>,
     rec: &mut Recorder,
@@ -175,20 +167,7 @@ pub fn record(
     // color_half, coc_half, color_base: written from scratch. The inputs (colour, CoC) and the
     // args buffer were made visible to compute by the barriers before dof_classify and after it.
     rec.image_barriers(&[overwrite(b.color_half), overwrite(b.coc_half), overwrite(b.color_base)]);
-    kernel.dispatch(
-        rec,
-        &[
-            Bind::Image(b.color),
-            Bind::Image(b.coc),
-            Bind::Image(b.color_half),
-            Bind::Image(b.coc_half),
-            Bind::Buffer(b.args),
-            Bind::Buffer(b.sprites),
-            Bind::Image(b.color_base),
-        ],
-        push,
-        groups_for(b.color_half.width, b.color_half.height),
-    )?;
+    kernel.dispatch(rec, b, push, groups_for(b.color_half.width, b.color_half.height))?;
     rec.end_pass();
     Ok(())
 }

@@ -6,9 +6,7 @@ use super::barriers::{after_compute_write, overwrite};
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use std::f32::consts::PI;
 
 pub const NAME: &str = "dof_half_gather";
@@ -26,21 +24,26 @@ pub struct HalfGatherPush {
     pub small_radius_px: f32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_half_gather.comp.
+    pub struct HalfGatherBindings {
+        color_half: image(color_half),
+        coc_half: image(coc_half),
+        bg_half: image(bg_half),
+        fg_half: image(fg_half),
+        tile_lists: buffer(TileLists),
+        tile_radius: buffer(TileRadius),
+        aperture_mask: buffer(ApertureMask),
+        fg_big_half: image(fg_big_half),
+    }
+}
+
 /// glsl/dof_half_gather.comp: one 8x8 workgroup per large tile.
 pub struct HalfGatherShader;
 
 impl Shader for HalfGatherShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[
-        image("color_half"),
-        image("coc_half"),
-        image("bg_half"),
-        image("fg_half"),
-        buffer("TileLists"),
-        buffer("TileRadius"),
-        buffer("ApertureMask"),
-        image("fg_big_half"),
-    ];
+    type Bindings<'a> = HalfGatherBindings<'a>;
     type Push = HalfGatherPush;
 }
 
@@ -130,23 +133,11 @@ impl Twin for HalfGatherShader {
     }
 }
 
-/// The resources of the half-resolution gather.
-pub struct HalfGatherBindings<'a> {
-    pub color_half: &'a GpuImage,
-    pub coc_half: &'a GpuImage,
-    pub bg_half: &'a GpuImage,
-    pub fg_half: &'a GpuImage,
-    pub fg_big_half: &'a GpuImage,
-    pub tile_lists: &'a GpuBuffer,
-    pub tile_radius: &'a GpuBuffer,
-    pub args: &'a GpuBuffer,
-    pub aperture_mask: &'a GpuBuffer,
-}
-
 pub fn record(
     kernel: &Kernel<HalfGatherShader>,
     rec: &mut Recorder,
     b: &HalfGatherBindings<'_>,
+    args: &GpuBuffer,
     push: &HalfGatherPush,
 ) -> GpuResult<()> {
     rec.begin_pass(NAME);
@@ -160,22 +151,7 @@ pub fn record(
         overwrite(b.fg_half),
         overwrite(b.fg_big_half),
     ]);
-    kernel.dispatch_indirect(
-        rec,
-        &[
-            Bind::Image(b.color_half),
-            Bind::Image(b.coc_half),
-            Bind::Image(b.bg_half),
-            Bind::Image(b.fg_half),
-            Bind::Buffer(b.tile_lists),
-            Bind::Buffer(b.tile_radius),
-            Bind::Buffer(b.aperture_mask),
-            Bind::Image(b.fg_big_half),
-        ],
-        push,
-        b.args,
-        (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64,
-    )?;
+    kernel.dispatch_indirect(rec, b, push, args, (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64)?;
     rec.end_pass();
     Ok(())
 }

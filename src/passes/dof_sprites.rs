@@ -6,9 +6,7 @@ use super::barriers::{buffer_after_compute_write, write_after_write};
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, ARGS_SPRITE_COUNT, CLASS_LARGE, SPRITE_WORDS};
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_sprites";
 
@@ -21,19 +19,24 @@ pub struct SpritesPush {
     pub sprite_capacity: i32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_sprites.comp.
+    pub struct SpritesBindings {
+        coc: image(coc_px),
+        output: image(color_out),
+        args: buffer(Args),
+        sprites: buffer(Sprites),
+        tile_lists: buffer(TileLists),
+        aperture_mask: buffer(ApertureMask),
+    }
+}
+
 /// glsl/dof_sprites.comp: one workgroup per large tile.
 pub struct SpritesShader;
 
 impl Shader for SpritesShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[
-        image("coc_px"),
-        image("color_out"),
-        buffer("Args"),
-        buffer("Sprites"),
-        buffer("TileLists"),
-        buffer("ApertureMask"),
-    ];
+    type Bindings<'a> = SpritesBindings<'a>;
     type Push = SpritesPush;
 }
 
@@ -99,16 +102,6 @@ impl Twin for SpritesShader {
     const TOLERANCE: f32 = 2e-4;
 }
 
-/// The resources of the sprite pass.
-pub struct SpritesBindings<'a> {
-    pub coc: &'a GpuImage,
-    pub output: &'a GpuImage,
-    pub args: &'a GpuBuffer,
-    pub sprites: &'a GpuBuffer,
-    pub tile_lists: &'a GpuBuffer,
-    pub aperture_mask: &'a GpuBuffer,
-}
-
 pub fn record(
     kernel: &Kernel<SpritesShader>,
     rec: &mut Recorder,
@@ -120,20 +113,7 @@ pub fn record(
     // sprites and their count: written by dof_downsample (read-after-write).
     rec.image_barriers(&[write_after_write(b.output)]);
     rec.buffer_barriers(&[buffer_after_compute_write(b.sprites), buffer_after_compute_write(b.args)]);
-    kernel.dispatch_indirect(
-        rec,
-        &[
-            Bind::Image(b.coc),
-            Bind::Image(b.output),
-            Bind::Buffer(b.args),
-            Bind::Buffer(b.sprites),
-            Bind::Buffer(b.tile_lists),
-            Bind::Buffer(b.aperture_mask),
-        ],
-        push,
-        b.args,
-        (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64,
-    )?;
+    kernel.dispatch_indirect(rec, b, push, b.args, (CLASS_LARGE * ARGS_DISPATCH_WORDS * 4) as u64)?;
     rec.end_pass();
     Ok(())
 }

@@ -7,9 +7,7 @@ use super::bokeh_gather::gather_exact;
 use super::twin::{finite_or_zero, floats};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_SMALL};
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_tile_gather";
 
@@ -24,19 +22,24 @@ pub struct TileGatherPush {
     pub layer_transition_px: f32,
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_tile_gather.comp.
+    pub struct TileGatherBindings {
+        color: image(color_in),
+        coc: image(coc_px),
+        output: image(color_out),
+        tile_lists: buffer(TileLists),
+        tile_radius: buffer(TileRadius),
+        aperture_mask: buffer(ApertureMask),
+    }
+}
+
 /// glsl/dof_tile_gather.comp: one workgroup per tile of the class's list.
 pub struct TileGatherShader;
 
 impl Shader for TileGatherShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[
-        image("color_in"),
-        image("coc_px"),
-        image("color_out"),
-        buffer("TileLists"),
-        buffer("TileRadius"),
-        buffer("ApertureMask"),
-    ];
+    type Bindings<'a> = TileGatherBindings<'a>;
     type Push = TileGatherPush;
 }
 
@@ -82,38 +85,20 @@ impl Twin for TileGatherShader {
     }
 }
 
-/// The resources of the full-resolution tile passes.
-pub struct TileGatherBindings<'a> {
-    pub color: &'a GpuImage,
-    pub coc: &'a GpuImage,
-    pub output: &'a GpuImage,
-    pub tile_lists: &'a GpuBuffer,
-    pub tile_radius: &'a GpuBuffer,
-    pub args: &'a GpuBuffer,
-    pub aperture_mask: &'a GpuBuffer,
-}
-
 /// Record the copy tiles and the small-CoC tiles (two indirect dispatches over their lists).
 /// The caller made the classification visible (see `tiled_dof`).
 pub fn record(
     kernel: &Kernel<TileGatherShader>,
     rec: &mut Recorder,
     b: &TileGatherBindings<'_>,
+    args: &GpuBuffer,
     push: &TileGatherPush,
 ) -> GpuResult<()> {
-    let binds = [
-        Bind::Image(b.color),
-        Bind::Image(b.coc),
-        Bind::Image(b.output),
-        Bind::Buffer(b.tile_lists),
-        Bind::Buffer(b.tile_radius),
-        Bind::Buffer(b.aperture_mask),
-    ];
     // The two dispatches write disjoint tiles of `output`: no barrier between them.
     for (class, label) in [(CLASS_COPY, "dof_copy_tiles"), (CLASS_SMALL, "dof_small_tiles")] {
         rec.begin_pass(label);
         let p = TileGatherPush { tile_class: class as i32, ..*push };
-        kernel.dispatch_indirect(rec, &binds, &p, b.args, (class * ARGS_DISPATCH_WORDS * 4) as u64)?;
+        kernel.dispatch_indirect(rec, b, &p, args, (class * ARGS_DISPATCH_WORDS * 4) as u64)?;
         rec.end_pass();
     }
     Ok(())

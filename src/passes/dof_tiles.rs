@@ -2,9 +2,7 @@
 //! Shader: glsl/dof_tiles.comp.
 
 use super::barriers::after_compute_write;
-use crate::gpu::{
-    buffer, image, Bind, Binding, GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin,
-};
+use crate::gpu::{GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_tiles";
 
@@ -15,12 +13,20 @@ pub struct TilesPush {
     pub tiles: [i32; 2],
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/dof_tiles.comp.
+    pub struct TilesBindings {
+        coc_px: image(coc_px),
+        tile_coc: buffer(TileCoc),
+    }
+}
+
 /// glsl/dof_tiles.comp: one workgroup per tile.
 pub struct TilesShader;
 
 impl Shader for TilesShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("coc_px"), buffer("TileCoc")];
+    type Bindings<'a> = TilesBindings<'a>;
     type Push = TilesPush;
 }
 
@@ -62,7 +68,7 @@ pub fn record(
     // earlier pass of this recording touched it, so it needs no barrier.
     rec.image_barriers(&[after_compute_write(coc)]);
     let groups = [push.tiles[0] as u32, push.tiles[1] as u32, 1];
-    kernel.dispatch(rec, &[Bind::Image(coc), Bind::Buffer(tile_coc)], push, groups)?;
+    kernel.dispatch(rec, &TilesBindings { coc_px: coc, tile_coc }, push, groups)?;
     rec.end_pass();
     Ok(())
 }

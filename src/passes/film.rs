@@ -3,10 +3,10 @@
 //! first; then either the characteristic curve (toe, straight part, shoulder on log exposure)
 //! or nothing more, keeping scene-referred linear values for compositing.
 
-use super::barriers::{after_compute_write, overwrite};
+use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
-use super::{groups_for, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use super::{Decision, FrameImages, Pass};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::camera::FilmMode;
 use crate::optics::film::FilmCurve;
 
@@ -158,7 +158,7 @@ pub struct FilmShader;
 
 impl Shader for FilmShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Table")];
+    type Bindings<'a> = FilterBindings<'a>;
     type Push = FilmPush;
 }
 
@@ -233,22 +233,6 @@ impl Pass for Film {
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &FilmParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        let input = images.color().clone();
-        let output = rec.create_image("color (film)", input.width, input.height, input.format)?;
-        let table = rec.upload_buffer("film table", &p.table)?;
-        // input: written by the previous compute pass (or the upload, whose own barrier made it
-        //   visible to compute reads): wait for those writes.
-        // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(input.width, input.height),
-        )?;
-        rec.end_pass();
-        images.set_color(None, output);
-        Ok(())
+        filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
     }
 }

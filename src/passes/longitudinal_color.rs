@@ -8,7 +8,7 @@
 use super::barriers::{after_compute_write, overwrite};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{groups_for, Decision, FrameImages, Pass};
-use crate::gpu::{image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::camera::BokehMode;
 
 pub const NAME: &str = "longitudinal_color";
@@ -23,12 +23,22 @@ pub fn join_cpu(red: &[f32], green: &[f32], blue: &[f32]) -> Vec<f32> {
     out
 }
 
+crate::shader_bindings! {
+    /// The bindings of glsl/longitudinal_color.comp.
+    pub struct JoinBindings {
+        red_run: image(red_run),
+        green_run: image(green_run),
+        blue_run: image(blue_run),
+        color_out: image(color_out),
+    }
+}
+
 /// glsl/longitudinal_color.comp; its push constants are the image size.
 pub struct JoinShader;
 
 impl Shader for JoinShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("red_run"), image("green_run"), image("blue_run"), image("color_out")];
+    type Bindings<'a> = JoinBindings<'a>;
     type Push = [i32; 2];
 }
 
@@ -88,12 +98,8 @@ impl Pass for LongitudinalColor {
             after_compute_write(&blue),
             overwrite(&output),
         ]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&red), Bind::Image(&green), Bind::Image(&blue), Bind::Image(&output)],
-            size,
-            groups_for(output.width, output.height),
-        )?;
+        let bindings = JoinBindings { red_run: &red, green_run: &green, blue_run: &blue, color_out: &output };
+        self.kernel.dispatch(rec, &bindings, size, groups_for(output.width, output.height))?;
         rec.end_pass();
         images.set_color(None, output);
         Ok(())

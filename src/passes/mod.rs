@@ -27,6 +27,7 @@ pub mod dof_sprites;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
+pub mod filter;
 pub mod longitudinal_color;
 pub mod scene;
 pub mod tiled_dof;

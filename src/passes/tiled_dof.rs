@@ -8,7 +8,7 @@
 
 use super::aperture::{mask_buffer_data, ApertureConstants};
 use super::barriers::{buffer_after_compute_write, overwrite};
-use super::dof_classify::{ClassifyPush, ClassifyShader};
+use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
 use super::dof_downsample::{DownsampleBindings, DownsamplePush, DownsampleShader};
 use super::dof_half_gather::{HalfGatherBindings, HalfGatherPush, HalfGatherShader};
@@ -173,7 +173,9 @@ impl Pass for TiledDof {
         dof_tiles::record(&self.tiles, rec, &coc, &tile_coc, &TilesPush { size, tiles })?;
         let search_tiles = (0.5 * p.max_abs_coc_px / TILE_SIZE as f32).ceil() as i32 + 1;
         let classify = ClassifyPush { tiles, search_tiles, small_radius_px: p.small_radius_px };
-        dof_classify::record(&self.classify, rec, &tile_coc, &args, &tile_lists, &tile_radius, &classify)?;
+        let classify_bindings =
+            ClassifyBindings { tile_coc: &tile_coc, args: &args, tile_lists: &tile_lists, tile_radius: &tile_radius };
+        dof_classify::record(&self.classify, rec, &classify_bindings, &classify)?;
 
         // The classification -> everything after it: the args feed indirect dispatches
         // (DRAW_INDIRECT stage, indirect-command reads) and the sprite counter; the lists and
@@ -203,11 +205,10 @@ impl Pass for TiledDof {
             output: &output,
             tile_lists: &tile_lists,
             tile_radius: &tile_radius,
-            args: &args,
             aperture_mask: &aperture_mask,
         };
         let tile_gather = TileGatherPush { size, tiles, tile_class: 0, aperture, layer_transition_px };
-        dof_tile_gather::record(&self.tile_gather, rec, &gather_bindings, &tile_gather)?;
+        dof_tile_gather::record(&self.tile_gather, rec, &gather_bindings, &args, &tile_gather)?;
         let downsample = DownsamplePush {
             size,
             half_size: [hw, hh],
@@ -244,10 +245,9 @@ impl Pass for TiledDof {
             fg_big_half: &fg_big_half,
             tile_lists: &tile_lists,
             tile_radius: &tile_radius,
-            args: &args,
             aperture_mask: &aperture_mask,
         };
-        dof_half_gather::record(&self.half_gather, rec, &half_bindings, &half)?;
+        dof_half_gather::record(&self.half_gather, rec, &half_bindings, &args, &half)?;
         let composite = CompositePush {
             size,
             half_size: [hw, hh],
@@ -264,13 +264,12 @@ impl Pass for TiledDof {
             fg_half: &fg_half,
             output: &output,
             tile_lists: &tile_lists,
-            args: &args,
             aperture_mask: &aperture_mask,
             coc_half: &coc_half,
             fg_big_half: &fg_big_half,
             tile_radius: &tile_radius,
         };
-        dof_composite::record(&self.composite, rec, &composite_bindings, &composite)?;
+        dof_composite::record(&self.composite, rec, &composite_bindings, &args, &composite)?;
         let sprite_bindings = SpritesBindings {
             coc: &coc,
             output: &output,

@@ -2,10 +2,10 @@
 //! (Kyaw 2013 eq 4.14 / 4.9).
 //! Shader: glsl/vignette.comp.
 
-use super::barriers::{after_compute_write, overwrite};
+use super::filter::{self, FilterBindings};
 use super::scene::{PlanInput, VISIBLE_FALLOFF};
-use super::{groups_for, Decision, FrameImages, Pass};
-use crate::gpu::{buffer, image, Bind, Binding, Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use super::{Decision, FrameImages, Pass};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "vignette";
 
@@ -67,7 +67,7 @@ pub struct VignetteShader;
 
 impl Shader for VignetteShader {
     const NAME: &'static str = NAME;
-    const BINDINGS: &'static [Binding] = &[image("color_in"), image("color_out"), buffer("Table")];
+    type Bindings<'a> = FilterBindings<'a>;
     type Push = VignettePush;
 }
 
@@ -124,22 +124,6 @@ impl Pass for Vignette {
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &VignetteParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
-        let input = images.color().clone();
-        let output = rec.create_image("color (vignetting)", input.width, input.height, input.format)?;
-        let table = rec.upload_buffer("relative illumination", &p.table)?;
-        // input: written by the previous compute pass (or the upload, made visible to compute by
-        //   its own barrier; the extra dependency is then harmless): wait for those writes.
-        // output: written from scratch.
-        rec.image_barriers(&[after_compute_write(&input), overwrite(&output)]);
-        self.kernel.dispatch(
-            rec,
-            &[Bind::Image(&input), Bind::Image(&output), Bind::Buffer(&table)],
-            &p.push,
-            groups_for(input.width, input.height),
-        )?;
-        rec.end_pass();
-        images.set_color(None, output);
-        Ok(())
+        filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
     }
 }

@@ -1,0 +1,63 @@
+//! The shape of the passes that filter the colour into a new colour through one shader reading
+//! a table: `color_in`, `color_out` and a buffer `Table` (distortion, astigmatism, coma,
+//! vignette, film). Their modules declare the shader and its twin and plan; the recording and
+//! its barriers are written here once.
+
+use super::barriers::{after_compute_write, overwrite};
+use super::{groups_for, FrameImages};
+use crate::gpu::{GpuImage, GpuResult, Kernel, Recorder, Shader, Twin};
+use std::sync::Arc;
+
+crate::shader_bindings! {
+    /// The bindings of a filter shader.
+    pub struct FilterBindings {
+        color_in: image(color_in),
+        color_out: image(color_out),
+        table: buffer(Table),
+    }
+}
+
+/// Record one filter pass named `label`: the table uploaded, the colour filtered into a new
+/// image (`color (<label>)`), which becomes the colour.
+pub fn record<S>(
+    kernel: &Kernel<S>,
+    rec: &mut Recorder,
+    images: &mut FrameImages,
+    label: &str,
+    table: &[f32],
+    push: &S::Push,
+) -> GpuResult<()>
+where
+    S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>,
+{
+    rec.begin_pass(label);
+    // The table: `Recorder::upload_buffer` records its copy -> compute-read barrier.
+    let table = rec.upload_buffer(&format!("{label} table"), table)?;
+    let output = dispatch(kernel, rec, images.color(), &table, push, &format!("color ({label})"))?;
+    rec.end_pass();
+    images.set_color(None, output);
+    Ok(())
+}
+
+/// One dispatch of a filter from `input` into a new image `output_name`, returned.
+pub fn dispatch<S>(
+    kernel: &Kernel<S>,
+    rec: &mut Recorder,
+    input: &GpuImage,
+    table: &crate::gpu::GpuBuffer,
+    push: &S::Push,
+    output_name: &str,
+) -> GpuResult<Arc<GpuImage>>
+where
+    S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>,
+{
+    let output = rec.create_image(output_name, input.width, input.height, input.format)?;
+    // input: written by the previous compute pass (or by the upload, whose own barrier made it
+    //   visible to compute reads; the extra dependency is then free). A filter may read it
+    //   anywhere around a pixel, so all of it must be written and visible.
+    // output: written from scratch; its old contents are discarded.
+    rec.image_barriers(&[after_compute_write(input), overwrite(&output)]);
+    let bindings = FilterBindings { color_in: input, color_out: &output, table };
+    kernel.dispatch(rec, &bindings, push, groups_for(input.width, input.height))?;
+    Ok(output)
+}
