@@ -6,7 +6,7 @@ mod support;
 use realcam::model::aperture::ApertureShape;
 use realcam::model::camera::{BokehMode, FilmMode};
 use realcam::model::frame::Frame;
-use realcam::passes::bokeh_gather::{BokehGather, GatherParams};
+use realcam::passes::bokeh_gather::{BokehGather, GatherPush};
 use realcam::passes::coc::{Coc, CocParams, CocPush};
 use realcam::passes::tiled_dof::{TiledDof, TiledDofParams};
 use realcam::pipeline::planner;
@@ -122,7 +122,7 @@ fn in_focus_plane_passes_through_the_gather_unchanged() {
     assert!(!plan.runs("coc") && !runs_dof(&plan));
     let push = CocPush::new(&camera.lens, camera.pixel_pitch_mm(256, 144), 64.0, 256, 144, [128.0, 72.0], None);
     plan.force::<Coc>(CocParams::new(push, None));
-    plan.force::<BokehGather>(GatherParams::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]));
+    plan.force::<BokehGather>(GatherPush::new(256, 144, 20.0, &camera.aperture, 64.0, [128.0, 72.0]).into());
     let (rgba, profile) = render_plan(&gpu, &frame, &plan);
     assert!(profile.pass_ms("bokeh_gather").is_some());
     let worst = rgba.iter().zip(&frame.color).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);

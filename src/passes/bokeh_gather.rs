@@ -162,21 +162,10 @@ pub struct BokehGather {
     kernel: Kernel<GatherShader>,
 }
 
-impl GatherParams {
-    /// One run for all channels, without an aperture image (see [`GatherPush::new`]).
-    pub fn new(
-        width: u32,
-        height: u32,
-        max_abs_coc_px: f64,
-        aperture: &ApertureShape,
-        sa_max_coc_px: f64,
-        centre_px: [f64; 2],
-    ) -> GatherParams {
-        GatherParams {
-            push: GatherPush::new(width, height, max_abs_coc_px, aperture, sa_max_coc_px, centre_px),
-            aperture_mask: mask_buffer_data(None),
-            channel: None,
-        }
+impl From<GatherPush> for GatherParams {
+    /// One run for all channels, without an aperture image.
+    fn from(push: GatherPush) -> GatherParams {
+        GatherParams { push, aperture_mask: mask_buffer_data(None), channel: None }
     }
 }
 
@@ -186,11 +175,8 @@ impl Pass for BokehGather {
 
     fn plan(input: &PlanInput<'_>) -> Decision<GatherParams> {
         let (f, camera) = (&input.facts, input.camera);
-        if camera.bokeh != BokehMode::Reference {
-            return Decision::not_chosen();
-        }
-        if !f.dof_visible() {
-            return Decision::skip("no pixel is defocused by more than a pixel");
+        if let Some(gated) = input.dof_method_gate(BokehMode::Reference) {
+            return gated;
         }
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();

@@ -160,11 +160,8 @@ impl Pass for Diffraction {
 
     fn plan(input: &PlanInput<'_>) -> Decision<DiffractionParams> {
         let (f, camera) = (&input.facts, input.camera);
-        if camera.bokeh != BokehMode::Diffraction {
-            return Decision::not_chosen();
-        }
-        if !f.dof_visible() {
-            return Decision::skip("no pixel is defocused by more than a pixel");
+        if let Some(gated) = input.dof_method_gate(BokehMode::Diffraction) {
+            return gated;
         }
         let settings = PsfTableSettings {
             subpixel: 1,

@@ -4,7 +4,7 @@
 use super::aperture::ApertureConstants;
 use super::barriers::{after_compute_write, write_after_write};
 use super::bokeh_gather::gather_exact;
-use super::twin::floats;
+use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
@@ -70,67 +70,61 @@ impl Twin for CompositeShader {
             let bottom = mix4(img.clamped(h0[0], h0[1] + 1), img.clamped(h0[0] + 1, h0[1] + 1), f[0]);
             mix4(&top, &bottom, f[1])
         };
-        for group in 0..groups[0] as usize {
-            let t = lists[CLASS_LARGE as usize * tile_count + group] as usize;
-            let origin = [(t % pc.tiles[0] as usize) as u32 * TILE_SIZE, (t / pc.tiles[0] as usize) as u32 * TILE_SIZE];
-            for y in origin[1]..origin[1] + TILE_SIZE {
-                for x in origin[0]..origin[0] + TILE_SIZE {
-                    let p = [x as i32, y as i32];
-                    if p[0] >= pc.size[0] || p[1] >= pc.size[1] {
-                        continue;
-                    }
-                    let h = [(x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5];
-                    let h0 = [h[0].floor() as i32, h[1].floor() as i32];
-                    let f = [h[0] - h0[0] as f32, h[1] - h0[1] as f32];
-                    // Joint bilateral upsampling of the background.
-                    let coc_here = coc.clamped(p[0], p[1])[0];
-                    let (mut bg, mut bg_weight) = ([0.0f32; 4], 0.0f32);
-                    for j in 0..2 {
-                        for i in 0..2 {
-                            let q = [h0[0] + i, h0[1] + j];
-                            let bilinear_w =
-                                (if i == 0 { 1.0 - f[0] } else { f[0] }) * (if j == 0 { 1.0 - f[1] } else { f[1] });
-                            let similar = 1.0 / (1.0 + (coc_half.clamped(q[0], q[1])[0] - coc_here).abs());
-                            let texel = bg_half.clamped(q[0], q[1]);
-                            for k in 0..4 {
-                                bg[k] += bilinear_w * similar * texel[k];
-                            }
-                            bg_weight += bilinear_w * similar;
+        for tile in listed_tiles(&lists, CLASS_LARGE, pc.tiles, groups[0], TILE_SIZE, pc.size) {
+            let t = tile.index;
+            for (x, y) in tile.pixels() {
+                let p = [x as i32, y as i32];
+                let h = [(x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5];
+                let h0 = [h[0].floor() as i32, h[1].floor() as i32];
+                let f = [h[0] - h0[0] as f32, h[1] - h0[1] as f32];
+                // Joint bilateral upsampling of the background.
+                let coc_here = coc.clamped(p[0], p[1])[0];
+                let (mut bg, mut bg_weight) = ([0.0f32; 4], 0.0f32);
+                for j in 0..2 {
+                    for i in 0..2 {
+                        let q = [h0[0] + i, h0[1] + j];
+                        let bilinear_w =
+                            (if i == 0 { 1.0 - f[0] } else { f[0] }) * (if j == 0 { 1.0 - f[1] } else { f[1] });
+                        let similar = 1.0 / (1.0 + (coc_half.clamped(q[0], q[1])[0] - coc_here).abs());
+                        let texel = bg_half.clamped(q[0], q[1]);
+                        for k in 0..4 {
+                            bg[k] += bilinear_w * similar * texel[k];
                         }
+                        bg_weight += bilinear_w * similar;
                     }
-                    if bg_weight > 0.0 {
-                        bg = bg.map(|v| v / bg_weight);
-                    } else {
-                        bg.copy_from_slice(bg_half.clamped(h0[0], h0[1]));
-                    }
-                    let mut fg = bilinear(&fg_half, h0, f);
-                    let radius_p = 0.5 * coc_here.abs();
-                    let blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
-                    let mut base = bg;
-                    if blurred < 1.0 {
-                        let fg_radius = radii[tile_count + t];
-                        let r = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() as i32 + 1;
-                        let mut exact = gather_exact(
-                            &color.texels,
-                            &coc.texels,
-                            pc.size,
-                            p,
-                            r,
-                            &pc.aperture,
-                            pc.layer_transition_px,
-                            &mask,
-                        );
-                        let big = bilinear(&fg_big_half, h0, f);
-                        for k in 0..3 {
-                            exact[k] = exact[k] * (1.0 - big[3]) + big[k] * big[3];
-                        }
-                        base = mix4(&exact, &bg, blurred);
-                        fg[3] *= blurred;
-                    }
-                    let texel: [f32; 4] =
-                        std::array::from_fn(|k| if k < 3 { base[k] * (1.0 - fg[3]) + fg[k] * fg[3] } else { base[3] });
-                    out.texel_mut(x, y).copy_from_slice(&texel);
                 }
+                if bg_weight > 0.0 {
+                    bg = bg.map(|v| v / bg_weight);
+                } else {
+                    bg.copy_from_slice(bg_half.clamped(h0[0], h0[1]));
+                }
+                let mut fg = bilinear(&fg_half, h0, f);
+                let radius_p = 0.5 * coc_here.abs();
+                let blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
+                let mut base = bg;
+                if blurred < 1.0 {
+                    let fg_radius = radii[tile_count + t];
+                    let r = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() as i32 + 1;
+                    let mut exact = gather_exact(
+                        &color.texels,
+                        &coc.texels,
+                        pc.size,
+                        p,
+                        r,
+                        &pc.aperture,
+                        pc.layer_transition_px,
+                        &mask,
+                    );
+                    let big = bilinear(&fg_big_half, h0, f);
+                    for k in 0..3 {
+                        exact[k] = exact[k] * (1.0 - big[3]) + big[k] * big[3];
+                    }
+                    base = mix4(&exact, &bg, blurred);
+                    fg[3] *= blurred;
+                }
+                let texel: [f32; 4] =
+                    std::array::from_fn(|k| if k < 3 { base[k] * (1.0 - fg[3]) + fg[k] * fg[3] } else { base[3] });
+                out.texel_mut(x, y).copy_from_slice(&texel);
             }
         }
     }

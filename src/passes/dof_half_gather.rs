@@ -3,7 +3,7 @@
 
 use super::aperture::{aperture_weight, sa_weight, ApertureConstants};
 use super::barriers::{after_compute_write, overwrite};
-use super::twin::floats;
+use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_LARGE};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
@@ -57,74 +57,66 @@ impl Twin for HalfGatherShader {
     fn cpu(pc: &HalfGatherPush, groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
         let (lists, radii, mask) = (b[4].words().to_vec(), floats(b[5].words()), floats(b[6].words()));
-        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let half_tile = TILE_SIZE / 2;
         let (mut bg_out, mut fg_out, mut big_out) = (b[2].image().clone(), b[3].image().clone(), b[7].image().clone());
-        for group in 0..groups[0] as usize {
-            let t = lists[CLASS_LARGE as usize * tile_count + group] as usize;
-            let origin = [(t % pc.tiles[0] as usize) as u32 * half_tile, (t / pc.tiles[0] as usize) as u32 * half_tile];
-            for hy in origin[1]..origin[1] + half_tile {
-                for hx in origin[0]..origin[0] + half_tile {
-                    let (x, y) = (hx as i32, hy as i32);
-                    if x >= pc.half_size[0] || y >= pc.half_size[1] {
-                        continue;
-                    }
-                    let ap = &pc.aperture;
-                    // Half-resolution units: CoC diameters and distances halve.
-                    let coc_p = 0.5 * coc.clamped(x, y)[0];
-                    let radius_p = (0.5 * coc_p.abs()).max(0.5);
-                    let extent = 0.5 * radii[t] + 1.0;
-                    let spacing = extent / pc.rings as f32;
-                    let ramp = spacing.max(1.0);
-                    let jitter = ring_jitter(x, y);
-                    let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-                    let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
-                    for k in 0..=pc.rings {
-                        let n = if k == 0 { 1 } else { 6 * k };
-                        let rho = k as f32 * spacing;
-                        let tap_area =
-                            if k == 0 { PI * 0.25 * spacing * spacing } else { PI * spacing * spacing / 3.0 };
-                        for j in 0..n {
-                            let theta = (j as f32 + jitter) * 2.0 * PI / n as f32;
-                            let qu = [x + (rho * theta.cos()).round() as i32, y + (rho * theta.sin()).round() as i32];
-                            let coc_q = 0.5 * coc.clamped(qu[0], qu[1])[0];
-                            let radius_q = (0.5 * coc_q.abs()).max(0.5);
-                            let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-                            let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
-                            let o = [(x - qu[0]) as f32 * flip, (y - qu[1]) as f32 * flip];
-                            let sample = [qu[0] as f32 + 0.5, qu[1] as f32 + 0.5];
-                            let w = tap_area
-                                * aperture_weight(o, reach, ap, sample, flip, ramp, &mask)
-                                * sa_weight(o, radius_q, coc_q, ap);
-                            if w <= 0.0 {
-                                continue;
-                            }
-                            let c = color.clamped(qu[0], qu[1]);
-                            let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
+        for tile in listed_tiles(&lists, CLASS_LARGE, pc.tiles, groups[0], half_tile, pc.half_size) {
+            let t = tile.index;
+            for (hx, hy) in tile.pixels() {
+                let (x, y) = (hx as i32, hy as i32);
+                let ap = &pc.aperture;
+                // Half-resolution units: CoC diameters and distances halve.
+                let coc_p = 0.5 * coc.clamped(x, y)[0];
+                let radius_p = (0.5 * coc_p.abs()).max(0.5);
+                let extent = 0.5 * radii[t] + 1.0;
+                let spacing = extent / pc.rings as f32;
+                let ramp = spacing.max(1.0);
+                let jitter = ring_jitter(x, y);
+                let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+                let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
+                for k in 0..=pc.rings {
+                    let n = if k == 0 { 1 } else { 6 * k };
+                    let rho = k as f32 * spacing;
+                    let tap_area = if k == 0 { PI * 0.25 * spacing * spacing } else { PI * spacing * spacing / 3.0 };
+                    for j in 0..n {
+                        let theta = (j as f32 + jitter) * 2.0 * PI / n as f32;
+                        let qu = [x + (rho * theta.cos()).round() as i32, y + (rho * theta.sin()).round() as i32];
+                        let coc_q = 0.5 * coc.clamped(qu[0], qu[1])[0];
+                        let radius_q = (0.5 * coc_q.abs()).max(0.5);
+                        let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+                        let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
+                        let o = [(x - qu[0]) as f32 * flip, (y - qu[1]) as f32 * flip];
+                        let sample = [qu[0] as f32 + 0.5, qu[1] as f32 + 0.5];
+                        let w = tap_area
+                            * aperture_weight(o, reach, ap, sample, flip, ramp, &mask)
+                            * sa_weight(o, radius_q, coc_q, ap);
+                        if w <= 0.0 {
+                            continue;
+                        }
+                        let c = color.clamped(qu[0], qu[1]);
+                        let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
+                        for ch in 0..4 {
+                            fg[ch] += f * w * c[ch];
+                            bg[ch] += (1.0 - f) * w * c[ch];
+                        }
+                        fg_w += f * w;
+                        bg_w += (1.0 - f) * w;
+                        if radius_q > pc.small_radius_px {
                             for ch in 0..4 {
-                                fg[ch] += f * w * c[ch];
-                                bg[ch] += (1.0 - f) * w * c[ch];
+                                big[ch] += f * w * c[ch];
                             }
-                            fg_w += f * w;
-                            bg_w += (1.0 - f) * w;
-                            if radius_q > pc.small_radius_px {
-                                for ch in 0..4 {
-                                    big[ch] += f * w * c[ch];
-                                }
-                                big_w += f * w;
-                            }
+                            big_w += f * w;
                         }
                     }
-                    let background: Vec<f32> =
-                        if bg_w > 0.0 { bg.iter().map(|v| v / bg_w).collect() } else { color.clamped(x, y).to_vec() };
-                    let layer = |sum: [f32; 4], weight: f32| {
-                        let rgb: [f32; 3] = std::array::from_fn(|ch| if weight > 0.0 { sum[ch] / weight } else { 0.0 });
-                        [rgb[0], rgb[1], rgb[2], weight.clamp(0.0, 1.0)]
-                    };
-                    bg_out.texel_mut(hx, hy).copy_from_slice(&background);
-                    fg_out.texel_mut(hx, hy).copy_from_slice(&layer(fg, fg_w));
-                    big_out.texel_mut(hx, hy).copy_from_slice(&layer(big, big_w));
                 }
+                let background: Vec<f32> =
+                    if bg_w > 0.0 { bg.iter().map(|v| v / bg_w).collect() } else { color.clamped(x, y).to_vec() };
+                let layer = |sum: [f32; 4], weight: f32| {
+                    let rgb: [f32; 3] = std::array::from_fn(|ch| if weight > 0.0 { sum[ch] / weight } else { 0.0 });
+                    [rgb[0], rgb[1], rgb[2], weight.clamp(0.0, 1.0)]
+                };
+                bg_out.texel_mut(hx, hy).copy_from_slice(&background);
+                fg_out.texel_mut(hx, hy).copy_from_slice(&layer(fg, fg_w));
+                big_out.texel_mut(hx, hy).copy_from_slice(&layer(big, big_w));
             }
         }
         b[2] = HostData::Image(bg_out);

@@ -3,7 +3,7 @@
 
 use super::aperture::{aperture_weight, sa_weight, ApertureConstants};
 use super::barriers::{buffer_after_compute_write, write_after_write};
-use super::twin::floats;
+use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, ARGS_SPRITE_COUNT, CLASS_LARGE, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
@@ -49,17 +49,12 @@ impl Twin for SpritesShader {
             .map(|s| std::array::from_fn(|k| s[k]))
             .collect();
         let (lists, mask) = (b[4].words().to_vec(), floats(b[5].words()));
-        let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let out = b[1].image_mut();
         if total == 0 {
             return;
         }
-        for group in 0..groups[0] as usize {
-            let t = lists[CLASS_LARGE as usize * tile_count + group] as usize;
-            let origin = [
-                (t % pc.tiles[0] as usize) as f32 * TILE_SIZE as f32,
-                (t / pc.tiles[0] as usize) as f32 * TILE_SIZE as f32,
-            ];
+        for tile in listed_tiles(&lists, CLASS_LARGE, pc.tiles, groups[0], TILE_SIZE, pc.size) {
+            let origin = tile.origin.map(|o| o as f32);
             // The sprites whose bounds overlap the tile (the shader's per-tile bin).
             let bin: Vec<&[f32; 8]> = sprites
                 .iter()
@@ -69,30 +64,25 @@ impl Twin for SpritesShader {
                     s[0] + r >= origin[0] && s[0] - r <= hi[0] && s[1] + r >= origin[1] && s[1] - r <= hi[1]
                 })
                 .collect();
-            for y in origin[1] as u32..origin[1] as u32 + TILE_SIZE {
-                for x in origin[0] as u32..origin[0] as u32 + TILE_SIZE {
-                    if x as i32 >= pc.size[0] || y as i32 >= pc.size[1] {
-                        continue;
-                    }
-                    let coc_p = coc.clamped(x as i32, y as i32)[0];
-                    let radius_p = (0.5 * coc_p.abs()).max(0.5);
-                    let mut sum = [0.0f32; 3];
-                    for s in &bin {
-                        let (centre, coc_q) = ([s[0], s[1]], s[2]);
-                        let radius_q = (0.5 * coc_q.abs()).max(0.5);
-                        let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-                        let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
-                        let o = [(x as f32 + 0.5 - centre[0]) * flip, (y as f32 + 0.5 - centre[1]) * flip];
-                        let w = aperture_weight(o, reach, &pc.aperture, centre, flip, 1.0, &mask)
-                            * sa_weight(o, radius_q, coc_q, &pc.aperture);
-                        for k in 0..3 {
-                            sum[k] += s[4 + k] * w;
-                        }
-                    }
-                    let texel = out.texel_mut(x, y);
+            for (x, y) in tile.pixels() {
+                let coc_p = coc.clamped(x as i32, y as i32)[0];
+                let radius_p = (0.5 * coc_p.abs()).max(0.5);
+                let mut sum = [0.0f32; 3];
+                for s in &bin {
+                    let (centre, coc_q) = ([s[0], s[1]], s[2]);
+                    let radius_q = (0.5 * coc_q.abs()).max(0.5);
+                    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+                    let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
+                    let o = [(x as f32 + 0.5 - centre[0]) * flip, (y as f32 + 0.5 - centre[1]) * flip];
+                    let w = aperture_weight(o, reach, &pc.aperture, centre, flip, 1.0, &mask)
+                        * sa_weight(o, radius_q, coc_q, &pc.aperture);
                     for k in 0..3 {
-                        texel[k] += sum[k];
+                        sum[k] += s[4 + k] * w;
                     }
+                }
+                let texel = out.texel_mut(x, y);
+                for k in 0..3 {
+                    texel[k] += sum[k];
                 }
             }
         }

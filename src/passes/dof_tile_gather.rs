@@ -4,7 +4,7 @@
 
 use super::aperture::ApertureConstants;
 use super::bokeh_gather::gather_exact;
-use super::twin::{finite_or_zero, floats};
+use super::twin::{finite_or_zero, floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_SMALL};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
@@ -49,37 +49,21 @@ impl Twin for TileGatherShader {
         let (lists, radii, mask) = (b[3].words().to_vec(), floats(b[4].words()), floats(b[5].words()));
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let out = b[2].image_mut();
-        for group in 0..groups[0] as usize {
-            let t = lists[pc.tile_class as usize * tile_count + group] as usize;
-            let origin = [(t % pc.tiles[0] as usize) as u32 * TILE_SIZE, (t / pc.tiles[0] as usize) as u32 * TILE_SIZE];
-            for y in origin[1]..origin[1] + TILE_SIZE {
-                for x in origin[0]..origin[0] + TILE_SIZE {
-                    if x as i32 >= pc.size[0] || y as i32 >= pc.size[1] {
-                        continue;
-                    }
-                    let texel = if pc.tile_class == CLASS_COPY as i32 {
-                        color.clamped(x as i32, y as i32).iter().map(|&v| finite_or_zero(v)).collect::<Vec<_>>()
-                    } else {
-                        // Samples behind p reach no farther than p's own CoC; only foreground
-                        // samples can reach farther, and the tile knows the largest of those.
-                        let radius_p = 0.5 * coc.clamped(x as i32, y as i32)[0].abs();
-                        let fg_radius = radii[tile_count + t];
-                        let r = radii[t].min(radius_p.max(fg_radius)).ceil() as i32 + 1;
-                        let p = [x as i32, y as i32];
-                        gather_exact(
-                            &color.texels,
-                            &coc.texels,
-                            pc.size,
-                            p,
-                            r,
-                            &pc.aperture,
-                            pc.layer_transition_px,
-                            &mask,
-                        )
-                        .to_vec()
-                    };
-                    out.texel_mut(x, y).copy_from_slice(&texel);
-                }
+        for tile in listed_tiles(&lists, pc.tile_class as u32, pc.tiles, groups[0], TILE_SIZE, pc.size) {
+            let t = tile.index;
+            for (x, y) in tile.pixels() {
+                let p = [x as i32, y as i32];
+                let texel = if pc.tile_class == CLASS_COPY as i32 {
+                    color.clamped(p[0], p[1]).iter().map(|&v| finite_or_zero(v)).collect::<Vec<_>>()
+                } else {
+                    // Samples behind p reach no farther than p's own CoC; only foreground
+                    // samples can reach farther, and the tile knows the largest of those.
+                    let radius_p = 0.5 * coc.clamped(p[0], p[1])[0].abs();
+                    let r = radii[t].min(radius_p.max(radii[tile_count + t])).ceil() as i32 + 1;
+                    let (a, l) = (&pc.aperture, pc.layer_transition_px);
+                    gather_exact(&color.texels, &coc.texels, pc.size, p, r, a, l, &mask).to_vec()
+                };
+                out.texel_mut(x, y).copy_from_slice(&texel);
             }
         }
     }

@@ -344,4 +344,42 @@ pub mod twin {
     pub fn floats(words: &[u32]) -> Vec<f32> {
         words.iter().map(|&w| f32::from_bits(w)).collect()
     }
+
+    /// A tile read from a tile list by one workgroup of an indirect dispatch.
+    pub struct ListedTile {
+        /// The tile's index (row-major over the tile grid).
+        pub index: usize,
+        pub origin: [u32; 2],
+        tile_px: u32,
+        size: [i32; 2],
+    }
+
+    impl ListedTile {
+        /// The tile's pixels inside the image, row by row.
+        pub fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+            let [x0, y0] = self.origin;
+            (y0..y0 + self.tile_px)
+                .flat_map(move |y| (x0..x0 + self.tile_px).map(move |x| (x, y)))
+                .filter(|&(x, y)| (x as i32) < self.size[0] && (y as i32) < self.size[1])
+        }
+    }
+
+    /// The tiles workgroups `0..groups` read from the list of `class` (dof_classify's layout:
+    /// one list of `tiles.x * tiles.y` entries per class), each `tile_px` pixels wide in an
+    /// image of `size`.
+    pub fn listed_tiles(
+        lists: &[u32],
+        class: u32,
+        tiles: [i32; 2],
+        groups: u32,
+        tile_px: u32,
+        size: [i32; 2],
+    ) -> impl Iterator<Item = ListedTile> + '_ {
+        let tile_count = (tiles[0] * tiles[1]) as usize;
+        (0..groups as usize).map(move |group| {
+            let index = lists[class as usize * tile_count + group] as usize;
+            let origin = [(index % tiles[0] as usize) as u32 * tile_px, (index / tiles[0] as usize) as u32 * tile_px];
+            ListedTile { index, origin, tile_px, size }
+        })
+    }
 }

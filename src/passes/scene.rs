@@ -109,6 +109,18 @@ impl<'a> PlanInput<'a> {
         }
     }
 
+    /// The gate of the depth-of-field methods: `None` when `mode` is the method the user chose
+    /// and some pixel is defocused by more than a pixel; otherwise the method's decision.
+    pub fn dof_method_gate<P>(&self, mode: BokehMode) -> Option<super::Decision<P>> {
+        if self.camera.bokeh != mode {
+            Some(super::Decision::not_chosen())
+        } else if !self.facts.dof_visible() {
+            Some(super::Decision::skip("no pixel is defocused by more than a pixel"))
+        } else {
+            None
+        }
+    }
+
     /// The aperture's description in `--explain`.
     pub fn aperture_text(&self) -> String {
         let camera = self.camera;

@@ -104,11 +104,8 @@ impl Pass for TiledDof {
 
     fn plan(input: &PlanInput<'_>) -> Decision<TiledDofParams> {
         let (f, camera) = (&input.facts, input.camera);
-        if camera.bokeh != BokehMode::Tiled {
-            return Decision::not_chosen();
-        }
-        if !f.dof_visible() {
-            return Decision::skip("no pixel is defocused by more than a pixel");
+        if let Some(gated) = input.dof_method_gate(BokehMode::Tiled) {
+            return gated;
         }
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();
