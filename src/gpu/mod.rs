@@ -27,7 +27,7 @@ pub enum GpuError {
     Loader(String),
     #[error("no Vulkan device found; install a driver (lavapipe: mesa-vulkan-drivers)")]
     NoDevice,
-    #[error("no Vulkan device matches --device {wanted:?}; devices found: {found}")]
+    #[error("no Vulkan device matches {wanted:?}; devices found: {found}")]
     DeviceNotFound { wanted: String, found: String },
     #[error("device {name:?} is unsuitable: {why}")]
     Unsuitable { name: String, why: String },

@@ -77,6 +77,17 @@ pub enum LensfunError {
     Converted { model: String, error: LensFileError, hint: String },
 }
 
+impl LensfunError {
+    /// The import option the error is about, if one is.
+    pub fn field(&self) -> Option<&'static str> {
+        match self {
+            LensfunError::BadOption { name, .. } => Some(name),
+            LensfunError::Converted { hint, .. } if !hint.is_empty() => Some("sensor_diagonal_mm"),
+            _ => None,
+        }
+    }
+}
+
 fn close_names(close: &[String]) -> String {
     if close.is_empty() {
         "no model names are close to it".to_string()
@@ -312,11 +323,11 @@ pub struct ImportOptions {
 impl ImportOptions {
     /// Every number given must be finite and positive.
     pub fn check(&self) -> Result<(), LensfunError> {
-        positive("focal_length_mm (--focal-length)", self.focal_length_mm)?;
-        positive("distance_m (--distance-m)", self.distance_m)?;
-        positive("f_number_min (--f-number-min)", self.f_number_min)?;
-        positive("focus_min_m (--focus-min-m)", self.focus_min_m)?;
-        positive("sensor_diagonal_mm (--sensor-diagonal-mm)", self.sensor_diagonal_mm)?;
+        positive("focal_length_mm", self.focal_length_mm)?;
+        positive("distance_m", self.distance_m)?;
+        positive("f_number_min", self.f_number_min)?;
+        positive("focus_min_m", self.focus_min_m)?;
+        positive("sensor_diagonal_mm", self.sensor_diagonal_mm)?;
         Ok(())
     }
 }
@@ -945,9 +956,9 @@ struct Settings {
 
 impl Settings {
     fn new(entry: &LensEntry, focal_length_mm: f64, options: &ImportOptions) -> Result<Settings, LensfunError> {
-        let given = positive("f_number_min (--f-number-min)", options.f_number_min)?;
+        let given = positive("f_number_min", options.f_number_min)?;
         let f_number_min = match (given, entry.f_number_min, f_number_from_model(&entry.model)) {
-            (Some(n), ..) => Setting { value: n, note: "given on the command line (--f-number-min)" },
+            (Some(n), ..) => Setting { value: n, note: "given in the import options (f_number_min)" },
             (None, Some(n), _) => Setting { value: n, note: "lensfun <aperture min>" },
             (None, None, Some(n)) => Setting { value: n, note: "from the model name (lensfun has no <aperture>)" },
             (None, None, None) => {
@@ -966,15 +977,15 @@ impl Settings {
                 note: "ASSUMED: f/16 (or f_number_min if larger); lensfun gives no smallest aperture",
             },
         };
-        let focus_min_m = match positive("focus_min_m (--focus-min-m)", options.focus_min_m)? {
-            Some(m) => Setting { value: m, note: "given on the command line (--focus-min-m)" },
+        let focus_min_m = match positive("focus_min_m", options.focus_min_m)? {
+            Some(m) => Setting { value: m, note: "given in the import options (focus_min_m)" },
             None => Setting {
                 value: 10.0 * focal_length_mm / 1000.0,
                 note: "ASSUMED: 10 focal lengths; lensfun does not give the closest focus",
             },
         };
         let blades = match options.blades {
-            Some(b) => Setting { value: b, note: "given on the command line (--blades)" },
+            Some(b) => Setting { value: b, note: "given in the import options (blades)" },
             None => Setting { value: 0, note: "ASSUMED: circular; lensfun does not give the blade count" },
         };
         Ok(Settings { f_number_min, f_number_max, focus_min_m, blades })
@@ -1029,10 +1040,9 @@ fn check_supported(entry: &LensEntry) -> Result<CalibrationSensor, LensfunError>
 fn convert(entry: &LensEntry, others: Vec<LensEntry>, options: &ImportOptions) -> Result<Imported, LensfunError> {
     options.check()?;
     let sensor = check_supported(entry)?;
-    let requested_mm = positive("focal_length_mm (--focal-length)", options.focal_length_mm)?;
-    let distance_m = positive("distance_m (--distance-m)", options.distance_m)?;
-    let diagonal_mm = positive("sensor_diagonal_mm (--sensor-diagonal-mm)", options.sensor_diagonal_mm)?
-        .unwrap_or(FULL_FRAME_DIAGONAL_MM);
+    let requested_mm = positive("focal_length_mm", options.focal_length_mm)?;
+    let distance_m = positive("distance_m", options.distance_m)?;
+    let diagonal_mm = positive("sensor_diagonal_mm", options.sensor_diagonal_mm)?.unwrap_or(FULL_FRAME_DIAGONAL_MM);
     let mut warnings = Vec::new();
     let selection = Selection::choose(entry, requested_mm, distance_m, &mut warnings)?;
     let settings = Settings::new(entry, selection.focal_length_mm, options)?;
@@ -1064,7 +1074,7 @@ fn convert(entry: &LensEntry, others: Vec<LensEntry>, options: &ImportOptions) -
         let hint = if extrapolated {
             format!(
                 ". The tables reach {target_mm:.2} mm but the calibration only {:.2} mm: give the sensor's \
-                     diagonal with --sensor-diagonal-mm (the calibration sensor's is {:.2} mm)",
+                     diagonal in sensor_diagonal_mm (the calibration sensor's is {:.2} mm)",
                 sensor.half_diagonal_mm(),
                 2.0 * sensor.half_diagonal_mm()
             )
@@ -1616,7 +1626,7 @@ mod tests {
         assert_eq!(db.import("Nameless 35mm", &options).unwrap().lens.f_number_min, 2.5);
         let options = ImportOptions { focus_min_m: Some(-1.0), ..Default::default() };
         let err = db.import("Nameless 35mm", &options).unwrap_err().to_string();
-        assert!(err.contains("focus_min_m (--focus-min-m) = -1 must be a positive number"), "{err}");
+        assert!(err.contains("focus_min_m = -1 must be a positive number"), "{err}");
     }
 
     #[test]
@@ -1662,7 +1672,7 @@ mod tests {
         let xml = "<distortion model=\"poly3\" focal=\"6\" k1=\"0.05\"/>";
         let db = database(&[lens("Compact 6mm f/2", 5.0, "", xml)]);
         let err = db.import("Compact 6mm f/2", &ImportOptions::default()).unwrap_err().to_string();
-        assert!(err.contains("--sensor-diagonal-mm (the calibration sensor's is 8.65 mm)"), "{err}");
+        assert!(err.contains("sensor_diagonal_mm (the calibration sensor's is 8.65 mm)"), "{err}");
         let options = ImportOptions { sensor_diagonal_mm: Some(8.65), ..Default::default() };
         assert!(db.import("Compact 6mm f/2", &options).is_ok());
     }

@@ -108,3 +108,17 @@ impl Plan {
 pub fn pass_order() -> String {
     PASS_ORDER.iter().enumerate().map(|(i, e)| format!("{}. {}\n", i + 1, e.name)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_readme_quotes_the_pass_order() {
+        let readme = include_str!("../../README.md");
+        let quoted = readme
+            .split("<!-- pass-order -->\n")
+            .nth(1)
+            .and_then(|rest| rest.split("<!-- /pass-order -->").next())
+            .expect("README.md has a pass-order block");
+        assert_eq!(quoted, super::pass_order(), "README.md's pass order differs from PASS_ORDER");
+    }
+}

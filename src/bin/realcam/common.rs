@@ -111,7 +111,10 @@ impl GpuArgs {
         if self.device.is_some() {
             options.device = self.device.clone();
         }
-        let gpu = Gpu::new(&options)?;
+        let gpu = Gpu::new(&options).map_err(|e| match e {
+            realcam::gpu::GpuError::DeviceNotFound { .. } => anyhow::anyhow!("{e} (--device or REALCAM_DEVICE)"),
+            e => e.into(),
+        })?;
         eprintln!("device: {}", gpu.info());
         Ok(gpu)
     }

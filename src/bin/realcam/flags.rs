@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 14] = [
+const FLAGS: [(&str, &str); 18] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -23,6 +23,10 @@ const FLAGS: [(&str, &str); 14] = [
     ("force", "--force"),
     ("depth_unit_m", "--depth-unit"),
     ("tables_path", "--write-tables"),
+    ("distance_m", "--distance-m"),
+    ("f_number_min", "--f-number-min"),
+    ("focus_min_m", "--focus-min-m"),
+    ("sensor_diagonal_mm", "--sensor-diagonal-mm"),
 ];
 
 /// The flag of a library field (the field's own name if it has none).
@@ -51,6 +55,12 @@ impl FieldError for CameraError {
 }
 
 impl FieldError for IoError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field()
+    }
+}
+
+impl FieldError for realcam::io::lensfun::LensfunError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()
     }

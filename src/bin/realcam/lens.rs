@@ -92,7 +92,7 @@ fn import_lensfun(args: &ImportLensfunArgs) -> Result<()> {
         blades: args.blades,
         sensor_diagonal_mm: args.sensor_diagonal_mm,
     };
-    let imported = import(&args.model, &options, args.lensfun_dir.as_deref())?;
+    let imported = import(&args.model, &options, args.lensfun_dir.as_deref()).name_flags()?;
     let crop = imported.entry.crop_factor.map_or_else(|| "not given".to_string(), |c| c.to_string());
     eprintln!("lensfun entry: {} (crop factor {crop})", imported.entry.at);
     for other in &imported.others {
