@@ -125,6 +125,15 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     // order that no case runs, or a compiled shader that no dispatch checked, fails the test.
     let gpu = gpu();
     let (mut ran, mut checked, mut failures) = (BTreeSet::new(), BTreeSet::new(), Vec::new());
+    // The bare pass of the benchmark is no pass of a render: check it on its own.
+    let copy = realcam::gpu::Kernel::new(&gpu).expect("copy pipeline");
+    let (_, checks) = realcam::tools::bench::run_bare_pass(&gpu, &copy, &busy_frame(20, 12), true).expect("bare pass");
+    for c in checks {
+        checked.insert(c.shader);
+        if let Err(e) = c.result {
+            failures.push(format!("bare pass: {e}"));
+        }
+    }
     for (name, frame, camera) in twin_cases() {
         let plan = planner::plan(&frame, &camera);
         let renderer = Renderer::new(&gpu, &plan).expect("pipelines");

@@ -17,6 +17,7 @@ pub mod barriers;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod coma;
+pub mod copy;
 pub mod diffraction;
 pub mod distortion;
 pub mod dof_classify;

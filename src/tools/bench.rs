@@ -2,13 +2,16 @@
 //! everywhere, for a range of CoC radii, with the fast path's error against the reference.
 //! Timings come from timestamp queries; the table names the device.
 
-use crate::gpu::{Gpu, GpuResult, Profile};
+use crate::gpu::{Gpu, GpuResult, Kernel, Profile, Recorder, TwinCheck};
 use crate::io::lens_file::LensFile;
 use crate::model::camera::{BokehMode, Camera, CameraRequest};
 use crate::model::frame::Frame;
+use crate::passes::copy::{self, CopyShader};
+use crate::passes::FrameImages;
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
 use crate::tools::metrics::{compare_rgba, ImageError};
+use ash::vk;
 
 const PIXEL_PITCH_MM: f64 = 0.01;
 
@@ -23,6 +26,8 @@ pub struct BenchRow {
     pub tiled_ms: f64,
     pub reference_ms: Option<f64>,
     pub error: Option<ImageError>,
+    /// The bare pass (read the frame, write it) at this resolution, in the same run.
+    pub bare_ms: f64,
 }
 
 #[derive(Clone, Debug)]
@@ -81,6 +86,40 @@ pub fn bench_frame(width: u32, height: u32, coc_radius_px: f64, camera: &Camera)
     Frame::new(width, height, color, vec![depth_m; (width * height) as usize])
 }
 
+/// The bare pass (src/passes/copy.rs) on `frame`: upload, copy, download; its profile, and the
+/// dispatch checked against its twin when `twin_checks` is set.
+pub fn run_bare_pass(
+    gpu: &Gpu,
+    kernel: &Kernel<CopyShader>,
+    frame: &Frame,
+    twin_checks: bool,
+) -> GpuResult<(Profile, Vec<TwinCheck>)> {
+    let mut rec =
+        if twin_checks { Recorder::with_twin_checks(gpu, "bare pass")? } else { Recorder::new(gpu, "bare pass")? };
+    rec.begin_pass("upload");
+    let color = rec.create_image("color (input)", frame.width, frame.height, vk::Format::R32G32B32A32_SFLOAT)?;
+    rec.upload_images(&[(&color, &frame.color)])?;
+    rec.end_pass();
+    let mut images = FrameImages::new(color, None);
+    copy::record(kernel, &mut rec, &mut images)?;
+    rec.begin_pass("download");
+    rec.download_image(images.color(), 4)?;
+    rec.end_pass();
+    let (profile, _, checks) = rec.submit_checked()?;
+    Ok((profile, checks))
+}
+
+/// GPU ms of the bare pass on a `width x height` frame: the median of `runs` after a warm-up.
+pub fn bare_pass_ms(gpu: &Gpu, width: u32, height: u32, runs: usize) -> GpuResult<f64> {
+    let kernel = Kernel::<CopyShader>::new(gpu)?;
+    let camera = bench_camera(width, height, BokehMode::Tiled);
+    let frame = bench_frame(width, height, 8.0, &camera);
+    let time = || run_bare_pass(gpu, &kernel, &frame, false).map(|(p, _)| p.pass_ms(copy::NAME).unwrap_or(f64::NAN));
+    time()?;
+    let times = (0..runs.max(1)).map(|_| time()).collect::<GpuResult<Vec<_>>>()?;
+    Ok(median(times))
+}
+
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(0.0)
@@ -94,6 +133,8 @@ fn dof_ms(profile: &Profile) -> f64 {
 pub fn run(gpu: &Gpu, options: &BenchOptions, mut progress: impl FnMut(&str)) -> GpuResult<Vec<BenchRow>> {
     let mut rows = Vec::new();
     for &(width, height) in &options.resolutions {
+        progress(&format!("{width}x{height}: the bare pass"));
+        let bare_ms = bare_pass_ms(gpu, width, height, options.runs)?;
         for &radius in &options.radii_px {
             progress(&format!("{width}x{height}, CoC radius {radius} px: tiled"));
             let camera = bench_camera(width, height, BokehMode::Tiled);
@@ -122,7 +163,7 @@ pub fn run(gpu: &Gpu, options: &BenchOptions, mut progress: impl FnMut(&str)) ->
                 reference_ms = Some(dof_ms(&reference.profile));
                 error = Some(compare_rgba(&out.rgba, &reference.rgba));
             }
-            rows.push(BenchRow { width, height, coc_radius_px: radius, tiled, tiled_ms, reference_ms, error });
+            rows.push(BenchRow { width, height, coc_radius_px: radius, tiled, tiled_ms, reference_ms, error, bare_ms });
         }
     }
     Ok(rows)
@@ -134,12 +175,17 @@ pub fn markdown(device: &str, command: &str, rows: &[BenchRow]) -> String {
     out += "Frame defocused everywhere (a textured plane with sparse highlights of 50x), 7-bladed aperture. \
             GPU ms from timestamp queries (median of the runs); error of the tiled path against the reference \
             (`--bokeh reference`), RGB, values clamped to [0,1] for the display RMSE.\n\n";
-    out += "| resolution | CoC radius px | tiled ms | vs radius 8 | reference ms | RMSE | display RMSE | PSNR dB | energy |\n";
-    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    out += "Every time is also given as a multiple of the bare pass (read the frame, write it: `glsl/copy.comp`) at the same \
+            resolution, measured in the same run.\n\n";
+    out += "| resolution | bare pass ms | CoC radius px | tiled ms | x bare | vs radius 8 | reference ms | x bare | RMSE | display RMSE | PSNR dB | energy |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         let at8 = rows.iter().find(|o| (o.width, o.height) == (r.width, r.height) && o.coc_radius_px == 8.0);
         let ratio = at8.map_or("".into(), |o| format!("{:.2}x", r.tiled_ms / o.tiled_ms));
-        let reference = r.reference_ms.map_or("(skipped)".into(), |ms| format!("{ms:.1}"));
+        let (reference, reference_x) = match r.reference_ms {
+            Some(ms) => (format!("{ms:.1}"), format!("{:.0}x", ms / r.bare_ms)),
+            None => ("(skipped)".into(), String::new()),
+        };
         let (rmse, display, psnr, energy) = match &r.error {
             Some(e) => (
                 format!("{:.4}", e.rmse),
@@ -150,8 +196,13 @@ pub fn markdown(device: &str, command: &str, rows: &[BenchRow]) -> String {
             None => Default::default(),
         };
         out += &format!(
-            "| {}x{} | {} | {:.1} | {ratio} | {reference} | {rmse} | {display} | {psnr} | {energy} |\n",
-            r.width, r.height, r.coc_radius_px, r.tiled_ms
+            "| {}x{} | {:.2} | {} | {:.1} | {:.0}x | {ratio} | {reference} | {reference_x} | {rmse} | {display} | {psnr} | {energy} |\n",
+            r.width,
+            r.height,
+            r.bare_ms,
+            r.coc_radius_px,
+            r.tiled_ms,
+            r.tiled_ms / r.bare_ms
         );
     }
     out += "\nTiled path, GPU ms per pass:\n\n| resolution | CoC radius px |";
