@@ -47,10 +47,12 @@ pub enum CameraField {
     CatsEye,
     MaxCocPx,
     Grain,
+    FlareThreshold,
+    FlareLight,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 11] = [
+    pub const ALL: [CameraField; 13] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -62,6 +64,8 @@ impl CameraField {
         CameraField::CatsEye,
         CameraField::MaxCocPx,
         CameraField::Grain,
+        CameraField::FlareThreshold,
+        CameraField::FlareLight,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -78,6 +82,8 @@ impl CameraField {
             CameraField::CatsEye => "cats_eye",
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
+            CameraField::FlareThreshold => "flare_threshold",
+            CameraField::FlareLight => "flare_lights",
         }
     }
 
@@ -95,6 +101,8 @@ impl CameraField {
             CameraField::CatsEye => "cat's eye",
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::FlareThreshold => "flare threshold",
+            CameraField::FlareLight => "a flare light's numbers",
         }
     }
 
@@ -219,6 +227,8 @@ pub struct Camera {
     pub coma: Option<crate::optics::distortion::HeightTable>,
     /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
     pub longitudinal_color_mm: Option<[f64; 2]>,
+    /// Lens flare: ghosts, starburst and halo around bright lights.
+    pub flare: crate::model::flare::FlareSettings,
 }
 
 /// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
@@ -262,13 +272,19 @@ pub struct CameraRequest {
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
+    /// Record lens flare where it would be visible.
+    pub flare: bool,
+    /// A pixel belongs to a light from this many times the sensor's saturation.
+    pub flare_threshold: f64,
+    /// Lights given explicitly.
+    pub flare_lights: Vec<crate::model::flare::FlareLight>,
 }
 
 impl Default for CameraRequest {
     /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
     /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
     /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
-    /// 64 px, tiled bokeh, no grain.
+    /// 64 px, tiled bokeh, no grain, lens flare from one stop over saturation.
     fn default() -> Self {
         CameraRequest {
             focal_length_mm: None,
@@ -291,20 +307,24 @@ impl Default for CameraRequest {
             bokeh: BokehMode::Tiled,
             grain: 0.0,
             seed: 0,
+            flare: true,
+            flare_threshold: crate::model::flare::FlareSettings::DEFAULT_THRESHOLD,
+            flare_lights: Vec::new(),
         }
     }
 }
 
 impl CameraRequest {
-    /// Depth of field alone: no exposure gain, vignetting or film curve, so pixel values stay
-    /// scene values, and no spherical aberration or cat's eye in the bokeh (which the
-    /// diffraction reference does not model); the rest as [`Default`].
+    /// Depth of field alone: no exposure gain, vignetting, film curve or lens flare, so pixel
+    /// values stay scene values, and no spherical aberration or cat's eye in the bokeh (which
+    /// the diffraction reference does not model); the rest as [`Default`].
     pub fn blur_only() -> CameraRequest {
         CameraRequest {
             spherical_aberration: Some(0.0),
             cats_eye: Some(0.0),
             exposure: false,
             vignetting: false,
+            flare: false,
             film: Some(FilmMode::Linear),
             ..CameraRequest::default()
         }
@@ -382,6 +402,12 @@ impl Camera {
             "0 (circular) or 3..32",
         )?;
         require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
+        require(CameraField::FlareThreshold, req.flare_threshold, req.flare_threshold > 0.0, "a positive factor")?;
+        if let Some(bad) = req.flare_lights.iter().find(|l| !l.is_valid()) {
+            let value =
+                [bad.x_px, bad.y_px, bad.area_px].into_iter().chain(bad.energy).find(|v| !v.is_finite() || *v < 0.0);
+            require(CameraField::FlareLight, value.unwrap_or(f64::NAN), false, "finite, with energy and area >= 0")?;
+        }
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
@@ -425,6 +451,28 @@ impl Camera {
             }),
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
+            flare: crate::model::flare::FlareSettings {
+                enabled: req.flare,
+                threshold: req.flare_threshold,
+                lights: req.flare_lights.clone(),
+                // The file was checked when it was read: its surfaces make a prescription.
+                prescription: (!lens_file.surfaces.is_empty())
+                    .then(|| {
+                        crate::optics::prescription::Prescription::from_specs(
+                            &lens_file.name,
+                            &lens_file.surfaces,
+                            "",
+                            "",
+                        )
+                    })
+                    .and_then(Result::ok)
+                    .map(std::sync::Arc::new),
+                coating_design_nm: lens_file.flare.coating_nm(),
+                halo: crate::optics::flare::starburst::Halo {
+                    fraction: lens_file.flare.halo_fraction,
+                    radius_mm: lens_file.flare.halo_radius_mm,
+                },
+            },
         })
     }
 

@@ -29,6 +29,10 @@ pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
 pub mod filter;
+pub mod flare;
+pub mod flare_lights;
+pub mod flare_tiles;
+pub mod ghost_sprites;
 pub mod longitudinal_color;
 pub mod scene;
 pub mod tiled_dof;
@@ -42,7 +46,8 @@ use std::sync::Arc;
 
 /// The pass order: every pass the renderer can record, in recording order. Depth of field
 /// comes first (it needs the pinhole image and its depth, before anything moves pixels), then the
-/// lens's aberrations of the image, then the light's falloff and the film.
+/// lens's aberrations of the image, its flare around the bright lights, then the light's
+/// falloff and the film.
 pub static PASS_ORDER: &[PassEntry] = &[
     entry::<coc::Coc>(),
     entry::<bokeh_gather::BokehGather>(),
@@ -52,6 +57,7 @@ pub static PASS_ORDER: &[PassEntry] = &[
     entry::<distortion::Distortion>(),
     entry::<astigmatism::Astigmatism>(),
     entry::<coma::Coma>(),
+    entry::<flare::Flare>(),
     entry::<vignette::Vignette>(),
     entry::<film::Film>(),
 ];

@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 18] = [
+const FLAGS: [(&str, &str); 20] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -20,6 +20,8 @@ const FLAGS: [(&str, &str); 18] = [
     ("cats_eye", "--cats-eye"),
     ("max_coc_px", "--max-coc"),
     ("grain", "--grain"),
+    ("flare_threshold", "--flare-threshold"),
+    ("flare_lights", "--flare-light"),
     ("force", "--force"),
     ("depth_unit_m", "--depth-unit"),
     ("tables_path", "--write-tables"),
