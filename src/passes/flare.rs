@@ -134,6 +134,7 @@ pub fn ghost_from_table(table: &[f32], g: usize, c: usize) -> GhostChannel {
         sensor: RayMatrix { a: t[1] as f64, b: 0.0, c: 0.0, d: 0.0 },
         centre_mm: t[0] as f64,
         aperture_radius_mm: t[2] as f64,
+        aperture_crossing: 0,
         flip: t[3] as f64,
         clips,
         energy_ratio: t[4] as f64,

@@ -188,6 +188,9 @@ pub struct GhostChannel {
     pub centre_mm: f64,
     /// Radius of the entrance-plane region the aperture lets through: r_stop / |a_stop| (mm).
     pub aperture_radius_mm: f64,
+    /// The event at which the path crosses the stop as the aperture (the crossing that lets
+    /// the least through).
+    pub aperture_crossing: usize,
     /// +1: the aperture's image appears as the bokeh behind the focus plane does (upright); -1
     /// turned by 180 degrees. -sign(A a_stop): the sensor image is shown turned.
     pub flip: f64,
@@ -264,11 +267,12 @@ impl GhostCatalogue {
                     let lambda_nm = super::channel_nm(c);
                     let m = path_matrix(lens, &events, lambda_nm);
                     // The aperture: the stop crossing that lets the least through.
-                    let aperture = m
+                    let (aperture_crossing, aperture) = m
                         .crossings
                         .iter()
-                        .filter(|x| x.surface == stop && x.a.abs() > 1e-12)
-                        .max_by(|p, q| p.a.abs().total_cmp(&q.a.abs()))?;
+                        .enumerate()
+                        .filter(|(_, x)| x.surface == stop && x.a.abs() > 1e-12)
+                        .max_by(|p, q| p.1.a.abs().total_cmp(&q.1.a.abs()))?;
                     let aperture_radius_mm = r_stop / aperture.a.abs();
                     let clips: Vec<Clip> = m
                         .crossings
@@ -290,6 +294,7 @@ impl GhostCatalogue {
                         sensor: m.sensor,
                         centre_mm: m.sensor.b - m.sensor.a * aperture.b / aperture.a,
                         aperture_radius_mm,
+                        aperture_crossing,
                         flip: if m.sensor.a * aperture.a > 0.0 { -1.0 } else { 1.0 },
                         clips,
                         energy_ratio: throughput / direct.transmission[c] * area,
@@ -391,6 +396,52 @@ impl GhostShape {
         let d_aperture = aperture.sdf(o, self.radius_px).max((o[0] * o[0] + o[1] * o[1]).sqrt() - self.radius_px);
         let (dx, dy) = (p[0] - self.clip_centre_px[0], p[1] - self.clip_centre_px[1]);
         d_aperture.max((dx * dx + dy * dy).sqrt() - self.clip_radius_px)
+    }
+}
+
+/// Area, centroid and root-mean-square radius of a shape (or an image of traced light).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Moments {
+    pub area_px2: f64,
+    pub centroid_px: [f64; 2],
+    pub rms_radius_px: f64,
+}
+
+impl GhostShape {
+    /// The drawn shape's moments (its inside, sdf < 0), integrated on a grid of `per_px`
+    /// samples per pixel over its bounds.
+    pub fn moments(&self, aperture: &super::AperturePolygon, per_px: usize) -> Option<Moments> {
+        let r = self.radius_px;
+        let lo = [
+            (self.centre_px[0] - r).max(self.clip_centre_px[0] - self.clip_radius_px),
+            (self.centre_px[1] - r).max(self.clip_centre_px[1] - self.clip_radius_px),
+        ];
+        let hi = [
+            (self.centre_px[0] + r).min(self.clip_centre_px[0] + self.clip_radius_px),
+            (self.centre_px[1] + r).min(self.clip_centre_px[1] + self.clip_radius_px),
+        ];
+        if !(lo[0] < hi[0] && lo[1] < hi[1]) {
+            return None;
+        }
+        let h = 1.0 / per_px.max(1) as f64;
+        let (nx, ny) = (((hi[0] - lo[0]) / h).ceil() as usize, ((hi[1] - lo[1]) / h).ceil() as usize);
+        let points = (0..nx * ny)
+            .map(|i| [lo[0] + ((i % nx) as f64 + 0.5) * h, lo[1] + ((i / nx) as f64 + 0.5) * h])
+            .filter(|&p| self.sdf(p, aperture) < 0.0);
+        Moments::of(points.map(|p| (p, h * h)))
+    }
+}
+
+impl Moments {
+    /// Of weighted points (position, weight).
+    pub fn of(points: impl Iterator<Item = ([f64; 2], f64)> + Clone) -> Option<Moments> {
+        let (w, sx, sy) = points.clone().fold((0.0, 0.0, 0.0), |(w, x, y), (p, v)| (w + v, x + v * p[0], y + v * p[1]));
+        if !(w > 0.0) {
+            return None;
+        }
+        let c = [sx / w, sy / w];
+        let m2: f64 = points.map(|(p, v)| v * ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2))).sum();
+        Some(Moments { area_px2: w, centroid_px: c, rms_radius_px: (m2 / w).sqrt() })
     }
 }
 
