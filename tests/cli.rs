@@ -598,7 +598,8 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
 fn planner_skips_invisible_effects_and_output_equals_input() {
     let dir = TestDir::new("all_skipped");
     let (w, h) = (64u32, 48u32);
-    dir.scene("p", &SynthScene::point_on_plane(w, h, 2.0, [50.0; 3]));
+    // A point just under 2x saturation: no light for the lens flare either.
+    dir.scene("p", &SynthScene::point_on_plane(w, h, 2.0, [1.9; 3]));
     let args = s(&[
         "--color",
         &dir.arg("p_color.exr"),
@@ -617,20 +618,21 @@ fn planner_skips_invisible_effects_and_output_equals_input() {
     ]);
     let run = render(&dir, &args).success();
     let err = &run.stderr;
-    for pass in ["coc", "bokeh_tiled", "vignette", "film"] {
+    for pass in ["coc", "bokeh_tiled", "flare", "vignette", "film"] {
         assert_contains(err, &format!("[skip] {pass}"));
         assert!(!err.contains(&format!("[run ] {pass}")), "{pass} runs:\n{err}");
     }
     assert_contains(err, "depth of field is invisible");
     assert_contains(err, "turned off (--no-vignetting)");
     assert_contains(err, "linear film with exposure off and no grain: the sensor value is the scene value");
+    assert_contains(err, "no pixel reaches 2 x saturation (scene value 2.0000) and no light is given");
 
     let input = read_exr_rgba(&dir.join("p_color.exr")).unwrap();
     let out = read_exr_rgba(&dir.join("out.exr")).unwrap();
     assert_eq!((out.width, out.height, out.channels), (w, h, 4));
     let worst = input.data.iter().zip(&out.data).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst <= 1e-6, "output differs from input by up to {worst}");
-    assert_eq!(out.get(w / 2, h / 2, 0), 50.0);
+    assert_eq!(out.get(w / 2, h / 2, 0), 1.9);
     // The depth pass itself was not modified either.
     let depth = read_exr_channel(&dir.join("p_depth.exr"), "Z").unwrap();
     assert!(depth.data.iter().all(|&d| d == 2.0));
