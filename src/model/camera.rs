@@ -47,10 +47,11 @@ pub enum CameraField {
     CatsEye,
     MaxCocPx,
     Grain,
+    BladeCurvature,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 11] = [
+    pub const ALL: [CameraField; 12] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -62,6 +63,7 @@ impl CameraField {
         CameraField::CatsEye,
         CameraField::MaxCocPx,
         CameraField::Grain,
+        CameraField::BladeCurvature,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -78,6 +80,7 @@ impl CameraField {
             CameraField::CatsEye => "cats_eye",
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
+            CameraField::BladeCurvature => "blade_curvature",
         }
     }
 
@@ -95,6 +98,7 @@ impl CameraField {
             CameraField::CatsEye => "cat's eye",
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::BladeCurvature => "blade curvature",
         }
     }
 
@@ -110,6 +114,17 @@ impl CameraField {
         };
         format!("{} {value}{unit}", self.label())
     }
+}
+
+/// How the circle of confusion follows depth (see [`crate::optics::ThinLens::coc_renderer_mm`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CocModel {
+    /// Kyaw 2013 eq 5.3: the film at the image distance v, the exit pupil v/(N' P).
+    #[default]
+    Physical,
+    /// The renderers' thin lens: aperture f/N at the pinhole, image scale f.
+    Renderer,
 }
 
 /// Which depth-of-field method renders the bokeh.
@@ -200,6 +215,8 @@ pub struct Camera {
     /// User clamp on |CoC| in pixels.
     pub max_coc_px: f64,
     pub bokeh: BokehMode,
+    /// How the CoC follows depth.
+    pub coc_model: CocModel,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
@@ -258,6 +275,10 @@ pub struct CameraRequest {
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
+    /// The lens file's (or its default) when None.
+    pub coc_model: Option<CocModel>,
+    /// Blade curvature, 0 straight .. 1 round; the lens file's when None.
+    pub blade_curvature: Option<f64>,
     /// Sensor noise at ISO 100 ([`Camera::grain`]); 0: none.
     pub grain: f64,
     /// Seed of the noise.
@@ -289,6 +310,8 @@ impl Default for CameraRequest {
             max_coc_px: 64.0,
             force: false,
             bokeh: BokehMode::Tiled,
+            coc_model: None,
+            blade_curvature: None,
             grain: 0.0,
             seed: 0,
         }
@@ -341,7 +364,7 @@ impl Camera {
         let out_of_range = |field: CameraField, value: f64, allowed: String| {
             Err(CameraError::OutOfRange { field, value, lens: lens_file.name.clone(), allowed })
         };
-        if !req.force {
+        if !req.force && !lens_file.ideal {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
                 let allowed = format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max);
                 return out_of_range(CameraField::FNumber, f_number, allowed);
@@ -382,13 +405,18 @@ impl Camera {
             "0 (circular) or 3..32",
         )?;
         require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
+        if let Some(c) = req.blade_curvature {
+            require(CameraField::BladeCurvature, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
+        }
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
             aperture: ApertureShape {
                 blades,
                 rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
-                curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
+                curvature: req
+                    .blade_curvature
+                    .unwrap_or_else(|| lens_file.aperture.curvature_at(f_number, lens_file.f_number_min)),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
                 // A requested cat's eye holds at the frame corner; the lens file's may name its height.
@@ -406,10 +434,15 @@ impl Camera {
             iso: req.iso,
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
-            vignetting: req.vignetting,
+            vignetting: req.vignetting && lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc_px: req.max_coc_px,
             bokeh: req.bokeh,
+            coc_model: req.coc_model.or(lens_file.coc_model).unwrap_or(if lens_file.ideal {
+                CocModel::Renderer
+            } else {
+                CocModel::Physical
+            }),
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             grain: req.grain,
@@ -426,6 +459,15 @@ impl Camera {
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
         })
+    }
+
+    /// The signed CoC diameter (mm on the film) of a point at `object_distance_mm`, by the
+    /// camera's CoC model.
+    pub fn coc_mm(&self, object_distance_mm: f64) -> f64 {
+        match self.coc_model {
+            CocModel::Physical => self.lens.coc_mm(object_distance_mm),
+            CocModel::Renderer => self.lens.coc_renderer_mm(object_distance_mm),
+        }
     }
 
     /// Pixel pitch on the film for an image of this size.

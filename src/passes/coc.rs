@@ -5,7 +5,7 @@ use super::barriers::overwrite;
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
 use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use crate::model::camera::{BokehMode, Camera};
+use crate::model::camera::{BokehMode, Camera, CocModel};
 use crate::model::frame::Frame;
 use crate::optics::ThinLens;
 use ash::vk;
@@ -46,7 +46,7 @@ pub fn table_data(table: Option<&crate::optics::distortion::HeightTable>) -> Vec
 impl CocPush {
     /// The camera's CoC on this frame (its size and optical centre), before any channel offset.
     pub fn for_frame(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> CocPush {
-        CocPush::new(
+        let push = CocPush::new(
             &camera.lens,
             pixel_pitch_mm,
             camera.max_coc_px,
@@ -54,7 +54,21 @@ impl CocPush {
             frame.height,
             frame.centre_px,
             camera.field_curvature.as_ref(),
-        )
+        );
+        match camera.coc_model {
+            CocModel::Physical => push,
+            // The renderers' CoC, f^2/N (1/S - 1/u) (ThinLens::coc_renderer_mm); a film offset
+            // (field curvature) scales with it: aperture_px v = coc_scale, as in eq 5.3's form.
+            CocModel::Renderer => {
+                let f = camera.lens.focal_length_mm;
+                let scale_px_mm = f * f / camera.lens.f_number / pixel_pitch_mm;
+                CocPush {
+                    coc_scale_px_mm: scale_px_mm as f32,
+                    aperture_px: (scale_px_mm / camera.lens.image_distance_mm()) as f32,
+                    ..push
+                }
+            }
+        }
     }
 
     /// `field_curvature`: the film-plane offset (mm) of the sharp image surface against height,

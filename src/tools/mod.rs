@@ -4,5 +4,6 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod error_budget;
 pub mod metrics;
 pub mod synth;

@@ -27,6 +27,12 @@ pub struct AccuracyArgs {
     /// Clamp on the CoC diameter in pixels.
     #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
     max_coc_px: f64,
+    /// Ray-traced ground truth (EXR of the frame's size): compare the pinhole input and the tiled
+    /// and reference depth of field with it (energy-matched, clamped RMSE and its error budget)
+    /// instead of running every method against the diffraction reference. The camera's lens
+    /// and settings are used as given (e.g. --lens ideal).
+    #[arg(long = "ground-truth", value_name = "EXR")]
+    ground_truth: Option<PathBuf>,
     /// Folder for accuracy.md, accuracy.csv and accuracy.svg.
     #[arg(long = "out-dir", default_value = "accuracy")]
     out_dir: PathBuf,
@@ -47,6 +53,30 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let sources = PassSources { depth_path: args.depth.clone(), ..PassSources::new(&args.color) };
     let frame = Frame::from_passes(load_passes(&sources).name_flags()?, &camera, DepthKind::Planar);
     let gpu = args.gpu.open()?;
+    if let Some(path) = &args.ground_truth {
+        let truth = realcam::io::read_exr_rgba(path)?;
+        if (truth.width, truth.height) != (frame.width, frame.height) {
+            anyhow::bail!(
+                "--ground-truth {}: {}x{} px, but the frame is {}x{} px",
+                path.display(),
+                truth.width,
+                truth.height,
+                frame.width,
+                frame.height
+            );
+        }
+        let bar = progress_bar(2);
+        let results = realcam::tools::accuracy::against_ground_truth(&gpu, &frame, &camera, &truth.data, |m| {
+            bar.set_message(m.to_string());
+            bar.inc(1);
+        })?;
+        bar.finish_and_clear();
+        let table = realcam::tools::accuracy::ground_truth_markdown(&gpu.info().to_string(), &command_line(), &results);
+        print!("{table}");
+        std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
+        write_text(&args.out_dir.join("ground-truth.md"), &table)?;
+        return Ok(());
+    }
     let bar = progress_bar(7);
     let results = realcam::tools::accuracy::run(&gpu, &frame, &camera, |m| {
         bar.set_message(m.to_string());

@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 18] = [
+const FLAGS: [(&str, &str); 19] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -16,6 +16,7 @@ const FLAGS: [(&str, &str); 18] = [
     ("iso", "--iso"),
     ("nits_per_unit", "--nits-per-unit"),
     ("blades", "--blades"),
+    ("blade_curvature", "--blade-curvature"),
     ("spherical_aberration", "--spherical-aberration"),
     ("cats_eye", "--cats-eye"),
     ("max_coc_px", "--max-coc"),

@@ -100,6 +100,9 @@ pub struct RenderArgs {
     /// Aperture rotation in degrees; default from the lens file.
     #[arg(long = "blade-rotation")]
     blade_rotation_deg: Option<f64>,
+    /// Blade curvature, 0 (straight blades: a polygon) .. 1 (round); default from the lens file.
+    #[arg(long = "blade-curvature")]
+    blade_curvature: Option<f64>,
     /// Spherical aberration in the bokeh: an amount in [-1, 1] (> 0 under-corrected: soft
     /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
     #[arg(long = "spherical-aberration")]
@@ -191,6 +194,7 @@ impl RenderArgs {
             nits_per_unit: self.nits_per_unit,
             blades: self.blades,
             blade_rotation_deg: self.blade_rotation_deg,
+            blade_curvature: self.blade_curvature,
             spherical_aberration,
             cats_eye: self.cats_eye,
             exposure: !self.no_exposure,
