@@ -217,6 +217,9 @@ pub struct Camera {
     pub bokeh: BokehMode,
     /// How the CoC follows depth.
     pub coc_model: CocModel,
+    /// At anti-aliased depth edges, give each pixel the depth of the layer that brings most of
+    /// its light (the CoC pass); off: the depth as stored.
+    pub resolve_depth_edges: bool,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
@@ -279,6 +282,8 @@ pub struct CameraRequest {
     pub coc_model: Option<CocModel>,
     /// Blade curvature, 0 straight .. 1 round; the lens file's when None.
     pub blade_curvature: Option<f64>,
+    /// Resolve anti-aliased depth edges ([`Camera::resolve_depth_edges`]).
+    pub resolve_depth_edges: bool,
     /// Sensor noise at ISO 100 ([`Camera::grain`]); 0: none.
     pub grain: f64,
     /// Seed of the noise.
@@ -312,6 +317,7 @@ impl Default for CameraRequest {
             bokeh: BokehMode::Tiled,
             coc_model: None,
             blade_curvature: None,
+            resolve_depth_edges: true,
             grain: 0.0,
             seed: 0,
         }
@@ -443,6 +449,7 @@ impl Camera {
             } else {
                 CocModel::Physical
             }),
+            resolve_depth_edges: req.resolve_depth_edges,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             grain: req.grain,

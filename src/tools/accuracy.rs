@@ -35,14 +35,14 @@ fn methods() -> Vec<Method> {
         Method { name: "diffraction (reference)".into(), mode: BokehMode::Diffraction, adjust: Box::new(|_| ()) },
         Method { name: "geometric full gather".into(), mode: BokehMode::Reference, adjust: Box::new(|_| ()) },
     ];
-    // The tiled path's quality settings: half-resolution rings and the exact-gather radius.
-    for (rings, small_radius_px) in [(4, 4.0f32), (8, 4.0), (8, 8.0), (12, 8.0), (16, 16.0)] {
+    // The tiled path's quality setting: the CoC radius up to which it gathers exactly at full
+    // resolution (beyond it, on the pyramid).
+    for small_radius_px in [1.0f32, 2.0, 3.0, 4.0, 8.0] {
         list.push(Method {
-            name: format!("tiled, {rings} rings, exact up to {small_radius_px} px"),
+            name: format!("tiled, exact up to {small_radius_px} px"),
             mode: BokehMode::Tiled,
             adjust: Box::new(move |p: &mut Plan| {
                 for t in p.params_mut::<crate::passes::tiled_dof::TiledDof>() {
-                    t.rings = rings;
                     t.small_radius_px = small_radius_px;
                 }
             }),
@@ -165,7 +165,14 @@ pub fn ground_truth_markdown(device: &str, command: &str, results: &[GroundTruth
         let shares: Vec<String> = r
             .budget
             .iter()
-            .map(|b| format!("{:.0}% of the error ({:.1}% of the pixels, RMSE {:.4})", 100.0 * b.error_share, 100.0 * b.pixel_share, b.rmse))
+            .map(|b| {
+                format!(
+                    "{:.0}% of the error ({:.1}% of the pixels, RMSE {:.4})",
+                    100.0 * b.error_share,
+                    100.0 * b.pixel_share,
+                    b.rmse
+                )
+            })
             .collect();
         out += &format!(
             "| {} | {:.1} | {:.4} | {} | {:+.3}% |\n",

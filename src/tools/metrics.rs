@@ -96,7 +96,8 @@ mod tests {
         // of 100 against 10: both clamp to 4 after matching, only the other pixel differs.
         let e = compare_rgba(&[2.0, 2.0, 2.0, 1.0, 4.0, 4.0, 4.0, 1.0], &[1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 1.0]);
         assert!(e.rmse_matched.abs() < 1e-12);
-        let e = compare_rgba(&[100.0, 100.0, 100.0, 1.0, 1.0, 1.0, 1.0, 1.0], &[10.0, 10.0, 10.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        let e =
+            compare_rgba(&[100.0, 100.0, 100.0, 1.0, 1.0, 1.0, 1.0, 1.0], &[10.0, 10.0, 10.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
         // scale = 11 / 101; pixel 2: 11/101 vs 1; pixel 1: min(1100/101, 4) = 4 vs 4.
         let expected = ((1.0f64 - 11.0 / 101.0).powi(2) * 3.0 / 6.0).sqrt();
         assert!((e.rmse_matched - expected).abs() < 1e-9, "{} vs {expected}", e.rmse_matched);

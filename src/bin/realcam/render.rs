@@ -103,6 +103,11 @@ pub struct RenderArgs {
     /// Blade curvature, 0 (straight blades: a polygon) .. 1 (round); default from the lens file.
     #[arg(long = "blade-curvature")]
     blade_curvature: Option<f64>,
+    /// Use the depth pass as stored at anti-aliased edges. By default a pixel at an edge takes
+    /// the depth of the layer that brings most of its light (renderers filter the colour pass
+    /// but keep one depth sample per pixel).
+    #[arg(long = "keep-edge-depth")]
+    keep_edge_depth: bool,
     /// Spherical aberration in the bokeh: an amount in [-1, 1] (> 0 under-corrected: soft
     /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
     #[arg(long = "spherical-aberration")]
@@ -195,6 +200,7 @@ impl RenderArgs {
             blades: self.blades,
             blade_rotation_deg: self.blade_rotation_deg,
             blade_curvature: self.blade_curvature,
+            resolve_depth_edges: !self.keep_edge_depth,
             spherical_aberration,
             cats_eye: self.cats_eye,
             exposure: !self.no_exposure,
