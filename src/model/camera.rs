@@ -47,10 +47,15 @@ pub enum CameraField {
     CatsEye,
     MaxCocPx,
     Grain,
+    Fps,
+    ShutterAngleDeg,
+    ShutterRamp,
+    RollingShutterS,
+    MaxBlurPx,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 11] = [
+    pub const ALL: [CameraField; 16] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -62,6 +67,11 @@ impl CameraField {
         CameraField::CatsEye,
         CameraField::MaxCocPx,
         CameraField::Grain,
+        CameraField::Fps,
+        CameraField::ShutterAngleDeg,
+        CameraField::ShutterRamp,
+        CameraField::RollingShutterS,
+        CameraField::MaxBlurPx,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -78,6 +88,11 @@ impl CameraField {
             CameraField::CatsEye => "cats_eye",
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
+            CameraField::Fps => "fps",
+            CameraField::ShutterAngleDeg => "shutter_angle_deg",
+            CameraField::ShutterRamp => "shutter_ramp",
+            CameraField::RollingShutterS => "rolling_shutter_s",
+            CameraField::MaxBlurPx => "max_blur_px",
         }
     }
 
@@ -95,6 +110,11 @@ impl CameraField {
             CameraField::CatsEye => "cat's eye",
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::Fps => "frame rate",
+            CameraField::ShutterAngleDeg => "shutter angle",
+            CameraField::ShutterRamp => "shutter curve ramp",
+            CameraField::RollingShutterS => "rolling-shutter readout time",
+            CameraField::MaxBlurPx => "largest motion blur",
         }
     }
 
@@ -219,7 +239,38 @@ pub struct Camera {
     pub coma: Option<crate::optics::distortion::HeightTable>,
     /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
     pub longitudinal_color_mm: Option<[f64; 2]>,
+    /// The shutter in time and the motion-blur method.
+    pub motion: Motion,
 }
+
+/// Which motion-blur method renders the velocity pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MotionBlurMode {
+    /// The tiled reconstruction gather (src/passes/motion_blur.rs): a fixed sample count.
+    #[default]
+    Fast,
+    /// Every source pixel scattered along its path at many sub-frame times with depth ordering
+    /// (src/passes/motion_reference.rs): the accuracy reference, cost grows with the blur length.
+    Reference,
+    /// No motion blur.
+    Off,
+}
+
+/// The shutter in time: the frame rate that turns pixels per frame into pixels per exposure,
+/// when the shutter is open and how, and the motion-blur method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    pub fps: f64,
+    /// False: the user gave no frame rate and `fps` is the default.
+    pub fps_given: bool,
+    pub timing: crate::optics::shutter::ShutterTiming,
+    pub mode: MotionBlurMode,
+    /// Blur longer than this (px) is clamped.
+    pub max_blur_px: f64,
+}
+
+/// The frame rate when none is given (film, Blender's and Nuke's default).
+pub const DEFAULT_FPS: f64 = 24.0;
 
 /// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
 /// command line's defaults; set what differs with `..CameraRequest::default()`.
@@ -262,6 +313,19 @@ pub struct CameraRequest {
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
+    /// Frames per second of the sequence; [`DEFAULT_FPS`] when None.
+    pub fps: Option<f64>,
+    /// The shutter as an angle (degrees of a frame) instead of `shutter_s`; the exposure uses the
+    /// time it makes.
+    pub shutter_angle_deg: Option<f64>,
+    pub shutter_position: crate::optics::shutter::ShutterPosition,
+    pub shutter_curve: crate::optics::shutter::ShutterCurve,
+    /// A rolling (focal-plane) shutter: the readout time from the first line to the last.
+    pub rolling_shutter_s: Option<f64>,
+    pub rolling_direction: crate::optics::shutter::RollingDirection,
+    pub motion_blur: MotionBlurMode,
+    /// Clamp on the motion blur length in pixels.
+    pub max_blur_px: f64,
 }
 
 impl Default for CameraRequest {
@@ -291,6 +355,14 @@ impl Default for CameraRequest {
             bokeh: BokehMode::Tiled,
             grain: 0.0,
             seed: 0,
+            fps: None,
+            shutter_angle_deg: None,
+            shutter_position: Default::default(),
+            shutter_curve: Default::default(),
+            rolling_shutter_s: None,
+            rolling_direction: Default::default(),
+            motion_blur: MotionBlurMode::Fast,
+            max_blur_px: 512.0,
         }
     }
 }
@@ -364,7 +436,26 @@ impl Camera {
                 Err(CameraError::Invalid { field, value, allowed })
             }
         };
-        require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
+        let fps = req.fps.unwrap_or(DEFAULT_FPS);
+        require(CameraField::Fps, fps, fps > 0.0, "a positive number of frames per second")?;
+        if let Some(angle) = req.shutter_angle_deg {
+            require(CameraField::ShutterAngleDeg, angle, angle > 0.0 && angle <= 360.0, "in (0, 360] degrees")?;
+        }
+        // A shutter angle is a time: angle / 360 of a frame. The exposure uses it too.
+        let shutter_s = req.shutter_angle_deg.map_or(req.shutter_s, |angle| angle / 360.0 / fps);
+        require(CameraField::ShutterS, shutter_s, shutter_s > 0.0, "a positive number")?;
+        if let crate::optics::shutter::ShutterCurve::Trapezoid { ramp } = req.shutter_curve {
+            require(CameraField::ShutterRamp, ramp, ramp > 0.0 && ramp <= 0.5, "in (0, 0.5] of the open time")?;
+        }
+        if let Some(r) = req.rolling_shutter_s {
+            require(CameraField::RollingShutterS, r, r >= 0.0, "a time >= 0 s")?;
+        }
+        require(CameraField::MaxBlurPx, req.max_blur_px, req.max_blur_px > 0.0, "a positive number of pixels")?;
+        let mut timing =
+            crate::optics::shutter::ShutterTiming::new(shutter_s, fps, req.shutter_position, req.shutter_curve);
+        if let Some(r) = req.rolling_shutter_s {
+            timing = timing.with_rolling(r, fps, req.rolling_direction);
+        }
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
         require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
@@ -402,7 +493,7 @@ impl Camera {
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),
-            shutter_s: req.shutter_s,
+            shutter_s,
             iso: req.iso,
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
@@ -425,6 +516,13 @@ impl Camera {
             }),
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
+            motion: Motion {
+                fps,
+                fps_given: req.fps.is_some(),
+                timing,
+                mode: req.motion_blur,
+                max_blur_px: req.max_blur_px,
+            },
         })
     }
 
