@@ -623,19 +623,22 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
             allowed: "a finite, non-zero factor",
         });
     }
-    let (velocity_px, velocity_prev_px, velocity_format) =
-        match find_velocity(vf, src.velocity_channels.as_deref(), src.velocity_format)? {
-            Some(v) => {
-                let first = v.next.as_ref().or(v.prev.as_ref()).map(|c| c.x).unwrap_or(c0);
-                let mut chans = Vec::new();
-                for c in v.next.iter().chain(&v.prev) {
-                    same_size("color", &cf, c0, "velocity", vf, c.x)?;
-                    same_size("velocity", vf, c.x, "velocity", vf, c.y)?;
-                    chans.extend([c.x, c.y]);
-                }
-                origins.push(("velocity", first.origin));
-                // Per-frame pixels from the format's own unit.
-                let factor = match v.format {
+    let (velocity_px, velocity_prev_px, velocity_format) = match find_velocity(
+        vf,
+        src.velocity_channels.as_deref(),
+        src.velocity_format,
+    )? {
+        Some(v) => {
+            let first = v.next.as_ref().or(v.prev.as_ref()).map(|c| c.x).unwrap_or(c0);
+            let mut chans = Vec::new();
+            for c in v.next.iter().chain(&v.prev) {
+                same_size("color", &cf, c0, "velocity", vf, c.x)?;
+                same_size("velocity", vf, c.x, "velocity", vf, c.y)?;
+                chans.extend([c.x, c.y]);
+            }
+            origins.push(("velocity", first.origin));
+            // Per-frame pixels from the format's own unit.
+            let factor = match v.format {
                     VelocityFormat::Ndc => [0.5 * c0.size.0 as f32, 0.5 * c0.size.1 as f32],
                     VelocityFormat::Arnold => match src.velocity_interval_frames {
                         Some(i) if i.is_finite() && i > 0.0 => [1.0 / i as f32; 2],
@@ -659,49 +662,49 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
                     },
                     _ => [1.0, 1.0],
                 };
-                let (scale, flip) = (src.velocity_scale as f32, src.velocity_flip_y);
-                let mut nonfinite = 0u64;
-                let next = v.next.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
-                let prev = v.prev.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
-                if nonfinite > 0 {
-                    log::warn!("velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0", vf.path.display());
-                }
-                let mut adjust = String::new();
-                if scale != 1.0 {
-                    adjust += &format!(", scaled by {scale}");
-                }
-                if flip {
-                    adjust += ", y flipped";
-                }
-                report.push(format!(
-                    "velocity: \"{}\" channels {} ({}{adjust}), {}{}",
-                    vf.path.display(),
-                    names(&chans),
-                    v.rule,
-                    first.type_name(),
-                    if nonfinite > 0 { format!(", {nonfinite} NaN/Inf value(s) replaced by 0") } else { String::new() }
-                ));
-                // Only the previous-frame vector: constant velocity gives the next one.
-                let next = match (next, &prev) {
-                    (Some(n), _) => n,
-                    (None, Some(p)) => negated(p),
-                    (None, None) => return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR)),
-                };
-                let prev = if v.next.is_some() { prev } else { None };
-                (Some(next), prev, Some(v.format))
+            let (scale, flip) = (src.velocity_scale as f32, src.velocity_flip_y);
+            let mut nonfinite = 0u64;
+            let next = v.next.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
+            let prev = v.prev.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
+            if nonfinite > 0 {
+                log::warn!("velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0", vf.path.display());
             }
-            None if explicit || src.require_velocity => {
-                let looked_for = match src.velocity_format {
-                    VelocityFormat::Auto => VELOCITY_LOOKED_FOR.to_string(),
-                    f => format!("{} (the {} format)", VELOCITY_LOOKED_FOR, f.name()),
-                };
-                return Err(vf.missing("velocity", &looked_for));
+            let mut adjust = String::new();
+            if scale != 1.0 {
+                adjust += &format!(", scaled by {scale}");
             }
-            None => {
-                report.push(format!("velocity: none (no velocity channels in \"{}\")", vf.path.display()));
-                (None, None, None)
+            if flip {
+                adjust += ", y flipped";
             }
-        };
+            report.push(format!(
+                "velocity: \"{}\" channels {} ({}{adjust}), {}{}",
+                vf.path.display(),
+                names(&chans),
+                v.rule,
+                first.type_name(),
+                if nonfinite > 0 { format!(", {nonfinite} NaN/Inf value(s) replaced by 0") } else { String::new() }
+            ));
+            // Only the previous-frame vector: constant velocity gives the next one.
+            let next = match (next, &prev) {
+                (Some(n), _) => n,
+                (None, Some(p)) => negated(p),
+                (None, None) => return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR)),
+            };
+            let prev = if v.next.is_some() { prev } else { None };
+            (Some(next), prev, Some(v.format))
+        }
+        None if explicit || src.require_velocity => {
+            let looked_for = match src.velocity_format {
+                VelocityFormat::Auto => VELOCITY_LOOKED_FOR.to_string(),
+                f => format!("{} (the {} format)", VELOCITY_LOOKED_FOR, f.name()),
+            };
+            return Err(vf.missing("velocity", &looked_for));
+        }
+        None => {
+            report.push(format!("velocity: none (no velocity channels in \"{}\")", vf.path.display()));
+            (None, None, None)
+        }
+    };
 
     for (what, o) in origins.into_iter().filter(|(_, o)| *o != c0.origin) {
         let msg = format!(

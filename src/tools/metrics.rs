@@ -17,6 +17,38 @@ pub struct ImageError {
     pub rmse_display: f64,
 }
 
+/// How to prepare two images before comparing them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CompareOptions {
+    /// Scale the test image so its RGB sum equals the reference's (an exposure difference is
+    /// then no error); the energy error is reported before the scaling.
+    pub match_energy: bool,
+    /// Clamp both images' values to at most this (after the scaling), so a few HDR highlights do
+    /// not dominate the RMSE.
+    pub clamp_max: Option<f32>,
+}
+
+/// Compare two RGBA images of the same size after `options`. Non-finite values count as 0.
+pub fn compare_rgba_with(test: &[f32], reference: &[f32], options: &CompareOptions) -> ImageError {
+    let sum = |image: &[f32]| -> f64 {
+        image.chunks_exact(4).flat_map(|p| &p[..3]).map(|&v| if v.is_finite() { v as f64 } else { 0.0 }).sum()
+    };
+    let (sum_t, sum_r) = (sum(test), sum(reference));
+    let scale = if options.match_energy && sum_t != 0.0 { (sum_r / sum_t) as f32 } else { 1.0 };
+    let prepare = |image: &[f32], s: f32| -> Vec<f32> {
+        image
+            .iter()
+            .map(|&v| {
+                let v = v * s;
+                options.clamp_max.map_or(v, |m| v.min(m))
+            })
+            .collect()
+    };
+    let mut e = compare_rgba(&prepare(test, scale), &prepare(reference, 1.0));
+    e.relative_energy_error = if sum_r != 0.0 { (sum_t - sum_r) / sum_r } else { 0.0 };
+    e
+}
+
 /// Compare two RGBA images of the same size. Non-finite values count as 0.
 pub fn compare_rgba(test: &[f32], reference: &[f32]) -> ImageError {
     let finite = |v: f32| if v.is_finite() { v as f64 } else { 0.0 };
@@ -59,6 +91,23 @@ mod tests {
         let e = compare_rgba(&a, &a);
         assert_eq!((e.rmse, e.mean_abs, e.relative_energy_error), (0.0, 0.0, 0.0));
         assert!(e.psnr_db.is_infinite());
+    }
+
+    #[test]
+    fn energy_matching_removes_an_exposure_difference_and_the_clamp_caps_highlights() {
+        // Twice as bright everywhere: no error once the energies match, +100% energy reported.
+        let reference = [0.5f32, 0.25, 1.0, 1.0, 0.1, 0.2, 0.3, 1.0];
+        let test: Vec<f32> = reference.iter().map(|v| 2.0 * v).collect();
+        let options = CompareOptions { match_energy: true, clamp_max: None };
+        let e = compare_rgba_with(&test, &reference, &options);
+        assert!(e.rmse < 1e-7 && (e.relative_energy_error - 1.0).abs() < 1e-9, "{e:?}");
+        // A highlight of 100 against 10, clamped at 4: no difference left there.
+        let options = CompareOptions { match_energy: false, clamp_max: Some(4.0) };
+        let e = compare_rgba_with(&[100.0, 0.0, 0.0, 1.0], &[10.0, 0.0, 0.0, 1.0], &options);
+        assert_eq!(e.rmse, 0.0);
+        // 5 against 3 clamped at 4: one channel of three off by 1: RMSE sqrt(1/3).
+        let e = compare_rgba_with(&[5.0, 0.0, 0.0, 1.0], &[3.0, 0.0, 0.0, 1.0], &options);
+        assert!((e.rmse - (1.0f64 / 3.0).sqrt()).abs() < 1e-9);
     }
 
     #[test]

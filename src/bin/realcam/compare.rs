@@ -2,10 +2,10 @@
 
 use anyhow::{bail, Result};
 use realcam::io::read_exr_rgba;
-use realcam::tools::metrics::compare_rgba;
+use realcam::tools::metrics::{compare_rgba_with, CompareOptions};
 use std::path::Path;
 
-pub fn run(test: &Path, reference: &Path) -> Result<()> {
+pub fn run(test: &Path, reference: &Path, options: &CompareOptions) -> Result<()> {
     let a = read_exr_rgba(test)?;
     let b = read_exr_rgba(reference)?;
     if (a.width, a.height) != (b.width, b.height) {
@@ -19,7 +19,7 @@ pub fn run(test: &Path, reference: &Path) -> Result<()> {
             b.height
         );
     }
-    let e = compare_rgba(&a.data, &b.data);
+    let e = compare_rgba_with(&a.data, &b.data, options);
     println!(
         "rmse {:.6}  rmse_display {:.6}  mean_abs {:.6}  psnr {:.2} dB  energy {:+.3}%",
         e.rmse,

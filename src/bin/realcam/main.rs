@@ -53,6 +53,13 @@ enum Command {
         test: PathBuf,
         /// The reference (EXR).
         reference: PathBuf,
+        /// Scale the image to the reference's total energy first (the energy error is reported
+        /// before the scaling).
+        #[arg(long = "match-energy")]
+        match_energy: bool,
+        /// Clamp both images' values to at most this before comparing (e.g. 4).
+        #[arg(long)]
+        clamp: Option<f32>,
     },
     /// Write the deterministic synthetic test scenes (testdata/ is made with this).
     Synth {
@@ -72,7 +79,10 @@ fn main() {
         Command::Lens { command } => lens::run(&command),
         Command::Accuracy(args) => accuracy::run(&args),
         Command::Bench(args) => bench::run(&args),
-        Command::Compare { test, reference } => compare::run(&test, &reference),
+        Command::Compare { test, reference, match_energy, clamp } => {
+            let options = realcam::tools::metrics::CompareOptions { match_energy, clamp_max: clamp };
+            compare::run(&test, &reference, &options)
+        }
         Command::Synth { out } => synth::run(&out),
     };
     if let Err(e) = result {
