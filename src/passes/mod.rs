@@ -32,9 +32,12 @@ pub mod filter;
 pub mod longitudinal_color;
 pub mod mb_gather;
 pub mod mb_neighbor;
+pub mod mb_ref_resolve;
+pub mod mb_ref_splat;
 pub mod mb_tiles;
 pub mod motion_blur;
 pub mod motion_path;
+pub mod motion_reference;
 pub mod scene;
 pub mod tiled_dof;
 pub mod vignette;
@@ -60,6 +63,7 @@ use std::sync::Arc;
 /// sec 7.3 orders its passes the same way.
 pub static PASS_ORDER: &[PassEntry] = &[
     entry::<motion_blur::MotionBlur>(),
+    entry::<motion_reference::MotionReference>(),
     entry::<coc::Coc>(),
     entry::<bokeh_gather::BokehGather>(),
     entry::<tiled_dof::TiledDof>(),

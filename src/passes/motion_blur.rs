@@ -34,6 +34,8 @@ pub struct MotionPlan {
     pub max_speed_px: f32,
     /// The longest path (px) any pixel travels while its shutter is open.
     pub max_blur_px: f64,
+    /// The fastest velocity in the frame after the clamp (px per frame).
+    pub speed_px: f64,
     /// The farthest (px) a pixel's path reaches from it on either side of the frame time.
     pub max_reach_px: f64,
 }
@@ -112,6 +114,7 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
         shutter: ShutterPush::new(timing, w, h),
         max_speed_px,
         max_blur_px: blur_px,
+        speed_px,
         max_reach_px: reach_px,
     };
     Ok((plan, why))
