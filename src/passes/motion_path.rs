@@ -172,8 +172,8 @@ mod tests {
         assert!((share(2.0) - 0.2).abs() < 1e-6 && share(3.0) == 0.0);
         let sum: f32 = (-4..=4).map(|x| share(x as f32)).sum();
         assert!((sum - 1.0).abs() < 1e-6, "the streak holds all the light: {sum}");
-        // Across the path: nothing one pixel to the side.
-        assert_eq!(path_coverage([1.0, 1.0], next, prev, win, 0.0), 0.0);
+        // Across the path: nothing one pixel to the side near the texel.
+        assert_eq!(path_coverage([0.0, 1.0], next, prev, win, 0.0), 0.0);
         // A static point lights only its own pixel, for the whole shutter.
         assert_eq!(path_coverage([0.0, 0.0], [0.0; 2], [0.0; 2], win, 0.0), 0.5);
         assert_eq!(path_coverage([1.0, 0.0], [0.0; 2], [0.0; 2], win, 0.0), 0.0);
