@@ -22,7 +22,7 @@ crate::shader_bindings! {
     }
 }
 
-/// glsl/mb_tiles.comp: one workgroup per tile.
+/// glsl/mb_tiles.comp: one invocation per tile.
 pub struct MbTilesShader;
 
 impl Shader for MbTilesShader {
@@ -41,13 +41,13 @@ pub fn longer(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
 }
 
 impl Twin for MbTilesShader {
-    fn cpu(pc: &MbTilesPush, groups: [u32; 3], b: &mut [HostData]) {
+    fn cpu(pc: &MbTilesPush, _groups: [u32; 3], b: &mut [HostData]) {
         let velocity = b[0].image().clone();
         let tile_size = super::TILE_SIZE;
         let words = b[1].words_mut();
-        for ty in 0..groups[1] {
-            for tx in 0..groups[0] {
-                // Row-major scan: of equal lengths the first, as the shader's index tie-break.
+        for ty in 0..pc.tiles[1] as u32 {
+            for tx in 0..pc.tiles[0] as u32 {
+                // Row-major scan: of equal lengths the first, as the shader.
                 let (mut next, mut prev) = (None::<[f32; 2]>, None::<[f32; 2]>);
                 for y in ty * tile_size..(ty + 1) * tile_size {
                     for x in tx * tile_size..(tx + 1) * tile_size {
@@ -79,6 +79,6 @@ pub fn record(
 ) -> GpuResult<()> {
     // velocity: written by the upload copy, whose own barrier made it visible to compute reads.
     // tile_motion: fully overwritten, touched by no earlier pass of this recording.
-    let groups = [push.tiles[0] as u32, push.tiles[1] as u32, 1];
+    let groups = [((push.tiles[0] * push.tiles[1]) as u32).div_ceil(64), 1, 1];
     kernel.dispatch(rec, &MbTilesBindings { velocity, tile_motion }, push, groups)
 }

@@ -4,5 +4,6 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod bench_motion;
 pub mod metrics;
 pub mod synth;

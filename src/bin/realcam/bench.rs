@@ -21,6 +21,15 @@ pub struct BenchArgs {
     /// Run the reference only up to this CoC radius (its cost grows with the radius squared).
     #[arg(long = "reference-max-radius", default_value_t = 16.0)]
     reference_max_radius_px: f64,
+    /// Benchmark the motion blur instead (against the longest blur, --blur).
+    #[arg(long = "motion-blur")]
+    motion_blur: bool,
+    /// Run the motion-blur reference only up to this blur (px; its cost grows with the blur).
+    #[arg(long = "reference-max-blur", default_value_t = 8.0)]
+    reference_max_blur_px: f64,
+    /// Longest motion blurs in pixels (with --motion-blur).
+    #[arg(long = "blur", default_value = "8,32,128", value_delimiter = ',')]
+    blurs_px: Vec<f64>,
     /// Also write the Markdown table here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -32,6 +41,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let resolutions =
         args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
     let gpu = args.gpu.open()?;
+    if args.motion_blur {
+        return motion(args, &gpu, resolutions);
+    }
     let options = BenchOptions {
         resolutions,
         radii_px: args.radii_px.clone(),
@@ -41,6 +53,29 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let total = (options.resolutions.len() * options.radii_px.len()) as u64;
     let bar = progress_bar(total * 2);
     let rows = realcam::tools::bench::run(&gpu, &options, |step| {
+        bar.set_message(step.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    let table = markdown(&gpu.info().to_string(), &command_line(), &rows);
+    print!("{table}");
+    if let Some(out) = &args.out {
+        write_text(out, &table)?;
+    }
+    Ok(())
+}
+
+/// `--motion-blur`: the motion-blur benchmark.
+fn motion(args: &BenchArgs, gpu: &realcam::gpu::Gpu, resolutions: Vec<(u32, u32)>) -> Result<()> {
+    use realcam::tools::bench_motion::{markdown, run, MotionBenchOptions};
+    let options = MotionBenchOptions {
+        resolutions,
+        blurs_px: args.blurs_px.clone(),
+        runs: args.runs,
+        reference_max_blur_px: args.reference_max_blur_px,
+    };
+    let bar = progress_bar((options.resolutions.len() * options.blurs_px.len()) as u64 * 2);
+    let rows = run(gpu, &options, |step| {
         bar.set_message(step.to_string());
         bar.inc(1);
     })?;
