@@ -175,3 +175,97 @@ mod tests {
         }
     }
 }
+
+/// One image of the motion-blur accuracy report.
+#[derive(Clone, Debug)]
+pub struct MotionAccuracyRow {
+    pub method: String,
+    /// GPU ms of the motion-blur passes (none for the pinhole and the CPU blur).
+    pub gpu_ms: Option<f64>,
+    pub error: ImageError,
+}
+
+/// A plain single-direction blur, for comparison: every pixel averages the colours along its own
+/// straight path (next velocity, both ways over the open time), no depth, no neighbours (CPU).
+pub fn single_direction_blur(frame: &Frame, camera: &Camera) -> Vec<f32> {
+    let Some(next) = frame.velocity_px.as_ref() else { return frame.color.clone() };
+    let t = &camera.motion.timing;
+    let (w, h) = (frame.width as i64, frame.height as i64);
+    let mut out = frame.color.clone();
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (vx, vy) = (next[2 * i] as f64, next[2 * i + 1] as f64);
+            let n = ((vx.hypot(vy) * t.open_length_frames()).ceil() as usize).max(1);
+            let mut sum = [0.0f64; 4];
+            for k in 0..n {
+                let time = t.open_frames + (k as f64 + 0.5) / n as f64 * t.open_length_frames();
+                let sx = ((x as f64 + 0.5 + vx * time).floor() as i64).clamp(0, w - 1);
+                let sy = ((y as f64 + 0.5 + vy * time).floor() as i64).clamp(0, h - 1);
+                let j = (sy * w + sx) as usize * 4;
+                (0..4).for_each(|c| sum[c] += frame.color[j + c] as f64 / n as f64);
+            }
+            out[i * 4..i * 4 + 4].copy_from_slice(&sum.map(|v| v as f32));
+        }
+    }
+    out
+}
+
+/// The pinhole input, the single-direction blur, the fast path and the reference against a
+/// ground truth, after `options` (energy matched, values clamped).
+pub fn accuracy(
+    gpu: &Gpu,
+    frame: &Frame,
+    camera: &Camera,
+    ground_truth: &[f32],
+    options: &crate::tools::metrics::CompareOptions,
+    mut progress: impl FnMut(&str),
+) -> GpuResult<Vec<MotionAccuracyRow>> {
+    use crate::tools::metrics::compare_rgba_with;
+    let mut rows = vec![MotionAccuracyRow {
+        method: "pinhole input".into(),
+        gpu_ms: None,
+        error: compare_rgba_with(&frame.color, ground_truth, options),
+    }];
+    progress("single-direction blur");
+    let plain = single_direction_blur(frame, camera);
+    rows.push(MotionAccuracyRow {
+        method: "single-direction blur (CPU)".into(),
+        gpu_ms: None,
+        error: compare_rgba_with(&plain, ground_truth, options),
+    });
+    for (name, mode) in [("fast", MotionBlurMode::Fast), ("reference", MotionBlurMode::Reference)] {
+        progress(name);
+        let mut camera = camera.clone();
+        camera.motion.mode = mode;
+        let p = plan(frame, &camera);
+        let renderer = Renderer::new(gpu, &p)?;
+        let out = renderer.render(frame, &p, false)?;
+        rows.push(MotionAccuracyRow {
+            method: format!("--motion-blur {name}"),
+            gpu_ms: Some(motion_ms(&out.profile)),
+            error: compare_rgba_with(&out.rgba, ground_truth, options),
+        });
+    }
+    Ok(rows)
+}
+
+pub fn accuracy_markdown(device: &str, command: &str, rows: &[MotionAccuracyRow]) -> String {
+    let mut out = format!("Device: {device}\n\nCommand: `{command}`\n\n");
+    out +=
+        "RMSE over RGB against the ground truth after scaling each image to its total energy, values clamped at 4.\n\n";
+    out += "| image | GPU ms | RMSE | x pinhole | display RMSE | energy before scaling |\n| --- | --- | --- | --- | --- | --- |\n";
+    let pinhole = rows.first().map_or(1.0, |r| r.error.rmse);
+    for r in rows {
+        out += &format!(
+            "| {} | {} | {:.4} | {:.2}x | {:.4} | {:+.3}% |\n",
+            r.method,
+            r.gpu_ms.map_or(String::new(), |ms| format!("{ms:.0}")),
+            r.error.rmse,
+            r.error.rmse / pinhole,
+            r.error.rmse_display,
+            100.0 * r.error.relative_energy_error
+        );
+    }
+    out
+}

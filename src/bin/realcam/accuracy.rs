@@ -27,6 +27,16 @@ pub struct AccuracyArgs {
     /// Clamp on the CoC diameter in pixels.
     #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
     max_coc_px: f64,
+    /// Judge the motion blur instead: the pinhole input, a plain single-direction blur, the fast
+    /// path and the reference against this ground truth (EXR), energy matched, values clamped at 4.
+    #[arg(long = "motion-blur", value_name = "GROUND_TRUTH")]
+    motion_ground_truth: Option<PathBuf>,
+    /// Frames per second (with --motion-blur).
+    #[arg(long, default_value_t = 24.0)]
+    fps: f64,
+    /// Shutter angle in degrees (with --motion-blur).
+    #[arg(long = "shutter-angle", default_value_t = 180.0)]
+    shutter_angle_deg: f64,
     /// Folder for accuracy.md, accuracy.csv and accuracy.svg.
     #[arg(long = "out-dir", default_value = "accuracy")]
     out_dir: PathBuf,
@@ -35,6 +45,9 @@ pub struct AccuracyArgs {
 }
 
 pub fn run(args: &AccuracyArgs) -> Result<()> {
+    if let Some(truth) = &args.motion_ground_truth {
+        return motion(args, truth);
+    }
     let lens_file = args.lens.lens.load()?;
     // The blur alone, on the geometric reference (the report runs every method).
     let request = args.lens.request(CameraRequest {
@@ -63,5 +76,40 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         write_text(&args.out_dir.join(name), &text)?;
     }
     eprintln!("wrote {}/accuracy.{{md,csv,svg}}", args.out_dir.display());
+    Ok(())
+}
+
+/// `--motion-blur GROUND_TRUTH`: the motion-blur methods against a ground truth.
+fn motion(args: &AccuracyArgs, truth: &std::path::Path) -> Result<()> {
+    let lens_file = args.lens.lens.load()?;
+    let request = args.lens.request(CameraRequest {
+        max_coc_px: 0.0,
+        fps: Some(args.fps),
+        shutter_angle_deg: Some(args.shutter_angle_deg),
+        ..CameraRequest::blur_only()
+    });
+    let camera = Camera::new(&lens_file, &request).name_flags()?;
+    let sources =
+        PassSources { depth_path: args.depth.clone(), require_velocity: true, ..PassSources::new(&args.color) };
+    let frame = Frame::from_passes(load_passes(&sources).name_flags()?, &camera, DepthKind::Planar);
+    let reference = realcam::io::read_exr_rgba(truth)?;
+    if (reference.width, reference.height) != (frame.width, frame.height) {
+        anyhow::bail!(
+            "{} is {}x{} px but the frame is {}x{} px",
+            truth.display(),
+            reference.width,
+            reference.height,
+            frame.width,
+            frame.height
+        );
+    }
+    let gpu = args.gpu.open()?;
+    let options = realcam::tools::metrics::CompareOptions { match_energy: true, clamp_max: Some(4.0) };
+    let rows =
+        realcam::tools::bench_motion::accuracy(&gpu, &frame, &camera, &reference.data, &options, |m| eprintln!("{m}"))?;
+    let table = realcam::tools::bench_motion::accuracy_markdown(&gpu.info().to_string(), &command_line(), &rows);
+    print!("{table}");
+    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
+    write_text(&args.out_dir.join("motion-accuracy.md"), &table)?;
     Ok(())
 }
