@@ -13,17 +13,23 @@
 //! | depth    | `<Layer>.Depth.Z`                         | Blender                                                                 |
 //! | depth    | `Z`, `depth.Z`, `depth.R`, `depth`        | common, Nuke                                                            |
 //! | depth    | the only channel of a one-channel file    | whatever its name (`Y`, `R`, ...)                                       |
-//! | velocity | `<Layer>.Vector.X,Y,Z,W`                  | Blender raster space (x right, y UP); Z,W = p[f]-p[f+1]: (dx, dy) = (-Z, +W) |
-//! | velocity | `<Layer>.Vector.X,Y` (no Z,W)             | Blender; X,Y = p[f-1]-p[f], constant velocity assumed: (dx, dy) = (-X, +Y) |
-//! | velocity | `X,Y,Z,W`, the file's only channels       | Blender Vector pass file, as above: (dx, dy) = (-Z, +W)                 |
-//! | velocity | `forward.u,forward.v`                     | Nuke: px toward the next frame, y UP: (dx, dy) = (u, -v)                |
-//! | velocity | `motion.u,motion.v` / `motion.x,motion.y` | as `forward`: (dx, dy) = (u, -v)                                        |
-//! | velocity | `velocity.X,Y` / `vel.X,Y`                | px toward the next frame, y UP: (dx, dy) = (X, -Y)                      |
+//! | velocity | `<Layer>.Vector.X,Y,Z,W`, `X,Y,Z,W` (whole file) | Blender, y UP: next (-Z, +W), previous (X, -Y)              |
+//! | velocity | `<Layer>.Vector.X,Y` (no Z,W)             | Blender: previous (X, -Y), next = -previous (constant velocity)         |
+//! | velocity | `forward.u,v` [+ `backward.u,v`]          | Nuke, y UP: next (u, -v), previous (bu, -bv)                            |
+//! | velocity | `motion.u,v` / `motion.x,y`               | Nuke single vector: next (u, -v)                                        |
+//! | velocity | `motion_vector.R,G` (or `.X,Y`)           | Arnold raw, over the renderer's shutter: next (R, -G) / interval        |
+//! | velocity | `velocity.X,Y`/`.R,G`, `VRayVelocity.R,G` | V-Ray, current to next frame, y UP: next (x, -y)                        |
+//! | velocity | `vel.X,Y`                                 | RE:Vision single vector, y UP: next (x, -y)                             |
+//!
+//! With [`VelocityFormat::Auto`] the format comes from the names, and names of two formats in
+//! one file are an error; a named format reads only its own names (`ndc` and `revision` also the
+//! generic single-vector names, read as that format). `velocity_scale` and `velocity_flip_y`
+//! apply after the conversion.
 //!
 //! Overrides ([`PassSources`]): color takes a layer prefix `P` (reads `P.R,P.G,P.B[,P.A]`) or an
 //! explicit list `R,G,B[,A]`; depth takes one exact channel name; velocity takes 4 names
-//! (Blender `X,Y,Z,W`: (-Z, +W)) or 2 names `x,y`, read as Blender previous-frame vectors
-//! (-x, +y) when the first contains `.Vector.`, else as px toward the next frame with y UP
+//! (Blender `X,Y,Z,W`) or 2 names `x,y`, read in the named format, or with `auto` as Blender
+//! previous-frame vectors when the first contains `.Vector.`, else as px toward the next frame, y UP
 //! (x, -y). The conventions used are written to [`ScenePasses::channel_report`].
 
 use super::{Image, IoError, PassSources, ScenePasses, VelocityFormat};
@@ -446,7 +452,10 @@ fn find_velocity<'a>(
                 v.rule = single_rule(format).into();
                 v
             };
-            Ok(candidates.into_iter().find(|v| v.prev.is_none() && v.next.is_some()).map(format_of))
+            let single = |v: &Velocity| v.prev.is_none() && v.next.is_some();
+            let own = candidates.iter().position(|v| v.format == format && single(v));
+            let index = own.or_else(|| candidates.iter().position(single));
+            Ok(index.map(|i| format_of(candidates.swap_remove(i))))
         }
         _ => {
             candidates.retain(|v| v.format == format);
@@ -790,7 +799,7 @@ mod tests {
         let r = &p.channel_report;
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
-        assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"), "{r}");
+        assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("next (-Z, +W)"), "{r}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -808,7 +817,7 @@ mod tests {
         write(&path, &[&chans[..], &[("forward.u", 3.0), ("forward.v", 2.0)]].concat(), true);
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(p.velocity_px.as_ref().unwrap(), &[3.0, -2.0]);
-        assert!(p.channel_report.contains("channels forward.u, forward.v (px toward the next frame"));
+        assert!(p.channel_report.contains("channels forward.u, forward.v (Nuke forward: px toward the next frame"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -931,6 +940,50 @@ mod tests {
                 format!("depth_unit_m must be a positive number of metres per depth unit, got {unit_m}")
             );
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn velocity_formats_that_need_a_setting_or_a_choice_say_so() {
+        let dir = test_dir("read-velocity-formats");
+        let path = dir.join("v.exr");
+        let base = [("R", 1.0), ("G", 1.0), ("B", 1.0), ("Z", 2.0)];
+        // Arnold's raw vectors span the renderer's shutter: without it, an error naming the file,
+        // the channels and the setting; with it, px per frame.
+        write(&path, &[&base[..], &[("motion_vector.R", 3.0), ("motion_vector.G", 1.0)]].concat(), true);
+        let e = load_passes(&sources(&path)).unwrap_err();
+        assert_eq!(e.field(), Some("velocity_interval_frames"));
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "velocity: \"{}\" holds Arnold motion vectors (motion_vector.R, motion_vector.G), which span the renderer's shutter interval; the file does not say how long it was; give velocity_interval_frames",
+                path.display()
+            )
+        );
+        let src = PassSources { velocity_interval_frames: Some(0.5), ..sources(&path) };
+        let p = load_passes(&src).unwrap();
+        assert_const(p.velocity_px.as_ref().unwrap(), &[6.0, -2.0]);
+        assert_eq!(p.velocity_format, Some(VelocityFormat::Arnold));
+        // Scale and flip apply after the format's conversion.
+        let src = PassSources { velocity_scale: 2.0, velocity_flip_y: true, ..src };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[12.0, 4.0]);
+        // Two formats' names in one file: auto refuses to guess; a named format reads its own.
+        write(
+            &path,
+            &[&base[..], &[("forward.u", 3.0), ("forward.v", 1.0), ("vel.X", 5.0), ("vel.Y", 5.0)]].concat(),
+            true,
+        );
+        let e = load_passes(&sources(&path)).unwrap_err().to_string();
+        assert!(e.contains("formats nuke, revision; choose one with --velocity-format"), "{e}");
+        let src = PassSources { velocity_format: VelocityFormat::Revision, ..sources(&path) };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[5.0, -5.0]);
+        // NDC: a frame width of 2 per frame (W = 4 px, H = 3 px).
+        let src = PassSources {
+            velocity_format: VelocityFormat::Ndc,
+            velocity_channels: Some("vel.X,vel.Y".into()),
+            ..sources(&path)
+        };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[10.0, -7.5]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 
