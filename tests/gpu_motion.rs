@@ -88,7 +88,8 @@ fn a_moving_square_streaks_by_its_velocity_times_the_shutter_in_every_convention
     let (vx, vy) = (12.0f32, 8.0f32);
     let interval = 0.5f32;
     let ndc = [vx * 2.0 / W as f32, -vy * 2.0 / H as f32];
-    let cases: Vec<(&str, VelocityFormat, Vec<(&str, f32)>, Option<&str>)> = vec![
+    type Case<'a> = (&'a str, VelocityFormat, Vec<(&'a str, f32)>, Option<&'a str>);
+    let cases: Vec<Case> = vec![
         // Blender: y up, X,Y = p[f-1]-p[f] = -v, Z,W = p[f]-p[f+1] = -v.
         (
             "blender",

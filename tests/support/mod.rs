@@ -92,6 +92,7 @@ pub fn motion_camera(fps: f64, shutter_frames: f64) -> Camera {
 /// A frame with a vertical bar (columns `x0..x1`, colour `bar`, depth `bar_m`) over a textured
 /// background (depth `background_m`); the bar moves with `next_px` toward the next frame and
 /// `prev_px` toward the previous one (px per frame, x right, y down), the background is still.
+#[allow(clippy::too_many_arguments)]
 pub fn moving_bar_frame(
     w: u32,
     h: u32,

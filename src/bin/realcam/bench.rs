@@ -41,23 +41,28 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let resolutions =
         args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
     let gpu = args.gpu.open()?;
-    if args.motion_blur {
-        return motion(args, &gpu, resolutions);
-    }
-    let options = BenchOptions {
-        resolutions,
-        radii_px: args.radii_px.clone(),
-        runs: args.runs,
-        reference_max_radius_px: args.reference_max_radius_px,
+    let table = if args.motion_blur {
+        use realcam::tools::bench_motion::{markdown, run, MotionBenchOptions};
+        let options = MotionBenchOptions {
+            resolutions,
+            blurs_px: args.blurs_px.clone(),
+            runs: args.runs,
+            reference_max_blur_px: args.reference_max_blur_px,
+        };
+        let steps = options.resolutions.len() * options.blurs_px.len();
+        let rows = with_progress(steps, |step| run(&gpu, &options, step))?;
+        markdown(&gpu.info().to_string(), &command_line(), &rows)
+    } else {
+        let options = BenchOptions {
+            resolutions,
+            radii_px: args.radii_px.clone(),
+            runs: args.runs,
+            reference_max_radius_px: args.reference_max_radius_px,
+        };
+        let steps = options.resolutions.len() * options.radii_px.len();
+        let rows = with_progress(steps, |step| realcam::tools::bench::run(&gpu, &options, step))?;
+        markdown(&gpu.info().to_string(), &command_line(), &rows)
     };
-    let total = (options.resolutions.len() * options.radii_px.len()) as u64;
-    let bar = progress_bar(total * 2);
-    let rows = realcam::tools::bench::run(&gpu, &options, |step| {
-        bar.set_message(step.to_string());
-        bar.inc(1);
-    })?;
-    bar.finish_and_clear();
-    let table = markdown(&gpu.info().to_string(), &command_line(), &rows);
     print!("{table}");
     if let Some(out) = &args.out {
         write_text(out, &table)?;
@@ -65,25 +70,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--motion-blur`: the motion-blur benchmark.
-fn motion(args: &BenchArgs, gpu: &realcam::gpu::Gpu, resolutions: Vec<(u32, u32)>) -> Result<()> {
-    use realcam::tools::bench_motion::{markdown, run, MotionBenchOptions};
-    let options = MotionBenchOptions {
-        resolutions,
-        blurs_px: args.blurs_px.clone(),
-        runs: args.runs,
-        reference_max_blur_px: args.reference_max_blur_px,
-    };
-    let bar = progress_bar((options.resolutions.len() * options.blurs_px.len()) as u64 * 2);
-    let rows = run(gpu, &options, |step| {
+/// Run a benchmark of `configurations` (two steps each) with a progress bar.
+fn with_progress<T>(
+    configurations: usize,
+    bench: impl FnOnce(&mut dyn FnMut(&str)) -> realcam::gpu::GpuResult<T>,
+) -> Result<T> {
+    let bar = progress_bar(configurations as u64 * 2);
+    let rows = bench(&mut |step: &str| {
         bar.set_message(step.to_string());
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    let table = markdown(&gpu.info().to_string(), &command_line(), &rows);
-    print!("{table}");
-    if let Some(out) = &args.out {
-        write_text(out, &table)?;
-    }
-    Ok(())
+    Ok(rows)
 }
