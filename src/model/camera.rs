@@ -694,6 +694,42 @@ mod tests {
     }
 
     #[test]
+    fn a_shutter_angle_is_a_time_and_the_exposure_uses_it() {
+        // 180 degrees at 24 fps: 1/48 s, open a quarter frame either side of the frame time;
+        // 90 degrees lets in half the light.
+        let req = |angle| CameraRequest { fps: Some(24.0), shutter_angle_deg: Some(angle), ..Default::default() };
+        let (half, quarter) = (camera(&req(180.0)).unwrap(), camera(&req(90.0)).unwrap());
+        assert!((half.shutter_s - 1.0 / 48.0).abs() < 1e-15);
+        let t = half.motion.timing;
+        assert!((t.open_frames + 0.25).abs() < 1e-12 && (t.close_frames - 0.25).abs() < 1e-12);
+        assert!((half.exposure_gain() / quarter.exposure_gain() - 2.0).abs() < 1e-12);
+        // Without a frame rate: 24 assumed, and said to be.
+        let assumed = camera(&CameraRequest::default()).unwrap();
+        assert_eq!((assumed.motion.fps, assumed.motion.fps_given), (DEFAULT_FPS, false));
+        for (req, field, message) in [
+            (
+                CameraRequest { fps: Some(0.0), ..Default::default() },
+                CameraField::Fps,
+                "frame rate must be a positive number of frames per second, got 0",
+            ),
+            (req(0.0), CameraField::ShutterAngleDeg, "shutter angle must be in (0, 360] degrees, got 0"),
+            (
+                CameraRequest { rolling_shutter_s: Some(-0.01), ..Default::default() },
+                CameraField::RollingShutterS,
+                "rolling-shutter readout time must be a time >= 0 s, got -0.01",
+            ),
+            (
+                CameraRequest { max_blur_px: 0.0, ..Default::default() },
+                CameraField::MaxBlurPx,
+                "largest motion blur must be a positive number of pixels, got 0",
+            ),
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert_eq!((err.field(), err.to_string()), (Some(field), message.to_string()));
+        }
+    }
+
+    #[test]
     fn field_names_are_distinct() {
         let names: std::collections::BTreeSet<_> = CameraField::ALL.iter().map(|f| f.name()).collect();
         assert_eq!(names.len(), CameraField::ALL.len());

@@ -16,7 +16,7 @@ use super::scene::PlanInput;
 use super::{groups_for, mb_neighbor, mb_tiles, Decision, FrameImages, Input, Pass, TILE_SIZE};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
 use crate::model::camera::MotionBlurMode;
-use crate::optics::shutter::{ShutterCurve, ShutterPosition};
+use crate::optics::shutter::ShutterCurve;
 use ash::vk;
 
 pub const NAME: &str = "motion_blur";
@@ -89,16 +89,16 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
     let fps =
         if motion.fps_given { format!("{} fps", motion.fps) } else { format!("{} fps (assumed; --fps)", motion.fps) };
     let position = match timing.open_frames {
-        o if o < 0.0 && timing.close_frames > 0.0 => ShutterPosition::Centred,
-        o if o >= 0.0 => ShutterPosition::Start,
-        _ => ShutterPosition::End,
+        o if o < 0.0 && timing.close_frames > 0.0 => "centred",
+        o if o >= 0.0 => "opening at the frame time",
+        _ => "closing at the frame time",
     };
     let curve = match timing.curve {
         ShutterCurve::Box => "box".to_string(),
         ShutterCurve::Trapezoid { ramp } => format!("trapezoid (ramps {ramp})"),
     };
     let why = format!(
-        "velocity up to {speed_px:.1} px/frame ({format}) at {fps}, shutter {:.4} s = {:.0} deg {position:?}, {curve}{rolling}: blur up to {blur_px:.1} px",
+        "velocity up to {speed_px:.1} px/frame ({format}) at {fps}, shutter {:.4} s = {:.0} deg {position}, {curve}{rolling}: blur up to {blur_px:.1} px",
         open / motion.fps,
         open * 360.0
     );
