@@ -48,10 +48,15 @@ pub enum CameraField {
     MaxCocPx,
     Grain,
     BladeCurvature,
+    Fps,
+    ShutterAngleDeg,
+    ShutterRamp,
+    RollingShutterS,
+    MaxBlurPx,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 12] = [
+    pub const ALL: [CameraField; 17] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -64,6 +69,11 @@ impl CameraField {
         CameraField::MaxCocPx,
         CameraField::Grain,
         CameraField::BladeCurvature,
+        CameraField::Fps,
+        CameraField::ShutterAngleDeg,
+        CameraField::ShutterRamp,
+        CameraField::RollingShutterS,
+        CameraField::MaxBlurPx,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -81,6 +91,11 @@ impl CameraField {
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
             CameraField::BladeCurvature => "blade_curvature",
+            CameraField::Fps => "fps",
+            CameraField::ShutterAngleDeg => "shutter_angle_deg",
+            CameraField::ShutterRamp => "shutter_ramp",
+            CameraField::RollingShutterS => "rolling_shutter_s",
+            CameraField::MaxBlurPx => "max_blur_px",
         }
     }
 
@@ -99,6 +114,11 @@ impl CameraField {
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
             CameraField::BladeCurvature => "blade curvature",
+            CameraField::Fps => "frame rate",
+            CameraField::ShutterAngleDeg => "shutter angle",
+            CameraField::ShutterRamp => "shutter curve ramp",
+            CameraField::RollingShutterS => "rolling-shutter readout time",
+            CameraField::MaxBlurPx => "largest motion blur",
         }
     }
 
@@ -239,7 +259,38 @@ pub struct Camera {
     pub coma: Option<crate::optics::distortion::HeightTable>,
     /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
     pub longitudinal_color_mm: Option<[f64; 2]>,
+    /// The shutter in time and the motion-blur method.
+    pub motion: Motion,
 }
+
+/// Which motion-blur method renders the velocity pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MotionBlurMode {
+    /// The tiled reconstruction gather (src/passes/motion_blur.rs): a fixed sample count.
+    #[default]
+    Fast,
+    /// Every source pixel scattered along its path at many sub-frame times with depth ordering
+    /// (src/passes/motion_reference.rs): the accuracy reference, cost grows with the blur length.
+    Reference,
+    /// No motion blur.
+    Off,
+}
+
+/// The shutter in time: the frame rate that turns pixels per frame into pixels per exposure,
+/// when the shutter is open and how, and the motion-blur method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    pub fps: f64,
+    /// False: the user gave no frame rate and `fps` is the default.
+    pub fps_given: bool,
+    pub timing: crate::optics::shutter::ShutterTiming,
+    pub mode: MotionBlurMode,
+    /// Blur longer than this (px) is clamped.
+    pub max_blur_px: f64,
+}
+
+/// The frame rate when none is given (film, Blender's and Nuke's default).
+pub const DEFAULT_FPS: f64 = 24.0;
 
 /// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
 /// command line's defaults; set what differs with `..CameraRequest::default()`.
@@ -288,6 +339,19 @@ pub struct CameraRequest {
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
+    /// Frames per second of the sequence; [`DEFAULT_FPS`] when None.
+    pub fps: Option<f64>,
+    /// The shutter as an angle (degrees of a frame) instead of `shutter_s`; the exposure uses the
+    /// time it makes.
+    pub shutter_angle_deg: Option<f64>,
+    pub shutter_position: crate::optics::shutter::ShutterPosition,
+    pub shutter_curve: crate::optics::shutter::ShutterCurve,
+    /// A rolling (focal-plane) shutter: the readout time from the first line to the last.
+    pub rolling_shutter_s: Option<f64>,
+    pub rolling_direction: crate::optics::shutter::RollingDirection,
+    pub motion_blur: MotionBlurMode,
+    /// Clamp on the motion blur length in pixels.
+    pub max_blur_px: f64,
 }
 
 impl Default for CameraRequest {
@@ -320,6 +384,14 @@ impl Default for CameraRequest {
             resolve_depth_edges: true,
             grain: 0.0,
             seed: 0,
+            fps: None,
+            shutter_angle_deg: None,
+            shutter_position: Default::default(),
+            shutter_curve: Default::default(),
+            rolling_shutter_s: None,
+            rolling_direction: Default::default(),
+            motion_blur: MotionBlurMode::Fast,
+            max_blur_px: 512.0,
         }
     }
 }
@@ -393,7 +465,26 @@ impl Camera {
                 Err(CameraError::Invalid { field, value, allowed })
             }
         };
-        require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
+        let fps = req.fps.unwrap_or(DEFAULT_FPS);
+        require(CameraField::Fps, fps, fps > 0.0, "a positive number of frames per second")?;
+        if let Some(angle) = req.shutter_angle_deg {
+            require(CameraField::ShutterAngleDeg, angle, angle > 0.0 && angle <= 360.0, "in (0, 360] degrees")?;
+        }
+        // A shutter angle is a time: angle / 360 of a frame. The exposure uses it too.
+        let shutter_s = req.shutter_angle_deg.map_or(req.shutter_s, |angle| angle / 360.0 / fps);
+        require(CameraField::ShutterS, shutter_s, shutter_s > 0.0, "a positive number")?;
+        if let crate::optics::shutter::ShutterCurve::Trapezoid { ramp } = req.shutter_curve {
+            require(CameraField::ShutterRamp, ramp, ramp > 0.0 && ramp <= 0.5, "in (0, 0.5] of the open time")?;
+        }
+        if let Some(r) = req.rolling_shutter_s {
+            require(CameraField::RollingShutterS, r, r >= 0.0, "a time >= 0 s")?;
+        }
+        require(CameraField::MaxBlurPx, req.max_blur_px, req.max_blur_px > 0.0, "a positive number of pixels")?;
+        let mut timing =
+            crate::optics::shutter::ShutterTiming::new(shutter_s, fps, req.shutter_position, req.shutter_curve);
+        if let Some(r) = req.rolling_shutter_s {
+            timing = timing.with_rolling(r, fps, req.rolling_direction);
+        }
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
         require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
@@ -436,7 +527,7 @@ impl Camera {
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),
-            shutter_s: req.shutter_s,
+            shutter_s,
             iso: req.iso,
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
@@ -465,6 +556,13 @@ impl Camera {
             }),
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
+            motion: Motion {
+                fps,
+                fps_given: req.fps.is_some(),
+                timing,
+                mode: req.motion_blur,
+                max_blur_px: req.max_blur_px,
+            },
         })
     }
 
@@ -641,6 +739,42 @@ mod tests {
             assert_eq!(err.field(), Some(field));
             assert_eq!(err.to_string(), format!("{what} is outside what the lens {lens} allows ({allowed})"));
             camera(&CameraRequest { force: true, ..req }).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_shutter_angle_is_a_time_and_the_exposure_uses_it() {
+        // 180 degrees at 24 fps: 1/48 s, open a quarter frame either side of the frame time;
+        // 90 degrees lets in half the light.
+        let req = |angle| CameraRequest { fps: Some(24.0), shutter_angle_deg: Some(angle), ..Default::default() };
+        let (half, quarter) = (camera(&req(180.0)).unwrap(), camera(&req(90.0)).unwrap());
+        assert!((half.shutter_s - 1.0 / 48.0).abs() < 1e-15);
+        let t = half.motion.timing;
+        assert!((t.open_frames + 0.25).abs() < 1e-12 && (t.close_frames - 0.25).abs() < 1e-12);
+        assert!((half.exposure_gain() / quarter.exposure_gain() - 2.0).abs() < 1e-12);
+        // Without a frame rate: 24 assumed, and said to be.
+        let assumed = camera(&CameraRequest::default()).unwrap();
+        assert_eq!((assumed.motion.fps, assumed.motion.fps_given), (DEFAULT_FPS, false));
+        for (req, field, message) in [
+            (
+                CameraRequest { fps: Some(0.0), ..Default::default() },
+                CameraField::Fps,
+                "frame rate must be a positive number of frames per second, got 0",
+            ),
+            (req(0.0), CameraField::ShutterAngleDeg, "shutter angle must be in (0, 360] degrees, got 0"),
+            (
+                CameraRequest { rolling_shutter_s: Some(-0.01), ..Default::default() },
+                CameraField::RollingShutterS,
+                "rolling-shutter readout time must be a time >= 0 s, got -0.01",
+            ),
+            (
+                CameraRequest { max_blur_px: 0.0, ..Default::default() },
+                CameraField::MaxBlurPx,
+                "largest motion blur must be a positive number of pixels, got 0",
+            ),
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert_eq!((err.field(), err.to_string()), (Some(field), message.to_string()));
         }
     }
 

@@ -2,6 +2,7 @@
 
 use crate::common::{write_text_atomically, GpuArgs, LensArgs};
 use crate::flags::NameFlags;
+use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
@@ -178,6 +179,8 @@ pub struct RenderArgs {
     #[arg(long)]
     trace: Option<PathBuf>,
     #[command(flatten)]
+    motion: MotionArgs,
+    #[command(flatten)]
     gpu: GpuArgs,
 }
 
@@ -193,7 +196,7 @@ impl RenderArgs {
             }
             None => None,
         };
-        let request = self.lens.request(CameraRequest {
+        let request = self.lens.request(self.motion.request(CameraRequest {
             shutter_s,
             iso: self.iso,
             nits_per_unit: self.nits_per_unit,
@@ -211,7 +214,7 @@ impl RenderArgs {
             grain: self.grain,
             seed: self.seed,
             ..CameraRequest::default()
-        });
+        })?);
         let mut camera = Camera::new(&lens_file, &request).name_flags()?;
         if let Some(path) = &self.aperture_image {
             camera.aperture_mask = Some(realcam::model::aperture::ApertureMask::load(path)?);
@@ -221,7 +224,7 @@ impl RenderArgs {
 
     /// Where the passes are, as these flags say.
     fn sources(&self) -> PassSources {
-        PassSources {
+        self.motion.sources(PassSources {
             color_path: self.color.clone(),
             depth_path: self.depth.clone(),
             velocity_path: self.velocity.clone(),
@@ -230,7 +233,8 @@ impl RenderArgs {
             velocity_channels: self.velocity_channels.clone(),
             depth_unit_m: self.depth_unit_m,
             require_velocity: self.velocity.is_some(),
-        }
+            ..PassSources::default()
+        })
     }
 }
 
