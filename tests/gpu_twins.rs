@@ -191,10 +191,10 @@ fn whole_pipeline_matches_the_chained_cpu_twins() {
         assert_validation_clean(&gpu);
 
         let coc_params = plan.params::<coc::Coc>().unwrap();
-        let coc_cpu = coc::coc_cpu(&frame.depth_m, &coc_params.push, &coc_params.table);
+        let coc_cpu = coc::coc_resolved_cpu(&frame.depth_m, &frame.color, &coc_params.push, &coc_params.table);
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let gather = plan.params::<bokeh_gather::BokehGather>().unwrap();
-        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture_mask);
+        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture);
         let v = plan.params::<vignette::Vignette>().unwrap();
         let vig = vignette::vignette_cpu(&dof, &v.push, &v.table);
         let f = plan.params::<film::Film>().unwrap();

@@ -145,6 +145,21 @@ pub fn coc_cpu(depth_m: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
     depth_m.iter().enumerate().map(|(i, &d)| push.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
 }
 
+/// CPU twin of the whole pass: the CoC of every pixel from the depth its colour belongs to
+/// (the edge resolve when `push.resolve_edges` is set). `rgba` is the colour pass.
+pub fn coc_resolved_cpu(depth_m: &[f32], rgba: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
+    let (w, h) = (push.size[0].max(1) as u32, push.size[1].max(1) as u32);
+    let depth = HostImage::new(w, h, 1, depth_m.to_vec());
+    let color = HostImage::new(w, h, 4, rgba.to_vec());
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let inv_u = resolved_inverse_depth(&depth, &color, push, x as i32, y as i32);
+            push.coc_px_of_inverse_depth(inv_u, x, y, table)
+        })
+        .collect()
+}
+
 /// The inverse depth (1/mm) whose light pixel (x, y) mostly holds: glsl/coc.comp's
 /// resolved_inverse_depth, in the same f32 arithmetic.
 pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
