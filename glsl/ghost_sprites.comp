@@ -15,7 +15,9 @@
 // A later primitive (Walch's fitted Bezier ghosts) is one more kind here.
 #include "common.glsl"
 #include "flare.glsl"
+// Only aperture_sdf is used: the mask and shape-table bindings are declared, never read.
 #define APERTURE_MASK_BINDING 7
+#define APERTURE_SHAPE_BINDING 8
 #include "aperture.glsl"
 
 #define GROUP (TILE_SIZE * TILE_SIZE)
@@ -46,7 +48,7 @@ float ghost_sdf(uint b, uint c, vec2 q) {
     float signed_radius = sprite_data[cb + 2];
     float radius = abs(signed_radius);
     vec2 o = (q - centre) * (signed_radius < 0.0 ? -1.0 : 1.0);
-    Aperture ap = Aperture(fc.blades, fc.rotation, fc.curvature, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    Aperture ap = Aperture(fc.blades, fc.rotation, fc.curvature, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
     // Past the corners the edge distance underestimates: the circumscribed circle bounds it.
     float d = max(aperture_sdf(o, radius, ap), length(o) - radius);
     return max(d, distance(q, vec2(sprite_data[cb + 4], sprite_data[cb + 5])) - sprite_data[cb + 6]);

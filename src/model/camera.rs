@@ -47,12 +47,18 @@ pub enum CameraField {
     CatsEye,
     MaxCocPx,
     Grain,
+    BladeCurvature,
+    Fps,
+    ShutterAngleDeg,
+    ShutterRamp,
+    RollingShutterS,
+    MaxBlurPx,
     FlareThreshold,
     FlareLight,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 13] = [
+    pub const ALL: [CameraField; 19] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -64,6 +70,12 @@ impl CameraField {
         CameraField::CatsEye,
         CameraField::MaxCocPx,
         CameraField::Grain,
+        CameraField::BladeCurvature,
+        CameraField::Fps,
+        CameraField::ShutterAngleDeg,
+        CameraField::ShutterRamp,
+        CameraField::RollingShutterS,
+        CameraField::MaxBlurPx,
         CameraField::FlareThreshold,
         CameraField::FlareLight,
     ];
@@ -82,6 +94,12 @@ impl CameraField {
             CameraField::CatsEye => "cats_eye",
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
+            CameraField::BladeCurvature => "blade_curvature",
+            CameraField::Fps => "fps",
+            CameraField::ShutterAngleDeg => "shutter_angle_deg",
+            CameraField::ShutterRamp => "shutter_ramp",
+            CameraField::RollingShutterS => "rolling_shutter_s",
+            CameraField::MaxBlurPx => "max_blur_px",
             CameraField::FlareThreshold => "flare_threshold",
             CameraField::FlareLight => "flare_lights",
         }
@@ -101,6 +119,12 @@ impl CameraField {
             CameraField::CatsEye => "cat's eye",
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::BladeCurvature => "blade curvature",
+            CameraField::Fps => "frame rate",
+            CameraField::ShutterAngleDeg => "shutter angle",
+            CameraField::ShutterRamp => "shutter curve ramp",
+            CameraField::RollingShutterS => "rolling-shutter readout time",
+            CameraField::MaxBlurPx => "largest motion blur",
             CameraField::FlareThreshold => "flare threshold",
             CameraField::FlareLight => "a flare light's numbers",
         }
@@ -118,6 +142,17 @@ impl CameraField {
         };
         format!("{} {value}{unit}", self.label())
     }
+}
+
+/// How the circle of confusion follows depth (see [`crate::optics::ThinLens::coc_renderer_mm`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CocModel {
+    /// Kyaw 2013 eq 5.3: the film at the image distance v, the exit pupil v/(N' P).
+    #[default]
+    Physical,
+    /// The renderers' thin lens: aperture f/N at the pinhole, image scale f.
+    Renderer,
 }
 
 /// Which depth-of-field method renders the bokeh.
@@ -208,6 +243,11 @@ pub struct Camera {
     /// User clamp on |CoC| in pixels.
     pub max_coc_px: f64,
     pub bokeh: BokehMode,
+    /// How the CoC follows depth.
+    pub coc_model: CocModel,
+    /// At anti-aliased depth edges, give each pixel the depth of the layer that brings most of
+    /// its light (the CoC pass); off: the depth as stored.
+    pub resolve_depth_edges: bool,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
@@ -227,9 +267,40 @@ pub struct Camera {
     pub coma: Option<crate::optics::distortion::HeightTable>,
     /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
     pub longitudinal_color_mm: Option<[f64; 2]>,
+    /// The shutter in time and the motion-blur method.
+    pub motion: Motion,
     /// Lens flare: ghosts, starburst and halo around bright lights.
     pub flare: crate::model::flare::FlareSettings,
 }
+
+/// Which motion-blur method renders the velocity pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MotionBlurMode {
+    /// The tiled reconstruction gather (src/passes/motion_blur.rs): a fixed sample count.
+    #[default]
+    Fast,
+    /// Every source pixel scattered along its path at many sub-frame times with depth ordering
+    /// (src/passes/motion_reference.rs): the accuracy reference, cost grows with the blur length.
+    Reference,
+    /// No motion blur.
+    Off,
+}
+
+/// The shutter in time: the frame rate that turns pixels per frame into pixels per exposure,
+/// when the shutter is open and how, and the motion-blur method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    pub fps: f64,
+    /// False: the user gave no frame rate and `fps` is the default.
+    pub fps_given: bool,
+    pub timing: crate::optics::shutter::ShutterTiming,
+    pub mode: MotionBlurMode,
+    /// Blur longer than this (px) is clamped.
+    pub max_blur_px: f64,
+}
+
+/// The frame rate when none is given (film, Blender's and Nuke's default).
+pub const DEFAULT_FPS: f64 = 24.0;
 
 /// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
 /// command line's defaults; set what differs with `..CameraRequest::default()`.
@@ -268,6 +339,12 @@ pub struct CameraRequest {
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
+    /// The lens file's (or its default) when None.
+    pub coc_model: Option<CocModel>,
+    /// Blade curvature, 0 straight .. 1 round; the lens file's when None.
+    pub blade_curvature: Option<f64>,
+    /// Resolve anti-aliased depth edges ([`Camera::resolve_depth_edges`]).
+    pub resolve_depth_edges: bool,
     /// Sensor noise at ISO 100 ([`Camera::grain`]); 0: none.
     pub grain: f64,
     /// Seed of the noise.
@@ -278,6 +355,19 @@ pub struct CameraRequest {
     pub flare_threshold: f64,
     /// Lights given explicitly.
     pub flare_lights: Vec<crate::model::flare::FlareLight>,
+    /// Frames per second of the sequence; [`DEFAULT_FPS`] when None.
+    pub fps: Option<f64>,
+    /// The shutter as an angle (degrees of a frame) instead of `shutter_s`; the exposure uses the
+    /// time it makes.
+    pub shutter_angle_deg: Option<f64>,
+    pub shutter_position: crate::optics::shutter::ShutterPosition,
+    pub shutter_curve: crate::optics::shutter::ShutterCurve,
+    /// A rolling (focal-plane) shutter: the readout time from the first line to the last.
+    pub rolling_shutter_s: Option<f64>,
+    pub rolling_direction: crate::optics::shutter::RollingDirection,
+    pub motion_blur: MotionBlurMode,
+    /// Clamp on the motion blur length in pixels.
+    pub max_blur_px: f64,
 }
 
 impl Default for CameraRequest {
@@ -305,8 +395,19 @@ impl Default for CameraRequest {
             max_coc_px: 64.0,
             force: false,
             bokeh: BokehMode::Tiled,
+            coc_model: None,
+            blade_curvature: None,
+            resolve_depth_edges: true,
             grain: 0.0,
             seed: 0,
+            fps: None,
+            shutter_angle_deg: None,
+            shutter_position: Default::default(),
+            shutter_curve: Default::default(),
+            rolling_shutter_s: None,
+            rolling_direction: Default::default(),
+            motion_blur: MotionBlurMode::Fast,
+            max_blur_px: 512.0,
             flare: true,
             flare_threshold: crate::model::flare::FlareSettings::DEFAULT_THRESHOLD,
             flare_lights: Vec::new(),
@@ -361,7 +462,7 @@ impl Camera {
         let out_of_range = |field: CameraField, value: f64, allowed: String| {
             Err(CameraError::OutOfRange { field, value, lens: lens_file.name.clone(), allowed })
         };
-        if !req.force {
+        if !req.force && !lens_file.ideal {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
                 let allowed = format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max);
                 return out_of_range(CameraField::FNumber, f_number, allowed);
@@ -384,7 +485,26 @@ impl Camera {
                 Err(CameraError::Invalid { field, value, allowed })
             }
         };
-        require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
+        let fps = req.fps.unwrap_or(DEFAULT_FPS);
+        require(CameraField::Fps, fps, fps > 0.0, "a positive number of frames per second")?;
+        if let Some(angle) = req.shutter_angle_deg {
+            require(CameraField::ShutterAngleDeg, angle, angle > 0.0 && angle <= 360.0, "in (0, 360] degrees")?;
+        }
+        // A shutter angle is a time: angle / 360 of a frame. The exposure uses it too.
+        let shutter_s = req.shutter_angle_deg.map_or(req.shutter_s, |angle| angle / 360.0 / fps);
+        require(CameraField::ShutterS, shutter_s, shutter_s > 0.0, "a positive number")?;
+        if let crate::optics::shutter::ShutterCurve::Trapezoid { ramp } = req.shutter_curve {
+            require(CameraField::ShutterRamp, ramp, ramp > 0.0 && ramp <= 0.5, "in (0, 0.5] of the open time")?;
+        }
+        if let Some(r) = req.rolling_shutter_s {
+            require(CameraField::RollingShutterS, r, r >= 0.0, "a time >= 0 s")?;
+        }
+        require(CameraField::MaxBlurPx, req.max_blur_px, req.max_blur_px > 0.0, "a positive number of pixels")?;
+        let mut timing =
+            crate::optics::shutter::ShutterTiming::new(shutter_s, fps, req.shutter_position, req.shutter_curve);
+        if let Some(r) = req.rolling_shutter_s {
+            timing = timing.with_rolling(r, fps, req.rolling_direction);
+        }
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
         require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
@@ -402,6 +522,9 @@ impl Camera {
             "0 (circular) or 3..32",
         )?;
         require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
+        if let Some(c) = req.blade_curvature {
+            require(CameraField::BladeCurvature, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
+        }
         require(CameraField::FlareThreshold, req.flare_threshold, req.flare_threshold > 0.0, "a positive factor")?;
         if let Some(bad) = req.flare_lights.iter().find(|l| !l.is_valid()) {
             let value =
@@ -414,7 +537,9 @@ impl Camera {
             aperture: ApertureShape {
                 blades,
                 rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
-                curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
+                curvature: req
+                    .blade_curvature
+                    .unwrap_or_else(|| lens_file.aperture.curvature_at(f_number, lens_file.f_number_min)),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
                 // A requested cat's eye holds at the frame corner; the lens file's may name its height.
@@ -428,14 +553,20 @@ impl Camera {
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),
-            shutter_s: req.shutter_s,
+            shutter_s,
             iso: req.iso,
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
-            vignetting: req.vignetting,
+            vignetting: req.vignetting && lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc_px: req.max_coc_px,
             bokeh: req.bokeh,
+            coc_model: req.coc_model.or(lens_file.coc_model).unwrap_or(if lens_file.ideal {
+                CocModel::Renderer
+            } else {
+                CocModel::Physical
+            }),
+            resolve_depth_edges: req.resolve_depth_edges,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             grain: req.grain,
@@ -451,6 +582,13 @@ impl Camera {
             }),
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
+            motion: Motion {
+                fps,
+                fps_given: req.fps.is_some(),
+                timing,
+                mode: req.motion_blur,
+                max_blur_px: req.max_blur_px,
+            },
             flare: crate::model::flare::FlareSettings {
                 enabled: req.flare,
                 threshold: req.flare_threshold,
@@ -474,6 +612,15 @@ impl Camera {
                 },
             },
         })
+    }
+
+    /// The signed CoC diameter (mm on the film) of a point at `object_distance_mm`, by the
+    /// camera's CoC model.
+    pub fn coc_mm(&self, object_distance_mm: f64) -> f64 {
+        match self.coc_model {
+            CocModel::Physical => self.lens.coc_mm(object_distance_mm),
+            CocModel::Renderer => self.lens.coc_renderer_mm(object_distance_mm),
+        }
     }
 
     /// Pixel pitch on the film for an image of this size.
@@ -640,6 +787,42 @@ mod tests {
             assert_eq!(err.field(), Some(field));
             assert_eq!(err.to_string(), format!("{what} is outside what the lens {lens} allows ({allowed})"));
             camera(&CameraRequest { force: true, ..req }).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_shutter_angle_is_a_time_and_the_exposure_uses_it() {
+        // 180 degrees at 24 fps: 1/48 s, open a quarter frame either side of the frame time;
+        // 90 degrees lets in half the light.
+        let req = |angle| CameraRequest { fps: Some(24.0), shutter_angle_deg: Some(angle), ..Default::default() };
+        let (half, quarter) = (camera(&req(180.0)).unwrap(), camera(&req(90.0)).unwrap());
+        assert!((half.shutter_s - 1.0 / 48.0).abs() < 1e-15);
+        let t = half.motion.timing;
+        assert!((t.open_frames + 0.25).abs() < 1e-12 && (t.close_frames - 0.25).abs() < 1e-12);
+        assert!((half.exposure_gain() / quarter.exposure_gain() - 2.0).abs() < 1e-12);
+        // Without a frame rate: 24 assumed, and said to be.
+        let assumed = camera(&CameraRequest::default()).unwrap();
+        assert_eq!((assumed.motion.fps, assumed.motion.fps_given), (DEFAULT_FPS, false));
+        for (req, field, message) in [
+            (
+                CameraRequest { fps: Some(0.0), ..Default::default() },
+                CameraField::Fps,
+                "frame rate must be a positive number of frames per second, got 0",
+            ),
+            (req(0.0), CameraField::ShutterAngleDeg, "shutter angle must be in (0, 360] degrees, got 0"),
+            (
+                CameraRequest { rolling_shutter_s: Some(-0.01), ..Default::default() },
+                CameraField::RollingShutterS,
+                "rolling-shutter readout time must be a time >= 0 s, got -0.01",
+            ),
+            (
+                CameraRequest { max_blur_px: 0.0, ..Default::default() },
+                CameraField::MaxBlurPx,
+                "largest motion blur must be a positive number of pixels, got 0",
+            ),
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert_eq!((err.field(), err.to_string()), (Some(field), message.to_string()));
         }
     }
 

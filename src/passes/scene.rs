@@ -46,7 +46,7 @@ impl SceneFacts {
         // The CoC is monotonic in depth, so the nearest and farthest depths bound it.
         let depth_range_m = frame.depth_m.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
         let coc_px = |d_m: f32| {
-            let c = camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
+            let c = camera.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
             c.clamp(-camera.max_coc_px, camera.max_coc_px)
         };
         let mut coc_range_px =

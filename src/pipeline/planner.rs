@@ -25,19 +25,7 @@ pub struct Plan {
 pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let input = PlanInput::new(frame, camera);
     let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
-    Plan { passes, facts: input.facts, notes: vec![motion_blur_note(frame)] }
-}
-
-/// What the velocity pass would call for: this version reads it but has no motion-blur pass.
-fn motion_blur_note(frame: &Frame) -> PlannedPass {
-    let why = match &frame.velocity_px {
-        None => "no velocity pass".to_string(),
-        Some(v) => {
-            let max_px = v.chunks_exact(2).map(|m| (m[0] * m[0] + m[1] * m[1]).sqrt()).fold(0.0f32, f32::max);
-            format!("velocity up to {max_px:.1} px/frame is read, but this version has no motion-blur pass")
-        }
-    };
-    PlannedPass::not_built("motion_blur", why)
+    Plan { passes, facts: input.facts, notes: Vec::new() }
 }
 
 impl Plan {

@@ -4,5 +4,7 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod bench_motion;
+pub mod error_budget;
 pub mod metrics;
 pub mod synth;
