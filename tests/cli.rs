@@ -871,3 +871,16 @@ fn motion_blur_settings_and_velocity_conventions_are_checked_with_their_flags() 
     assert_contains(&ok.stderr, "blur up to 2.8 px");
     assert_contains(&ok.stderr, "before the depth of field");
 }
+
+#[test]
+fn the_flare_report_needs_a_prescription_and_says_so() {
+    // The ghosts are traced through the lens's [[surface]]s: the default lens has none, and the
+    // error names the flag and a lens that has them; nothing is written.
+    let dir = TestDir::new("flare_report_no_prescription");
+    let out = dir.arg("report");
+    let run = realcam(&dir, s(&["flare", "--out-dir", &out]));
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert_contains(&run.stderr, "--lens: lens \"realcam standard 50 mm f/1.4\" has no [[surface]] prescription");
+    assert_contains(&run.stderr, "--lens lenses/tessar-walch-lens.toml");
+    assert!(!dir.join("report").exists());
+}

@@ -411,6 +411,11 @@ impl GhostShape {
     /// The drawn shape's moments (its inside, sdf < 0), integrated on a grid of `per_px`
     /// samples per pixel over its bounds.
     pub fn moments(&self, aperture: &super::AperturePolygon, per_px: usize) -> Option<Moments> {
+        self.moments_step(aperture, 1.0 / per_px.max(1) as f64)
+    }
+
+    /// [`Self::moments`] on a grid of `step_px` (also coarser than a pixel, for large ghosts).
+    pub fn moments_step(&self, aperture: &super::AperturePolygon, step_px: f64) -> Option<Moments> {
         let r = self.radius_px;
         let lo = [
             (self.centre_px[0] - r).max(self.clip_centre_px[0] - self.clip_radius_px),
@@ -423,12 +428,15 @@ impl GhostShape {
         if !(lo[0] < hi[0] && lo[1] < hi[1]) {
             return None;
         }
-        let h = 1.0 / per_px.max(1) as f64;
-        let (nx, ny) = (((hi[0] - lo[0]) / h).ceil() as usize, ((hi[1] - lo[1]) / h).ceil() as usize);
-        let points = (0..nx * ny)
-            .map(|i| [lo[0] + ((i % nx) as f64 + 0.5) * h, lo[1] + ((i / nx) as f64 + 0.5) * h])
+        // The grid fits the bounds exactly (steps of at most step_px), so a symmetric shape has
+        // its centroid on its centre.
+        let (nx, ny) = (((hi[0] - lo[0]) / step_px).ceil().max(1.0), ((hi[1] - lo[1]) / step_px).ceil().max(1.0));
+        let (hx, hy) = ((hi[0] - lo[0]) / nx, (hi[1] - lo[1]) / ny);
+        let nx = nx as usize;
+        let points = (0..nx * ny as usize)
+            .map(|i| [lo[0] + ((i % nx) as f64 + 0.5) * hx, lo[1] + ((i / nx) as f64 + 0.5) * hy])
             .filter(|&p| self.sdf(p, aperture) < 0.0);
-        Moments::of(points.map(|p| (p, h * h)))
+        Moments::of(points.map(|p| (p, hx * hy)))
     }
 }
 
