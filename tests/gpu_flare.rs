@@ -148,9 +148,8 @@ fn ghosts_lie_where_the_matrices_and_the_traced_rays_put_them_with_the_lights_en
         tested += 1;
         let rgba = render_with(&frame, &camera, ghosts_only(&frame, &camera, &[g.path]));
         let events = g.path.events(flare_lens.prescription.surfaces.len());
-        for c in 0..3 {
+        for (c, shape) in shapes.iter().enumerate() {
             let m = channel_moments(&rgba, w, c).expect("the ghost is drawn");
-            let shape = &shapes[c];
             let miss = (m.centroid_px[0] - shape.centre_px[0]).hypot(m.centroid_px[1] - shape.centre_px[1]);
             assert!(
                 miss < 0.25,

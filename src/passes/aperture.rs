@@ -186,6 +186,7 @@ pub fn mask_value(mask: &[f32], uv: [f32; 2]) -> f32 {
 /// The weight of aperture_weight_at in glsl/include/aperture.glsl: from the shape table (texels
 /// `table`, of half-size `p.shape_radius`) for an integer offset `o`, the general
 /// [`aperture_weight`] otherwise.
+#[allow(clippy::too_many_arguments)]
 pub fn aperture_weight_at(
     o: [i32; 2],
     r: f32,

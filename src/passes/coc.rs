@@ -168,7 +168,7 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
         return w_p;
     }
     let offset = |i: i32| (x + i % 3 - 1, y + i / 3 - 1);
-    let w: Vec<f32> = (0..9).map(|i| offset(i)).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
+    let w: Vec<f32> = (0..9).map(offset).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
     let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
     if push.coc_scale_px_mm * (w_near - w_far) <= 1.0 {
         return w_p;
@@ -179,8 +179,8 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
         let (qx, qy) = offset(i);
         let c = color.clamped(qx, qy);
         let layer = if w[i as usize] > w_mid { &mut near } else { &mut far };
-        for k in 0..3 {
-            layer.0[k] += finite_or_zero(c[k]);
+        for (sum, &v) in layer.0.iter_mut().zip(c) {
+            *sum += finite_or_zero(v);
         }
         layer.1 += 1.0;
         layer.2 += w[i as usize];

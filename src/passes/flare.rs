@@ -9,6 +9,7 @@
 //!      src/optics/flare/starburst.rs), none where an element would not show;
 //!   3. `ghost_sprites`: the ghost-sprite kernel, the sprites binned per tile and added, every
 //!      output pixel written once.
+//!
 //! The plan skips the pass when no light in the frame could make an element add a thousandth of
 //! the sensor's saturation, and says how bright a light would have to be.
 
@@ -201,7 +202,7 @@ impl FlareModel {
 
     /// The spikes' light in the pixel next to the light, per channel, per unit energy.
     pub fn spike_peak(&self) -> [f64; 3] {
-        let edges = if self.starburst.aperture.blades % 2 == 0 { 2.0 } else { 1.0 };
+        let edges = if self.starburst.aperture.blades.is_multiple_of(2) { 2.0 } else { 1.0 };
         std::array::from_fn(|c| edges * self.starburst.spike_coefficient(channel_nm(c)) / self.pixel_pitch_mm)
     }
 

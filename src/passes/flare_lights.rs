@@ -76,7 +76,8 @@ pub fn light_reach(fc: &FlareConstants, energy: [f64; 3], area_px: f64) -> Light
     }
     glow_reach = glow_reach.min(fc.max_radius_px as f64);
     let halo_at = |r: f64| if rho > 0.0 { (1.0 + r * r / (rho * rho)).powf(-1.5) } else { 0.0 };
-    if !(glow_peak / r0.powi(3) + halo_peak * halo_at(r0) >= visible) {
+    let at_r0 = glow_peak / r0.powi(3) + halo_peak * halo_at(r0);
+    if at_r0.is_nan() || at_r0 < visible {
         glow_reach = 0.0;
     }
     let moved = std::array::from_fn(|c| {
@@ -160,7 +161,7 @@ fn ghost_sprite(fc: &FlareConstants, sprite: &mut [f32], light: &[f32], l: usize
 /// edges'), 2n for an odd one.
 pub fn spike_direction(blades: i32, rotation: f64, k: usize) -> ([f64; 2], f64) {
     let n = blades.max(1) as usize;
-    let even = n % 2 == 0;
+    let even = n.is_multiple_of(2);
     let sector = 2.0 * PI / n as f64;
     let edge = if even { k } else { k % n };
     let angle = 0.5 * PI + rotation + (edge as f64 + 0.5) * sector;
@@ -194,7 +195,7 @@ fn glow_sprite(fc: &FlareConstants, sprite: &mut [f32], light: &[f32], l: usize)
     let r0 = light[LIGHT_R0 as usize] as f64;
     let r1 = light[LIGHT_GLOW_REACH as usize] as f64;
     let o = [light[LIGHT_X as usize] as f64, light[LIGHT_Y as usize] as f64];
-    if !(r1 > r0) {
+    if r1.partial_cmp(&r0) != Some(std::cmp::Ordering::Greater) {
         none(sprite);
         return;
     }

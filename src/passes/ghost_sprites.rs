@@ -127,7 +127,7 @@ impl Twin for GhostSpritesShader {
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
         for s in sprites.chunks_exact(SPRITE_WORDS as usize).take(total) {
             let bx = &s[SPRITE_BOUNDS as usize..][..4];
-            if !(bx[0] <= bx[2]) {
+            if !matches!(bx[0].partial_cmp(&bx[2]), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)) {
                 continue;
             }
             let (x0, y0) = (bx[0].floor().max(0.0) as u32, bx[1].floor().max(0.0) as u32);

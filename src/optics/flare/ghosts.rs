@@ -305,7 +305,7 @@ impl GhostCatalogue {
                 culled += 1;
                 continue;
             };
-            if channels.iter().all(|c| !(c.energy_ratio >= min_energy_ratio)) {
+            if channels.iter().all(|c| c.energy_ratio.is_nan() || c.energy_ratio < min_energy_ratio) {
                 culled += 1;
                 continue;
             }
@@ -382,7 +382,7 @@ impl GhostChannel {
             clip_radius_px: (scale.abs() * clip.radius_mm).min(1e30),
             irradiance_per_energy,
             clip_surface: (clip.surface != usize::MAX).then_some(clip.surface),
-            blocked: !(least > 0.0),
+            blocked: least.is_nan() || least <= 0.0,
         }
     }
 }
@@ -444,7 +444,7 @@ impl Moments {
     /// Of weighted points (position, weight).
     pub fn of(points: impl Iterator<Item = ([f64; 2], f64)> + Clone) -> Option<Moments> {
         let (w, sx, sy) = points.clone().fold((0.0, 0.0, 0.0), |(w, x, y), (p, v)| (w + v, x + v * p[0], y + v * p[1]));
-        if !(w > 0.0) {
+        if w.is_nan() || w <= 0.0 {
             return None;
         }
         let c = [sx / w, sy / w];

@@ -135,7 +135,7 @@ impl Halo {
     /// The radius beyond which the density stays below `density` (0 if it never reaches it).
     pub fn radius_below(&self, density: f64) -> f64 {
         let peak = self.density(0.0);
-        if !(density > 0.0) || peak <= density {
+        if density.is_nan() || density <= 0.0 || peak <= density {
             return 0.0;
         }
         self.radius_mm * ((peak / density).powf(2.0 / 3.0) - 1.0).max(0.0).sqrt()

@@ -243,7 +243,7 @@ impl TracedImage {
     /// Centroid on the sensor (mm; the sensor's own coordinates).
     pub fn centroid(&self) -> Option<[f64; 2]> {
         let e = self.energy();
-        if !(e > 0.0) {
+        if e.is_nan() || e <= 0.0 {
             return None;
         }
         let sum =
