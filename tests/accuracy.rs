@@ -43,9 +43,10 @@ fn accuracy_report_on_a_tiny_scene() {
     for r in &results[1..] {
         assert!(r.error.rmse > 0.0 && r.error.rmse_display < 0.1, "{}: {:?}", r.method, r.error);
     }
-    // The fast path with its exact gather up to 16 px is the geometric gather (CoC < 16 px here).
+    // The fast path with its exact gather up to a radius of 8 px is the geometric gather (every
+    // CoC radius is below 8 px here).
     let geometric = &results[1];
-    let exact_tiled = results.iter().find(|r| r.method.contains("exact up to 16")).unwrap();
+    let exact_tiled = results.iter().find(|r| r.method.contains("exact up to 8 px")).unwrap();
     assert!(
         (geometric.error.rmse - exact_tiled.error.rmse).abs() < 1e-4,
         "{:?} vs {:?}",
