@@ -463,21 +463,213 @@ fn failed_render_does_not_clobber_the_png() {
     assert_failed_render_does_not_clobber("no_clobber_png", true);
 }
 
-/// A write that fails after the render (the PNG target is a directory) reports the path and
-/// leaves no temporary file; the existing directory is untouched.
+/// A PNG target that is a folder is refused before any work; the folder and an existing EXR
+/// are untouched and no temporary file is left.
 #[test]
-fn failed_png_write_leaves_no_temporary_file() {
+fn png_target_that_is_a_folder_is_refused_before_rendering() {
     let dir = TestDir::new("png_write_fails");
     let mut args = small_scene(&dir);
     std::fs::create_dir(dir.join("out.png")).unwrap();
     std::fs::write(dir.join("out.png").join("keep.txt"), b"keep").unwrap();
+    std::fs::write(dir.join("out.exr"), b"old").unwrap();
     args.extend(s(&["--png", &dir.arg("out.png")]));
     let err = render(&dir, &args).failure();
-    assert_contains(&err, &format!("cannot write \"{}\"", dir.arg("out.png")));
+    assert_contains(
+        &err,
+        &format!("error: png \"{}\": it is a folder; realcam writes only new files", dir.arg("out.png")),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened:\n{err}");
     assert_eq!(std::fs::read(dir.join("out.png").join("keep.txt")).unwrap(), b"keep");
-    // The EXR is written before the PNG; what matters is that nothing half-written is left.
-    let listing = dir.listing();
-    assert!(listing.iter().all(|n| !n.contains("tmp")), "temporary files left behind: {listing:?}");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), b"old");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr", "out.png"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8b: never lose a file (outputs are checked first, written together, never over an input)
+// ---------------------------------------------------------------------------------------------
+
+/// `-o` at a device, a FIFO, a symlink or a folder is refused before any work, and the thing
+/// at the path is left as it was.
+#[test]
+fn outputs_that_are_not_regular_files_are_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = TestDir::new("not_regular");
+    let base = small_scene(&dir);
+    let with_output = |output: &str| {
+        let mut args = base.clone();
+        let at = args.iter().position(|a| a == "-o").unwrap();
+        args[at + 1] = output.to_string();
+        args
+    };
+    std::fs::write(dir.join("kept.exr"), b"kept").unwrap();
+    std::os::unix::fs::symlink(dir.join("kept.exr"), dir.join("link.exr")).unwrap();
+    let fifo = Command::new("mkfifo").arg(dir.join("fifo.exr")).status().unwrap();
+    assert!(fifo.success());
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    for (name, kind) in [
+        ("link.exr", "a symbolic link"),
+        ("fifo.exr", "a FIFO"),
+        ("folder.exr", "a folder"),
+        ("/dev/null", "a character device"),
+    ] {
+        let path = if name.starts_with('/') { name.to_string() } else { dir.arg(name) };
+        let err = render(&dir, &with_output(&path)).failure();
+        assert_contains(
+            &err,
+            &format!("error: output \"{path}\": it is {kind}; realcam writes only new files or replaces regular ones (--output)"),
+        );
+        assert!(!err.contains("device:"), "the GPU was opened:\n{err}");
+    }
+    assert!(std::fs::symlink_metadata(dir.join("link.exr")).unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read(dir.join("kept.exr")).unwrap(), b"kept");
+    assert!(std::fs::symlink_metadata(dir.join("fifo.exr")).unwrap().file_type().is_fifo());
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "kept.exr", "link.exr", "fifo.exr", "folder.exr"]);
+}
+
+/// An output that resolves to an input (the same path, another spelling, a symlink or a hard
+/// link to it) or to another output is refused; the inputs are left byte for byte.
+#[test]
+fn outputs_that_are_inputs_are_refused() {
+    let dir = TestDir::new("output_is_input");
+    let base = small_scene(&dir);
+    let color = std::fs::read(dir.join("scene_color.exr")).unwrap();
+    let depth = std::fs::read(dir.join("scene_depth.exr")).unwrap();
+    std::os::unix::fs::symlink(dir.join("scene_color.exr"), dir.join("color_link.exr")).unwrap();
+    std::fs::hard_link(dir.join("scene_depth.exr"), dir.join("depth_hard.exr")).unwrap();
+    let run = |output: &str, extra: &[&str]| {
+        let mut args = base.clone();
+        let at = args.iter().position(|a| a == "-o").unwrap();
+        args[at + 1] = output.to_string();
+        args.extend(s(extra));
+        render(&dir, &args).failure()
+    };
+    let color_arg = dir.arg("scene_color.exr");
+    let depth_arg = dir.arg("scene_depth.exr");
+    let err = run(&color_arg, &[]);
+    assert_contains(
+        &err,
+        &format!("error: output \"{color_arg}\": it is the input color pass \"{color_arg}\"; realcam never writes over its inputs (--output)"),
+    );
+    let other_spelling = format!("{}/./scene_depth.exr", dir.path.display());
+    assert_contains(&run(&other_spelling, &[]), &format!("it is the input depth pass \"{depth_arg}\""));
+    // Through the current folder, relative.
+    assert_contains(&run("scene_color.exr", &[]), "it is the input color pass");
+    // A hard link to the depth pass, and --color given through a symlink.
+    assert_contains(&run(&dir.arg("depth_hard.exr"), &[]), "it is the input depth pass");
+    let mut args = base.clone();
+    let at = args.iter().position(|a| a == "--color").unwrap();
+    args[at + 1] = dir.arg("color_link.exr");
+    let at = args.iter().position(|a| a == "-o").unwrap();
+    args[at + 1] = color_arg.clone();
+    assert_contains(&render(&dir, &args).failure(), "it is the input color pass");
+    // --png and -o the same file.
+    let out = dir.arg("out.exr");
+    let err = run(&out, &["--png", &out]);
+    assert_contains(&err, &format!("error: png \"{out}\": the output \"{out}\" is the same file (--png)"));
+    assert_eq!(std::fs::read(dir.join("scene_color.exr")).unwrap(), color);
+    assert_eq!(std::fs::read(dir.join("scene_depth.exr")).unwrap(), depth);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "color_link.exr", "depth_hard.exr"]);
+}
+
+/// Every output of a run is renamed into place only when all were written: a write that
+/// fails after the render (a lens name an EXR attribute cannot hold) leaves the existing EXR,
+/// PNG and trace as they were, and a missing PNG folder fails before the render.
+#[test]
+fn outputs_are_replaced_all_together_or_not_at_all() {
+    let dir = TestDir::new("all_or_nothing");
+    let mut args = small_scene(&dir);
+    let old: [(&str, &[u8]); 3] = [("out.exr", b"old exr"), ("out.png", b"old png"), ("trace.json", b"{}")];
+    for (name, bytes) in old {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let lens = dir.arg("lens.toml");
+    std::fs::write(&lens, VALID_LENS.replace("test lens", "\u{30ec}\u{30f3}\u{30ba}") + "[aperture]\nblades = 9\n")
+        .unwrap();
+    let mut failing = args.clone();
+    failing.extend(s(&["--png", &dir.arg("out.png"), "--trace", &dir.arg("trace.json"), "--lens", &lens]));
+    let err = render(&dir, &failing).failure();
+    assert_contains(&err, "attribute value");
+    assert_contains(&err, "device:");
+    for (name, bytes) in old {
+        assert_eq!(std::fs::read(dir.join(name)).unwrap(), bytes, "{name} was replaced");
+    }
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr", "out.png", "trace.json", "lens.toml"]);
+
+    args.extend(s(&["--png", "/missing-dir/p.png"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: png \"/missing-dir/p.png\": the folder \"/missing-dir\" does not exist (--png)");
+    assert!(!err.contains("device:"), "the GPU was opened before the output folder was checked:\n{err}");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), b"old exr");
+}
+
+/// The output folder is checked before anything is read: a missing or read-only folder is
+/// the first error, even before a missing input.
+#[test]
+fn the_output_folder_is_checked_before_any_work() {
+    let dir = TestDir::new("output_folder");
+    let out = dir.arg("no-such-folder/out.exr");
+    let err = render(&dir, &s(&["--color", &dir.arg("missing.exr"), "-o", &out])).failure();
+    assert_contains(
+        &err,
+        &format!("error: output \"{out}\": the folder \"{}\" does not exist (--output)", dir.arg("no-such-folder")),
+    );
+    assert_listing(&dir, &[]);
+}
+
+/// The `.NAME.realcam-HOST-PID-N.tmp` files in `dir`.
+fn temporaries(dir: &TestDir) -> Vec<String> {
+    dir.listing().into_iter().filter(|n| n.contains(".realcam-") && n.ends_with(".tmp")).collect()
+}
+
+/// Starts a slow render (the reference bokeh on the demo scene, wide open) into `dir` and
+/// waits until its temporary output exists.
+fn start_slow_render(dir: &TestDir) -> std::process::Child {
+    let testdata = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata");
+    let child = Command::new(env!("CARGO_BIN_EXE_realcam"))
+        .args(["render", "--color"])
+        .arg(testdata.join("demo_color.exr"))
+        .arg("--depth")
+        .arg(testdata.join("demo_depth.exr"))
+        .args(["--fstop", "1.4", "--focus", "0.6", "--bokeh", "reference", "-o"])
+        .arg(dir.join("out.exr"))
+        .current_dir(&dir.path)
+        .env("REALCAM_CACHE_DIR", &dir.cache)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("running the realcam binary");
+    let start = std::time::Instant::now();
+    while temporaries(dir).is_empty() {
+        assert!(start.elapsed().as_secs() < 60, "no temporary output appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child
+}
+
+/// SIGINT and SIGTERM during a run remove its temporary output, and the process still ends by
+/// that signal; a SIGKILLed run's temporary is removed by the next run into the same folder.
+#[test]
+fn interrupted_runs_leave_no_temporary_file() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = TestDir::new("signals");
+    for (signal, number) in [("INT", 2), ("TERM", 15)] {
+        let mut child = start_slow_render(&dir);
+        let kill = Command::new("kill").args([format!("-{signal}"), child.id().to_string()]).status().unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.signal(), Some(number), "SIG{signal}: {status:?}");
+        assert_eq!(temporaries(&dir), Vec::<String>::new(), "SIG{signal} left a temporary file");
+        assert!(!dir.join("out.exr").exists());
+    }
+    let mut child = start_slow_render(&dir);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left = temporaries(&dir);
+    assert_eq!(left.len(), 1, "{left:?}");
+    // The next run into this folder (here one that fails on its input) removes it.
+    let err = render(&dir, &s(&["--color", &dir.arg("missing.exr"), "-o", &dir.arg("other.exr")])).failure();
+    assert_contains(&err, "does not exist");
+    assert_listing(&dir, &[]);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -9,9 +9,10 @@
 //! - [`lens_analysis`]: a lens file's or a prescription's trace, and the lens file its tables make.
 //! - [`lensfun`]: lenses of the lensfun database converted into lens files.
 //!
-//! Both writers write a temporary file next to the target and rename it onto the target
-//! only after a complete, successful write, so a failed write never touches an existing
-//! target.
+//! - [`output`]: every file realcam writes goes through a temporary beside its target, renamed
+//!   onto it only after a complete write of every output of the run, so a failed or interrupted
+//!   run never touches an existing file; targets that are not regular files, or are inputs, are
+//!   refused before any work.
 
 pub mod exr_read;
 pub mod exr_write;
@@ -19,15 +20,14 @@ pub mod film_file;
 pub mod lens_analysis;
 pub mod lens_file;
 pub mod lensfun;
+pub mod output;
 pub mod png;
 
 pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba};
-pub use exr_write::{write_exr_channels, write_exr_rgba, ExrWriteOptions};
-pub use png::write_png_srgb;
+pub use exr_write::{encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrWriteOptions};
+pub use png::{encode_png_srgb, write_png_srgb};
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::PathBuf;
 
 /// Every failure of this module. Each names the file involved and, where relevant, the
 /// channel.
@@ -71,6 +71,10 @@ pub enum IoError {
     PngEncode { path: PathBuf, source: image::ImageError },
     #[error("cannot write \"{}\": {source}", .path.display())]
     Write { path: PathBuf, source: std::io::Error },
+    /// An output path refused before any work (see [`output::Outputs::new`]), by the field
+    /// that named it.
+    #[error("{field} \"{}\": {reason}", .path.display())]
+    Output { field: &'static str, path: PathBuf, reason: String },
 }
 
 /// Interleaved f32 image, row-major, top row first (y down), `channels` values per pixel.
@@ -164,7 +168,7 @@ impl IoError {
     /// The field of [`PassSources`] the error is about, if it is about one.
     pub fn field(&self) -> Option<&'static str> {
         match self {
-            IoError::InvalidArgument { field, .. } => Some(field),
+            IoError::InvalidArgument { field, .. } | IoError::Output { field, .. } => Some(field),
             _ => None,
         }
     }
@@ -190,37 +194,6 @@ pub struct ScenePasses {
     pub color_nan_count: u64,
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it onto `path`. On any
-/// failure the temporary file is removed and an existing `path` is left untouched.
-pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path.file_name().ok_or_else(|| IoError::InvalidImage {
-        path: path.to_path_buf(),
-        reason: "the path does not name a file".into(),
-    })?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        IoError::Write { path: path.to_path_buf(), source }
-    })
-}
-
 /// A fresh, empty directory under the system temp dir for one test.
 #[cfg(test)]
 pub(crate) fn test_dir(name: &str) -> PathBuf {
@@ -244,13 +217,13 @@ mod tests {
     }
 
     #[test]
-    fn atomic_write_replaces_and_cleans_up() {
+    fn writes_replace_and_clean_up() {
         let dir = test_dir("atomic");
         let target = dir.join("a.bin");
-        write_file_atomically(&target, b"one").unwrap();
-        write_file_atomically(&target, b"two").unwrap();
+        output::write_file("output", &target, b"one").unwrap();
+        output::write_file("output", &target, b"two").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"two");
-        let err = write_file_atomically(&dir.join("missing/a.bin"), b"x").unwrap_err();
+        let err = output::write_file("output", &dir.join("missing/a.bin"), b"x").unwrap_err();
         assert!(err.to_string().contains("missing/a.bin"), "{err}");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         let _ = std::fs::remove_dir_all(&dir);

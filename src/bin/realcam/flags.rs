@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 18] = [
+const FLAGS: [(&str, &str); 21] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -27,6 +27,9 @@ const FLAGS: [(&str, &str); 18] = [
     ("f_number_min", "--f-number-min"),
     ("focus_min_m", "--focus-min-m"),
     ("sensor_diagonal_mm", "--sensor-diagonal-mm"),
+    ("output", "--output"),
+    ("png", "--png"),
+    ("trace", "--trace"),
 ];
 
 /// The flag of a library field (the field's own name if it has none).

@@ -1,15 +1,16 @@
 //! `realcam render`: color + depth (+ velocity) passes through a camera.
 
-use crate::common::{write_text_atomically, GpuArgs, LensArgs};
+use crate::common::{GpuArgs, LensArgs};
 use crate::flags::NameFlags;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
+use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_shutter_s, parse_spherical_aberration};
 use realcam::pipeline::render::Renderer;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum FilmArg {
@@ -209,6 +210,23 @@ impl RenderArgs {
         Ok(camera)
     }
 
+    /// The outputs, checked against each other and the inputs and reserved, before any work.
+    fn outputs(&self) -> Result<Outputs> {
+        let mut outputs: Vec<(&'static str, &Path)> = vec![("output", &self.output)];
+        outputs.extend(self.png.as_deref().map(|p| ("png", p)));
+        outputs.extend(self.trace.as_deref().map(|p| ("trace", p)));
+        let inputs = [
+            ("color pass", Some(self.color.as_path())),
+            ("depth pass", self.depth.as_deref()),
+            ("velocity pass", self.velocity.as_deref()),
+            ("aperture image", self.aperture_image.as_deref()),
+            ("lens file", self.lens.lens.lens.as_deref()),
+            ("film file", self.film_file.as_deref()),
+        ];
+        let inputs: Vec<(&'static str, &Path)> = inputs.into_iter().filter_map(|(w, p)| Some((w, p?))).collect();
+        Outputs::new(&outputs, &inputs).name_flags()
+    }
+
     /// Where the passes are, as these flags say.
     fn sources(&self) -> PassSources {
         PassSources {
@@ -225,6 +243,7 @@ impl RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let mut outputs = args.outputs()?;
     let camera = args.camera()?;
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
@@ -241,10 +260,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }
-    if let Some(trace) = &args.trace {
-        write_text_atomically(trace, &rendered.profile.chrome_trace_json())
-            .with_context(|| format!("writing the trace {}", trace.display()))?;
-    }
     if gpu.validation_message_count() > 0 {
         bail!("{} Vulkan validation messages (see above)", gpu.validation_message_count());
     }
@@ -256,11 +271,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         data_origin: frame.data_origin,
         attributes: camera.attributes(),
     };
-    io::write_exr_rgba(&args.output, &image, &exr_options)?;
-    eprintln!("wrote {}", args.output.display());
+    // Every output to its temporary first; renamed together only when all were written.
+    outputs.write("output", &io::encode_exr_rgba(&args.output, &image, &exr_options)?)?;
     if let Some(png) = &args.png {
-        io::write_png_srgb(png, &image)?;
-        eprintln!("wrote {}", png.display());
+        outputs.write("png", &io::encode_png_srgb(png, &image)?)?;
+    }
+    if args.trace.is_some() {
+        outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
+    }
+    outputs.commit()?;
+    for path in [Some(&args.output), args.png.as_ref(), args.trace.as_ref()].into_iter().flatten() {
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }
