@@ -1004,3 +1004,169 @@ fn every_film_file_in_films_parses_and_the_presets_match_the_built_ins() {
     names.sort();
     assert_eq!(names, ["contrast", "neutral", "reversal-example", "soft"]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Hostile inputs: declared sizes checked against the memory before anything is allocated
+// ---------------------------------------------------------------------------------------------
+
+/// A single-part tiled EXR whose header declares a `w`x`h` image of one tile (channels B, G,
+/// R, Z as half) followed by one empty chunk: 395 bytes, whatever it declares.
+fn tiled_exr_header(w: i32, h: i32) -> Vec<u8> {
+    fn attr(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
+        for text in [name, kind] {
+            out.extend(text.as_bytes());
+            out.push(0);
+        }
+        out.extend((value.len() as i32).to_le_bytes());
+        out.extend(value);
+    }
+    let ints = |v: &[i32]| v.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>();
+    let mut channels = Vec::new();
+    for name in ["B", "G", "R", "Z"] {
+        channels.extend(name.as_bytes());
+        channels.extend([0, 1, 0, 0, 0, 0, 0, 0, 0]); // \0, type HALF, pLinear, reserved
+        channels.extend(ints(&[1, 1]));
+    }
+    channels.push(0);
+    let window = ints(&[0, 0, w - 1, h - 1]);
+    let mut header = Vec::new();
+    attr(&mut header, "channels", "chlist", &channels);
+    attr(&mut header, "compression", "compression", &[0]);
+    attr(&mut header, "dataWindow", "box2i", &window);
+    attr(&mut header, "displayWindow", "box2i", &window);
+    attr(&mut header, "lineOrder", "lineOrder", &[0]);
+    attr(&mut header, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+    attr(&mut header, "screenWindowCenter", "v2f", &[0; 8]);
+    attr(&mut header, "screenWindowWidth", "float", &1f32.to_le_bytes());
+    let mut tiles = ints(&[w, h]);
+    tiles.push(0); // one level
+    attr(&mut header, "tiles", "tiledesc", &tiles);
+    header.push(0);
+    let mut file = ints(&[20000630, 2 | 0x200]); // magic, version 2 with the tiled flag
+    let chunk_at = (file.len() + header.len() + 8) as u64;
+    file.extend(header);
+    file.extend(chunk_at.to_le_bytes());
+    file.extend(ints(&[0, 0, 0, 0, 8]));
+    file.extend([0; 8]);
+    file
+}
+
+#[test]
+fn a_header_declaring_a_huge_image_is_refused_before_allocating() {
+    let dir = TestDir::new("huge_header");
+    std::fs::write(dir.join("huge.exr"), tiled_exr_header(100_000, 100_000)).unwrap();
+    assert_eq!(std::fs::metadata(dir.join("huge.exr")).unwrap().len(), 395);
+    let err = render(&dir, &s(&["--color", &dir.arg("huge.exr"), "-o", &dir.arg("out.exr")])).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: color: \"{}\" declares a 100000x100000 px image: reading it takes 400.0 GB, more than the ",
+            dir.arg("huge.exr")
+        ),
+    );
+    assert_contains(&err, "of memory available (free memory, address-space limit)");
+    // With --max-pixels, that limit.
+    let err =
+        render(&dir, &s(&["--color", &dir.arg("huge.exr"), "--max-pixels", "8294400", "-o", &dir.arg("out.exr")]))
+            .failure();
+    assert_contains(
+        &err,
+        "declares a 100000x100000 px image (10000000000 pixels), more than the limit of 8294400 pixels (--max-pixels)",
+    );
+    assert_listing(&dir, &["huge.exr"]);
+}
+
+/// Under a 4 GB address-space limit a 20000x20000 header is refused with the limit, not an
+/// abort; a small frame still renders under the same limit.
+#[test]
+fn a_memory_limit_refuses_what_does_not_fit_and_renders_what_does() {
+    let dir = TestDir::new("ulimit");
+    std::fs::write(dir.join("big.exr"), tiled_exr_header(20_000, 20_000)).unwrap();
+    let bin = env!("CARGO_BIN_EXE_realcam");
+    let limited = |args: &str| {
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(format!("ulimit -v 4194304 && exec {bin} render {args}"))
+            .current_dir(&dir.path)
+            .env("REALCAM_CACHE_DIR", &dir.cache)
+            .output()
+            .unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, err) = limited(&format!("--color {} -o {}", dir.arg("big.exr"), dir.arg("out.exr")));
+    assert_eq!(code, Some(1), "{err}");
+    assert_contains(&err, "declares a 20000x20000 px image: reading it takes 16.0 GB, more than the ");
+    dir.scene("p", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]));
+    let (code, err) = limited(&format!(
+        "--color {} --depth {} -o {}",
+        dir.arg("p_color.exr"),
+        dir.arg("p_depth.exr"),
+        dir.arg("out.exr")
+    ));
+    assert_eq!(code, Some(0), "{err}");
+}
+
+/// A PNG whose header declares `w`x`h` px (8-bit grey), with an empty IDAT chunk.
+fn png_header(w: u32, h: u32) -> Vec<u8> {
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+            }
+        }
+        !crc
+    }
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(w.to_be_bytes());
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 0, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    png.extend([0, 0, 0, 0]);
+    png.extend(b"IDAT");
+    png.extend(crc32(b"IDAT").to_be_bytes());
+    png.extend([0, 0, 0, 0]);
+    png.extend(b"IEND");
+    png.extend(crc32(b"IEND").to_be_bytes());
+    png
+}
+
+#[test]
+fn a_huge_aperture_image_is_refused_with_its_size_and_the_limit() {
+    let dir = TestDir::new("huge_aperture");
+    let mut args = small_scene(&dir);
+    std::fs::write(dir.join("iris.png"), png_header(100_000, 100_000)).unwrap();
+    args.extend(s(&["--aperture-image", &dir.arg("iris.png"), "--max-pixels", "16777216"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: aperture image: \"{}\" declares a 100000x100000 px image (10000000000 pixels), more than the limit of 16777216 pixels (--max-pixels)",
+            dir.arg("iris.png")
+        ),
+    );
+    let at = args.iter().position(|a| a == "--max-pixels").unwrap();
+    args.truncate(at);
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "declares a 100000x100000 px image: reading it takes 200.0 GB, more than the ");
+}
+
+/// A frame wider than the device's largest image is an error naming the device's limit
+/// (lavapipe: 16384 px), before any GPU image is made.
+#[test]
+fn a_frame_larger_than_the_device_takes_is_a_clear_error() {
+    let dir = TestDir::new("wide_frame");
+    let w = 16_400u32;
+    write_color_only(&dir.join("c.exr"), w, 1);
+    write_depth(&dir.join("d.exr"), w, 1, &vec![2.0; w as usize]);
+    let err =
+        render(&dir, &s(&["--color", &dir.arg("c.exr"), "--depth", &dir.arg("d.exr"), "-o", &dir.arg("out.exr")]))
+            .failure();
+    assert_contains(&err, "error: a frame of 16400x1 px does not fit the device");
+    assert_contains(&err, "its images may be at most");
+    assert_listing(&dir, &["c.exr", "d.exr"]);
+}

@@ -26,7 +26,7 @@
 //! (-x, +y) when the first contains `.Vector.`, else as px toward the next frame with y UP
 //! (x, -y). The conventions used are written to [`ScenePasses::channel_report`].
 
-use super::{Image, IoError, PassSources, ScenePasses};
+use super::{Image, IoError, MemoryBudget, PassSources, ScenePasses};
 use exr::image::FlatSamples;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -70,8 +70,12 @@ struct ExrFile {
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
+/// Bytes per pixel that [`load_passes`] allocates beyond the decoded samples: the interleaved
+/// colour (4 f32), depth (1) and velocity (2), and one channel converted to f32 at a time.
+const LOADED_BYTES_PER_PX: u64 = 4 * (4 + 1 + 2 + 1);
+
 impl ExrFile {
-    fn open(path: &Path, what: &str) -> Result<ExrFile, IoError> {
+    fn open(path: &Path, what: &str, budget: &MemoryBudget) -> Result<ExrFile, IoError> {
         let read_err = |source: std::io::Error| {
             if source.kind() == std::io::ErrorKind::NotFound {
                 IoError::NotFound { what: what.into(), path: path.into() }
@@ -88,11 +92,25 @@ impl ExrFile {
             return Err(IoError::NotExr { what: what.into(), path: path.into() });
         }
         drop(file);
-        let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|source| IoError::Exr {
-            what: what.into(),
-            path: path.into(),
-            source,
-        })?;
+        let exr_err = |source| IoError::Exr { what: what.into(), path: path.into(), source };
+        // The headers alone first: the declared sizes against the budget before any pixel
+        // storage is allocated.
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
+        let mut decoded_bytes = 0u64;
+        let mut largest = (0u64, 0u64);
+        for header in &meta.headers {
+            let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+            let sample_bytes: u64 = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u64).sum();
+            decoded_bytes = decoded_bytes.saturating_add(w.saturating_mul(h).saturating_mul(sample_bytes));
+            budget.check(what, path, w, h, 0)?;
+            if w.saturating_mul(h) > largest.0.saturating_mul(largest.1) {
+                largest = (w, h);
+            }
+        }
+        let loaded = largest.0.saturating_mul(largest.1).saturating_mul(LOADED_BYTES_PER_PX);
+        budget.check(what, path, largest.0, largest.1, decoded_bytes.saturating_add(loaded))?;
+        drop(meta);
+        let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(exr_err)?;
         let dw = image.attributes.display_window;
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();
@@ -390,21 +408,31 @@ fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a
 /// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
 /// discovery as [`load_passes`]. Values are returned as stored (NaN/Inf kept).
 pub fn read_exr_rgba(path: &Path) -> Result<Image, IoError> {
-    let f = ExrFile::open(path, "color")?;
+    read_exr_rgba_within(path, &MemoryBudget::system())
+}
+
+/// [`read_exr_rgba`] within `budget`.
+pub fn read_exr_rgba_within(path: &Path, budget: &MemoryBudget) -> Result<Image, IoError> {
+    let f = ExrFile::open(path, "color", budget)?;
     Ok(color_image(&f, None)?.0)
 }
 
 /// Reads one channel, by exact (qualified) name, as a 1-channel image, values as stored.
 pub fn read_exr_channel(path: &Path, channel: &str) -> Result<Image, IoError> {
-    let f = ExrFile::open(path, "channel")?;
+    let f = ExrFile::open(path, "channel", &MemoryBudget::system())?;
     let c = f.require("channel", channel, &[channel])?;
     Ok(interleave(&c, 1, 0.0))
 }
 
 /// Opens `path` unless it is `None` or `same`: then the caller reuses its open file.
-fn open_other(path: &Option<PathBuf>, same: &Path, what: &str) -> Result<Option<ExrFile>, IoError> {
+fn open_other(
+    path: &Option<PathBuf>,
+    same: &Path,
+    what: &str,
+    budget: &MemoryBudget,
+) -> Result<Option<ExrFile>, IoError> {
     match path {
-        Some(p) if p != same => ExrFile::open(p, what).map(Some),
+        Some(p) if p != same => ExrFile::open(p, what, budget).map(Some),
         _ => Ok(None),
     }
 }
@@ -420,9 +448,9 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
             allowed: "a positive number of metres per depth unit",
         });
     }
-    let cf = ExrFile::open(&src.color_path, "color")?;
-    let df_own = open_other(&src.depth_path, &src.color_path, "depth")?;
-    let vf_own = open_other(&src.velocity_path, &src.color_path, "velocity")?;
+    let cf = ExrFile::open(&src.color_path, "color", &src.budget)?;
+    let df_own = open_other(&src.depth_path, &src.color_path, "depth", &src.budget)?;
+    let vf_own = open_other(&src.velocity_path, &src.color_path, "velocity", &src.budget)?;
     let df = df_own.as_ref().unwrap_or(&cf);
     let vf = vf_own.as_ref().unwrap_or(&cf);
     let mut report = Vec::new();

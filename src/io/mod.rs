@@ -23,11 +23,11 @@ pub mod lensfun;
 pub mod output;
 pub mod png;
 
-pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba};
+pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
 pub use exr_write::{encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrWriteOptions};
 pub use png::{encode_png_srgb, write_png_srgb};
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Every failure of this module. Each names the file involved and, where relevant, the
 /// channel.
@@ -71,6 +71,9 @@ pub enum IoError {
     PngEncode { path: PathBuf, source: image::ImageError },
     #[error("cannot write \"{}\": {source}", .path.display())]
     Write { path: PathBuf, source: std::io::Error },
+    /// An image larger than the memory budget, refused before anything of its size is allocated.
+    #[error("{what}: \"{}\" declares a {width}x{height} px image{reason}", .path.display())]
+    TooLarge { what: String, path: PathBuf, width: u64, height: u64, reason: String, field: Option<&'static str> },
     /// An output path refused before any work (see [`output::Outputs::new`]), by the field
     /// that named it.
     #[error("{field} \"{}\": {reason}", .path.display())]
@@ -140,6 +143,8 @@ pub struct PassSources {
     pub depth_unit_m: f64,
     /// The user asked for velocity: missing velocity is an error.
     pub require_velocity: bool,
+    /// What reading may allocate; checked against each file's declared size before reading it.
+    pub budget: MemoryBudget,
 }
 
 impl Default for PassSources {
@@ -160,8 +165,85 @@ impl PassSources {
             velocity_channels: None,
             depth_unit_m: 1.0,
             require_velocity: false,
+            budget: MemoryBudget::system(),
         }
     }
+}
+
+/// How large an image realcam reads: a limit on its pixels (`--max-pixels`), and the memory
+/// this process may still take (free memory and the address-space limit, `ulimit -v`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemoryBudget {
+    /// Largest image (width x height); None: no limit but memory.
+    pub max_pixels: Option<u64>,
+    /// Bytes reading one image may allocate.
+    pub max_bytes: u64,
+}
+
+impl MemoryBudget {
+    /// No pixel limit; the memory available now ([`available_memory_bytes`]).
+    pub fn system() -> MemoryBudget {
+        MemoryBudget { max_pixels: None, max_bytes: available_memory_bytes() }
+    }
+
+    /// Errors, naming the file and its declared size, unless an image of `width` x `height`
+    /// px whose reading takes `bytes` fits this budget.
+    pub fn check(&self, what: &str, path: &Path, width: u64, height: u64, bytes: u64) -> Result<(), IoError> {
+        let too_large = |reason: String, field| IoError::TooLarge {
+            what: what.into(),
+            path: path.into(),
+            width,
+            height,
+            reason,
+            field,
+        };
+        let pixels = width.saturating_mul(height);
+        if let Some(max) = self.max_pixels.filter(|&max| pixels > max) {
+            return Err(too_large(
+                format!(" ({pixels} pixels), more than the limit of {max} pixels"),
+                Some("max_pixels"),
+            ));
+        }
+        if bytes > self.max_bytes {
+            return Err(too_large(
+                format!(
+                    ": reading it takes {}, more than the {} of memory available (free memory, address-space limit)",
+                    gigabytes(bytes),
+                    gigabytes(self.max_bytes)
+                ),
+                None,
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `bytes` as "12.3 GB" (or MB below a gigabyte).
+fn gigabytes(bytes: u64) -> String {
+    if bytes >= 1_000_000_000 {
+        format!("{:.1} GB", bytes as f64 / 1e9)
+    } else {
+        format!("{:.1} MB", bytes as f64 / 1e6)
+    }
+}
+
+/// The memory this process may still allocate: the free memory (`MemAvailable`), and under an
+/// address-space limit (`ulimit -v`) what is left of it. `u64::MAX` where neither is known.
+pub fn available_memory_bytes() -> u64 {
+    let kb_field = |file: &str, key: &str| {
+        let text = std::fs::read_to_string(file).ok()?;
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        let kb: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
+        Some(kb.saturating_mul(1024))
+    };
+    let free = kb_field("/proc/meminfo", "MemAvailable:");
+    let address_space = std::fs::read_to_string("/proc/self/limits").ok().and_then(|text| {
+        let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+        let limit: u64 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
+        let used = kb_field("/proc/self/status", "VmSize:").unwrap_or(0);
+        Some(limit.saturating_sub(used))
+    });
+    free.into_iter().chain(address_space).min().unwrap_or(u64::MAX)
 }
 
 impl IoError {
@@ -169,6 +251,7 @@ impl IoError {
     pub fn field(&self) -> Option<&'static str> {
         match self {
             IoError::InvalidArgument { field, .. } | IoError::Output { field, .. } => Some(field),
+            IoError::TooLarge { field, .. } => *field,
             _ => None,
         }
     }

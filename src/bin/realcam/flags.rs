@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 21] = [
+const FLAGS: [(&str, &str); 22] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -30,6 +30,7 @@ const FLAGS: [(&str, &str); 21] = [
     ("output", "--output"),
     ("png", "--png"),
     ("trace", "--trace"),
+    ("max_pixels", "--max-pixels"),
 ];
 
 /// The flag of a library field (the field's own name if it has none).
@@ -64,6 +65,12 @@ impl FieldError for IoError {
 }
 
 impl FieldError for realcam::io::lensfun::LensfunError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field()
+    }
+}
+
+impl FieldError for realcam::model::aperture::ApertureMaskError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()
     }

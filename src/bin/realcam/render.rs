@@ -5,7 +5,7 @@ use crate::flags::NameFlags;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::io::output::Outputs;
-use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
+use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_shutter_s, parse_spherical_aberration};
@@ -152,6 +152,10 @@ pub struct RenderArgs {
     /// Velocity channel override: "x,y" or Blender "X,Y,Z,W".
     #[arg(long = "velocity-channels")]
     velocity_channels: Option<String>,
+    /// Refuse an input or aperture image larger than this many pixels (width x height); the
+    /// memory available is checked in any case.
+    #[arg(long = "max-pixels")]
+    max_pixels: Option<u64>,
     /// Output EXR.
     #[arg(short, long)]
     output: PathBuf,
@@ -205,7 +209,8 @@ impl RenderArgs {
         });
         let mut camera = Camera::new(&lens_file, &request).name_flags()?;
         if let Some(path) = &self.aperture_image {
-            camera.aperture_mask = Some(realcam::model::aperture::ApertureMask::load(path)?);
+            camera.aperture_mask =
+                Some(realcam::model::aperture::ApertureMask::load(path, &self.budget()).name_flags()?);
         }
         Ok(camera)
     }
@@ -227,6 +232,11 @@ impl RenderArgs {
         Outputs::new(&outputs, &inputs).name_flags()
     }
 
+    /// What reading an image may take.
+    fn budget(&self) -> MemoryBudget {
+        MemoryBudget { max_pixels: self.max_pixels, ..MemoryBudget::system() }
+    }
+
     /// Where the passes are, as these flags say.
     fn sources(&self) -> PassSources {
         PassSources {
@@ -238,6 +248,7 @@ impl RenderArgs {
             velocity_channels: self.velocity_channels.clone(),
             depth_unit_m: self.depth_unit_m,
             require_velocity: self.velocity.is_some(),
+            budget: self.budget(),
         }
     }
 }
