@@ -1170,3 +1170,132 @@ fn a_frame_larger_than_the_device_takes_is_a_clear_error() {
     assert_contains(&err, "its images may be at most");
     assert_listing(&dir, &["c.exr", "d.exr"]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Bad values and messages
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn a_rotation_that_is_not_finite_is_refused() {
+    let dir = TestDir::new("rotation_nan");
+    let base = small_scene(&dir);
+    for (value, shown) in [("nan", "NaN"), ("inf", "inf"), ("-inf", "-inf")] {
+        let mut args = base.clone();
+        args.push(format!("--blade-rotation={value}"));
+        let err = render(&dir, &args).failure();
+        assert_contains(
+            &err,
+            &format!("error: aperture rotation must be a finite angle in degrees, got {shown} (--blade-rotation)"),
+        );
+    }
+    let lens = dir.arg("lens.toml");
+    std::fs::write(&lens, format!("{VALID_LENS}[aperture]\nblades = 6\nrotation_deg = nan\n")).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: lens file {lens}: aperture.rotation_deg = NaN must be a finite angle in degrees"),
+    );
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "lens.toml"]);
+}
+
+#[test]
+fn lens_file_values_are_checked_with_their_units() {
+    let dir = TestDir::new("lens_values");
+    let base = small_scene(&dir);
+    let lens = dir.arg("lens.toml");
+    let head = format!("{VALID_LENS}[aperture]\nblades = 9\n[tables]\nimage_height_mm = [0, 10, 21.6]\n");
+    for (table, message) in [
+        (
+            "relative_illumination = [1, 0.8, -0.5]",
+            "tables.relative_illumination value -0.5 is out of range (in (0, 2])",
+        ),
+        ("relative_illumination = [1, 3, 1]", "tables.relative_illumination value 3 is out of range (in (0, 2])"),
+        ("coma_mm = [0, 0.01, 49]", "tables.coma_mm value 49 is out of range (-5..5 mm, a tenth of the focal length)"),
+        (
+            "tangential_blur_mm = [0, 0.01, 49]",
+            "tables.tangential_blur_mm value 49 is out of range (from 0 to 5 mm, a tenth of the focal length)",
+        ),
+    ] {
+        std::fs::write(&lens, format!("{head}{table}\n")).unwrap();
+        let mut args = base.clone();
+        args.extend(s(&["--lens", &lens]));
+        assert_contains(&render(&dir, &args).failure(), &format!("error: lens file {lens}, line 11: {message}"));
+    }
+    // A prescription with impossible glass: lens analyze refuses it instead of printing NaN.
+    let prescription = dir.arg("p.toml");
+    let surfaces =
+        "name = \"p\"\n[[surface]]\nradius_mm = 50\nthickness_mm = 5\nn_d = 1.5\nsemi_diameter_mm = 10\nstop = true\n\
+                    [[surface]]\nradius_mm = -50\nthickness_mm = 48\nsemi_diameter_mm = 10\n";
+    for (from, to, message) in [
+        ("n_d = 1.5", "n_d = 1e12", "surface 0: n_d = 1e12 must be at most 3 (no optical material has more)"),
+        ("thickness_mm = 5", "thickness_mm = -5", "surface 0: thickness_mm = -5 must not be negative"),
+    ] {
+        std::fs::write(&prescription, surfaces.replace(from, to)).unwrap();
+        let err = realcam(&dir, s(&["lens", "analyze", &prescription])).failure();
+        assert_contains(&err, &format!("error: {prescription}:2: {message}"));
+    }
+    std::fs::write(&prescription, surfaces).unwrap();
+    let run = realcam(&dir, s(&["lens", "analyze", &prescription])).success();
+    assert!(!run.stdout.contains("NaN") && !run.stdout.contains("EFL 0.0000"), "{}", run.stdout);
+}
+
+#[test]
+fn messages_say_each_cause_once_and_numbers_shortly() {
+    let dir = TestDir::new("messages");
+    let base = small_scene(&dir);
+    // A folder as the colour pass.
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    let folder = dir.arg("folder.exr");
+    let err = render(&dir, &s(&["--color", &folder, "-o", &dir.arg("out.exr")])).failure();
+    assert_contains(&err, &format!("error: color: cannot read \"{folder}\": it is a directory\n"));
+    // A truncated EXR: the decoder's message once.
+    let color = std::fs::read(dir.join("scene_color.exr")).unwrap();
+    std::fs::write(dir.join("cut.exr"), &color[..color.len() / 2]).unwrap();
+    let err = render(&dir, &s(&["--color", &dir.arg("cut.exr"), "-o", &dir.arg("out.exr")])).failure();
+    let line = err.lines().find(|l| l.starts_with("error: ")).unwrap();
+    let cause = line.rsplit(": ").next().unwrap();
+    assert_eq!(line.matches(cause).count(), 1, "{line}");
+    // A NUL in a lens-file comment.
+    let lens = dir.arg("nul.toml");
+    std::fs::write(&lens, format!("{VALID_LENS}# a comment with a \0\n[aperture]\nblades = 9\n")).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: lens file {lens}, line 7: control character U+0000 is not allowed in a TOML file, not even in a comment"),
+    );
+    // f/0 is no setting --force could allow.
+    for force in [false, true] {
+        let mut args = base.clone();
+        args.extend(s(&["--fstop", "0"]));
+        if force {
+            args.push("--force".into());
+        }
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, "error: f-number must be positive, got f/0\n");
+        assert!(!err.contains("--force"), "{err}");
+    }
+    // A limit of 1e308 in a lens file is written 1e308.
+    std::fs::write(&lens, VALID_LENS.replace("f_number_max = 16", "f_number_max = 1e308") + "[aperture]\nblades = 9\n")
+        .unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens, "--fstop", "1"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: f/1 is outside what the lens \"test lens\" allows (f/1.4 to f/1e308); pass --force");
+}
+
+/// Two identical runs write identical bytes (the EXR header's attributes in name order).
+#[test]
+fn identical_runs_write_identical_bytes() {
+    let dir = TestDir::new("deterministic");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "1"]));
+    render(&dir, &args).success();
+    let first = std::fs::read(dir.join("out.exr")).unwrap();
+    render(&dir, &args).success();
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), first, "two identical runs wrote different bytes");
+    assert!(exr_text_attributes(&dir.join("out.exr")).len() >= 10);
+}

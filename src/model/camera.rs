@@ -6,7 +6,7 @@ use crate::io::lens_file::LensFile;
 use crate::model::aperture::ApertureShape;
 use crate::optics::film::FilmCurve;
 use crate::optics::sensor::SensorFit;
-use crate::optics::{OpticsError, Sensor, ThinLens};
+use crate::optics::{Num, OpticsError, Sensor, ThinLens};
 use std::path::Path;
 
 /// Why [`Camera::new`] refused a request. A refused setting is named by its field, with the
@@ -19,7 +19,7 @@ pub enum CameraError {
     #[error("{} is outside what the lens {lens:?} allows ({allowed})", .field.quantity(*.value))]
     OutOfRange { field: CameraField, value: f64, lens: String, allowed: String },
     /// A setting no camera takes.
-    #[error("{} must be {allowed}, got {value}", .field.label())]
+    #[error("{} must be {allowed}, got {}", .field.label(), Num(*.value))]
     Invalid { field: CameraField, value: f64, allowed: &'static str },
 }
 
@@ -47,10 +47,11 @@ pub enum CameraField {
     CatsEye,
     MaxCocPx,
     Grain,
+    BladeRotationDeg,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 11] = [
+    pub const ALL: [CameraField; 12] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -62,6 +63,7 @@ impl CameraField {
         CameraField::CatsEye,
         CameraField::MaxCocPx,
         CameraField::Grain,
+        CameraField::BladeRotationDeg,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -78,6 +80,7 @@ impl CameraField {
             CameraField::CatsEye => "cats_eye",
             CameraField::MaxCocPx => "max_coc_px",
             CameraField::Grain => "grain",
+            CameraField::BladeRotationDeg => "blade_rotation_deg",
         }
     }
 
@@ -95,17 +98,20 @@ impl CameraField {
             CameraField::CatsEye => "cat's eye",
             CameraField::MaxCocPx => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::BladeRotationDeg => "aperture rotation",
         }
     }
 
     /// A value of this setting in words, with its unit: `f/2.8`, `focus distance 0.3 m`.
     pub fn quantity(self, value: f64) -> String {
+        let value = Num(value);
         let unit = match self {
             CameraField::FNumber => return format!("f/{value}"),
             CameraField::FocalLengthMm => " mm",
             CameraField::FocusDistanceM => " m",
             CameraField::ShutterS => " s",
             CameraField::MaxCocPx => " px",
+            CameraField::BladeRotationDeg => " deg",
             _ => "",
         };
         format!("{} {value}{unit}", self.label())
@@ -341,21 +347,22 @@ impl Camera {
         let out_of_range = |field: CameraField, value: f64, allowed: String| {
             Err(CameraError::OutOfRange { field, value, lens: lens_file.name.clone(), allowed })
         };
+        // What no lens can do (f/0, focus inside the focal length) first: --force cannot help.
+        let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
         if !req.force {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
-                let allowed = format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max);
+                let allowed = format!("f/{} to f/{}", Num(lens_file.f_number_min), Num(lens_file.f_number_max));
                 return out_of_range(CameraField::FNumber, f_number, allowed);
             }
             if req.focus_distance_m < lens_file.focus_min_m {
-                let allowed = format!("closest focus {} m", lens_file.focus_min_m);
+                let allowed = format!("closest focus {} m", Num(lens_file.focus_min_m));
                 return out_of_range(CameraField::FocusDistanceM, req.focus_distance_m, allowed);
             }
             if (focal_length_mm - lens_file.focal_length_mm).abs() > 1e-9 {
-                let allowed = format!("a prime of {} mm", lens_file.focal_length_mm);
+                let allowed = format!("a prime of {} mm", Num(lens_file.focal_length_mm));
                 return out_of_range(CameraField::FocalLengthMm, focal_length_mm, allowed);
             }
         }
-        let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
         let sensor = Sensor::parse(req.sensor.as_deref().unwrap_or("full-frame"))?;
         let require = |field: CameraField, value: f64, ok: bool, allowed: &'static str| {
             if ok && value.is_finite() {
@@ -382,6 +389,9 @@ impl Camera {
             "0 (circular) or 3..32",
         )?;
         require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
+        if let Some(r) = req.blade_rotation_deg {
+            require(CameraField::BladeRotationDeg, r, true, "a finite angle in degrees")?;
+        }
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
@@ -556,6 +566,21 @@ mod tests {
                 CameraField::Grain,
                 "grain must be a non-negative number, got -0.5",
             ),
+            (
+                CameraRequest { blade_rotation_deg: Some(f64::NAN), ..Default::default() },
+                CameraField::BladeRotationDeg,
+                "aperture rotation must be a finite angle in degrees, got NaN",
+            ),
+            (
+                CameraRequest { blade_rotation_deg: Some(f64::INFINITY), ..Default::default() },
+                CameraField::BladeRotationDeg,
+                "aperture rotation must be a finite angle in degrees, got inf",
+            ),
+            (
+                CameraRequest { iso: 1e308, nits_per_unit: f64::INFINITY, ..Default::default() },
+                CameraField::NitsPerUnit,
+                "nits per unit must be a positive number, got inf",
+            ),
         ];
         for (req, field, message) in cases {
             let err = camera(&req).unwrap_err();
@@ -593,6 +618,26 @@ mod tests {
             assert_eq!(err.to_string(), format!("{what} is outside what the lens {lens} allows ({allowed})"));
             camera(&CameraRequest { force: true, ..req }).unwrap();
         }
+    }
+
+    #[test]
+    fn what_no_lens_can_do_is_refused_without_offering_force() {
+        for req in [
+            CameraRequest { f_number: Some(0.0), ..Default::default() },
+            CameraRequest { f_number: Some(0.0), force: true, ..Default::default() },
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert!(matches!(err, CameraError::Optics(_)), "{err:?}");
+            assert_eq!(err.to_string(), "f-number must be positive, got f/0");
+        }
+        // A lens file's limit of 1e308 is printed as such, not as 309 digits.
+        let mut lens = LensFile::default_lens();
+        lens.f_number_max = 1e308;
+        let err = Camera::new(&lens, &CameraRequest { f_number: Some(1.0), ..Default::default() }).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/1e308)"
+        );
     }
 
     #[test]

@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 22] = [
+const FLAGS: [(&str, &str); 23] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -31,6 +31,7 @@ const FLAGS: [(&str, &str); 22] = [
     ("png", "--png"),
     ("trace", "--trace"),
     ("max_pixels", "--max-pixels"),
+    ("blade_rotation_deg", "--blade-rotation"),
 ];
 
 /// The flag of a library field (the field's own name if it has none).
