@@ -1299,3 +1299,43 @@ fn identical_runs_write_identical_bytes() {
     assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), first, "two identical runs wrote different bytes");
     assert!(exr_text_attributes(&dir.join("out.exr")).len() >= 10);
 }
+
+/// Several view layers in one EXR: the passes come from one layer as a whole (the first, with
+/// a warning; the colour override's; or --layer's), and --explain says which.
+#[test]
+fn view_layers_are_chosen_whole_and_said() {
+    let dir = TestDir::new("layers");
+    let (w, h) = (8u32, 6u32);
+    let n = (w * h) as usize;
+    let mut planes: Vec<(String, Vec<f32>)> = Vec::new();
+    for (layer, colour, depth) in [("Alpha", 0.25f32, 1.0f32), ("Beta", 0.75, 5.0)] {
+        for c in ["R", "G", "B", "A"] {
+            planes.push((format!("{layer}.Combined.{c}"), vec![if c == "A" { 1.0 } else { colour }; n]));
+        }
+        planes.push((format!("{layer}.Depth.Z"), vec![depth; n]));
+    }
+    let chans: Vec<(&str, &[f32])> = planes.iter().map(|(name, v)| (name.as_str(), v.as_slice())).collect();
+    write_exr_channels(&dir.join("layers.exr"), w, h, &chans, &float_opts()).unwrap();
+    let base = s(&["--color", &dir.arg("layers.exr"), "-o", &dir.arg("out.exr"), "--explain", "--focus", "5"]);
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args).success().stderr
+    };
+    let err = run(&[]);
+    assert_contains(&err, "has 2 view layers (Alpha, Beta); every pass is taken from Alpha");
+    assert_contains(&err, "view layer: Alpha (the first; choose another with a layer option;");
+    assert_contains(&err, "channel Alpha.Depth.Z");
+    let err = run(&["--color-channels", "Beta.Combined"]);
+    assert_contains(&err, "view layer: Beta (the colour override's;");
+    assert_contains(&err, "channel Beta.Depth.Z");
+    assert!(!err.contains("Alpha.Depth.Z") && !err.contains("every pass is taken from"), "{err}");
+    let err = run(&["--layer", "Beta"]);
+    assert_contains(&err, "view layer: Beta (asked for;");
+    assert_contains(&err, "channel Beta.Depth.Z");
+    // Focused at 5 m, Beta's plane is sharp: no depth of field runs.
+    assert_contains(&err, "[skip] coc");
+    let mut args = base.clone();
+    args.extend(s(&["--layer", "Alpha", "--color-channels", "Beta.Combined"]));
+    assert_contains(&render(&dir, &args).failure(), "passes of two layers are never mixed");
+}

@@ -221,7 +221,72 @@ fn rgba_with_prefix<'a>(f: &'a ExrFile, p: &str) -> Option<Vec<&'a Chan>> {
     Some(v)
 }
 
-fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+/// The Blender view layers of a file (`L` of `L.Combined.R`, `L.Depth.Z`, `L.Vector.X`), in
+/// the file's order.
+fn view_layers(f: &ExrFile) -> Vec<&str> {
+    let mut layers: Vec<&str> = Vec::new();
+    for c in &f.chans {
+        let layer = [".Combined.R", ".Depth.Z", ".Vector.X"].iter().find_map(|suffix| c.name.strip_suffix(suffix));
+        if let Some(l) = layer.filter(|l| !layers.contains(l)) {
+            layers.push(l);
+        }
+    }
+    layers
+}
+
+/// The view layer every pass is taken from, and the line of the report that says why: the
+/// one asked for, else the one the colour override names, else the first of several.
+fn choose_layer(f: &ExrFile, src: &PassSources) -> Result<(Option<String>, Option<String>), IoError> {
+    let layers = view_layers(f);
+    let list = layers.join(", ");
+    let override_layer = src
+        .color_channels
+        .as_deref()
+        .filter(|o| !o.contains(','))
+        .and_then(|o| layers.iter().find(|l| o.starts_with(&format!("{l}."))).copied());
+    let chosen = match (src.layer.as_deref(), override_layer) {
+        (Some(asked), Some(other)) if asked != other => {
+            return Err(IoError::Layer {
+                path: f.path.clone(),
+                reason: format!(
+                    "the layer {asked} was asked for but the colour override \"{}\" is of layer {other}; passes of two layers are never mixed",
+                    src.color_channels.as_deref().unwrap_or_default()
+                ),
+            })
+        }
+        (Some(asked), _) if !layers.contains(&asked) => {
+            let found = if layers.is_empty() { "none".to_string() } else { list.clone() };
+            return Err(IoError::Layer { path: f.path.clone(), reason: format!("no view layer {asked} (layers: {found})") });
+        }
+        (Some(asked), _) => Some((asked, "asked for")),
+        (None, Some(other)) => Some((other, "the colour override's")),
+        (None, None) if layers.len() > 1 => Some((layers[0], "the first; choose another with a layer option")),
+        (None, None) => layers.first().map(|&l| (l, "the only one")),
+    };
+    Ok(match chosen {
+        None => (None, None),
+        Some((layer, why)) => {
+            let line = format!("view layer: {layer} ({why}; layers in \"{}\": {list})", f.path.display());
+            if layers.len() > 1 && src.layer.is_none() && override_layer.is_none() {
+                log::warn!(
+                    "{} has {} view layers ({list}); every pass is taken from {layer}",
+                    f.path.display(),
+                    layers.len()
+                );
+            }
+            (Some(layer.to_string()), Some(line))
+        }
+    })
+}
+
+/// Whether a channel of `f` is of view layer `layer`: a filter over its channels, true for
+/// all when no layer is chosen or `f` has none.
+fn in_layer<'a>(f: &ExrFile, layer: Option<&'a str>) -> impl Fn(&&Chan) -> bool + 'a {
+    let prefix = layer.filter(|_| !view_layers(f).is_empty()).map(|l| format!("{l}."));
+    move |c: &&Chan| prefix.as_ref().is_none_or(|p| c.name.starts_with(p.as_str()))
+}
+
+fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Found<'a>, IoError> {
     const WHAT: &str = "color";
     if let Some(o) = ovr {
         let rule = format!("override \"{o}\"");
@@ -242,7 +307,7 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
         chans.extend(f.find(&format!("{o}.A")));
         return Ok(Found { chans, rule });
     }
-    for c in &f.chans {
+    for c in f.chans.iter().filter(in_layer(f, layer)) {
         if let Some(layer) = c.name.strip_suffix(".Combined.R") {
             if let Some(chans) = rgba_with_prefix(f, &format!("{layer}.Combined")) {
                 let rule = format!("Blender multilayer {layer}.Combined");
@@ -275,14 +340,14 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
     }
 }
 
-fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Found<'a>, IoError> {
     if let Some(o) = ovr {
         let chans = f.require("depth", o, &[o])?;
         let rule = format!("override \"{o}\"");
         return Ok(Found { chans, rule });
     }
     let found = |c: &'a Chan, rule: &str| Ok(Found { chans: vec![c], rule: rule.into() });
-    if let Some(c) = f.chans.iter().find(|c| c.name.ends_with(".Depth.Z")) {
+    if let Some(c) = f.chans.iter().filter(in_layer(f, layer)).find(|c| c.name.ends_with(".Depth.Z")) {
         return found(c, "Blender <layer>.Depth.Z");
     }
     for n in ["Z", "depth.Z", "depth.R", "depth"] {
@@ -312,7 +377,7 @@ const NEXT_Y_UP: &str = "px toward the next frame, x right/y up: dx = +x, dy = -
 const VELOCITY_LOOKED_FOR: &str =
     "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v, motion.u/v, motion.x/y, velocity.X/Y, vel.X/Y";
 
-fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocity<'a>>, IoError> {
+fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Option<Velocity<'a>>, IoError> {
     let vel = |x, y, sx, sy, rule: String| Ok(Some(Velocity { x, y, sx, sy, rule }));
     if let Some(o) = ovr {
         let names = split_list(o);
@@ -334,7 +399,7 @@ fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Option<Velocit
             vel(c[0], c[1], 1.0, -1.0, format!("override \"{o}\" as {NEXT_Y_UP}"))
         };
     }
-    for c in &f.chans {
+    for c in f.chans.iter().filter(in_layer(f, layer)) {
         if let Some(layer) = c.name.strip_suffix(".Vector.X") {
             let n = |s: &str| f.find(&format!("{layer}.Vector.{s}"));
             match (n("Y"), n("Z"), n("W")) {
@@ -397,8 +462,8 @@ fn names(chans: &[&Chan]) -> String {
     chans.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ")
 }
 
-fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
-    let found = find_color(f, ovr)?;
+fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
+    let found = find_color(f, ovr, layer)?;
     for c in &found.chans[1..] {
         same_size("color", f, found.chans[0], "color", f, c)?;
     }
@@ -414,7 +479,7 @@ pub fn read_exr_rgba(path: &Path) -> Result<Image, IoError> {
 /// [`read_exr_rgba`] within `budget`.
 pub fn read_exr_rgba_within(path: &Path, budget: &MemoryBudget) -> Result<Image, IoError> {
     let f = ExrFile::open(path, "color", budget)?;
-    Ok(color_image(&f, None)?.0)
+    Ok(color_image(&f, None, None)?.0)
 }
 
 /// Reads one channel, by exact (qualified) name, as a 1-channel image, values as stored.
@@ -455,8 +520,13 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
     let vf = vf_own.as_ref().unwrap_or(&cf);
     let mut report = Vec::new();
 
+    // The view layer, chosen once for every pass.
+    let (layer, layer_line) = choose_layer(&cf, src)?;
+    let layer = layer.as_deref();
+    report.extend(layer_line);
+
     // Color.
-    let (mut color, cfound) = color_image(&cf, src.color_channels.as_deref())?;
+    let (mut color, cfound) = color_image(&cf, src.color_channels.as_deref(), layer)?;
     let c0 = cfound.chans[0];
     let mut color_nan_count = 0u64;
     for v in color.data.iter_mut().filter(|v| !v.is_finite()) {
@@ -477,7 +547,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
     ));
 
     // Depth.
-    let dfound = find_depth(df, src.depth_channel.as_deref())?;
+    let dfound = find_depth(df, src.depth_channel.as_deref(), layer)?;
     let dc = dfound.chans[0];
     same_size("color", &cf, c0, "depth", df, dc)?;
     let mut depth_m = interleave(&dfound.chans, 1, 0.0);
@@ -511,7 +581,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
     // Velocity.
     let explicit = src.velocity_path.is_some() || src.velocity_channels.is_some();
     let mut origins = vec![("depth", dc.origin)];
-    let velocity_px = match find_velocity(vf, src.velocity_channels.as_deref())? {
+    let velocity_px = match find_velocity(vf, src.velocity_channels.as_deref(), layer)? {
         Some(v) => {
             same_size("color", &cf, c0, "velocity", vf, v.x)?;
             same_size("velocity", vf, v.x, "velocity", vf, v.y)?;
@@ -630,6 +700,64 @@ mod tests {
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
         assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"), "{r}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn view_layers_are_taken_whole_and_said() {
+        let dir = test_dir("read-layers");
+        let path = dir.join("layers.exr");
+        let mut chans = Vec::new();
+        for (layer, colour, depth) in [("Alpha", 0.25, 1.0), ("Beta", 0.75, 5.0)] {
+            for c in ["R", "G", "B"] {
+                chans.push((format!("{layer}.Combined.{c}"), colour));
+            }
+            chans.push((format!("{layer}.Depth.Z"), depth));
+        }
+        let chans: Vec<(&str, f32)> = chans.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+        write(&path, &chans, true);
+        let load = |src: PassSources| load_passes(&src);
+        // None asked: the first, said.
+        let p = load(sources(&path)).unwrap();
+        assert_const(&p.color, &[0.25, 0.25, 0.25, 1.0]);
+        assert_const(&p.depth_m, &[1.0]);
+        let expected = format!(
+            "view layer: Alpha (the first; choose another with a layer option; layers in \"{}\": Alpha, Beta)",
+            path.display()
+        );
+        assert!(p.channel_report.starts_with(&expected), "{}", p.channel_report);
+        // The colour override's layer gives the depth too.
+        let p = load(PassSources { color_channels: Some("Beta.Combined".into()), ..sources(&path) }).unwrap();
+        assert_const(&p.color, &[0.75, 0.75, 0.75, 1.0]);
+        assert_const(&p.depth_m, &[5.0]);
+        assert!(
+            p.channel_report.contains("depth: ") && p.channel_report.contains("Beta.Depth.Z"),
+            "{}",
+            p.channel_report
+        );
+        // Asked for.
+        let p = load(PassSources { layer: Some("Beta".into()), ..sources(&path) }).unwrap();
+        assert_const(&p.depth_m, &[5.0]);
+        assert!(p.channel_report.starts_with("view layer: Beta (asked for;"), "{}", p.channel_report);
+        // Never mixed, never a layer that is not there.
+        let err = load(PassSources {
+            layer: Some("Alpha".into()),
+            color_channels: Some("Beta.Combined".into()),
+            ..sources(&path)
+        })
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "layer: \"{}\": the layer Alpha was asked for but the colour override \"Beta.Combined\" is of layer Beta; passes of two layers are never mixed",
+                path.display()
+            )
+        );
+        let err = load(PassSources { layer: Some("Gamma".into()), ..sources(&path) }).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("layer: \"{}\": no view layer Gamma (layers: Alpha, Beta)", path.display())
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

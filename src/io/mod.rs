@@ -71,6 +71,9 @@ pub enum IoError {
     PngEncode { path: PathBuf, source: image::ImageError },
     #[error("cannot write \"{}\": {source}", .path.display())]
     Write { path: PathBuf, source: std::io::Error },
+    /// The view layer asked for is not in the file, or two would be mixed.
+    #[error("layer: \"{}\": {reason}", .path.display())]
+    Layer { path: PathBuf, reason: String },
     /// An image larger than the memory budget, refused before anything of its size is allocated.
     #[error("{what}: \"{}\" declares a {width}x{height} px image{reason}", .path.display())]
     TooLarge { what: String, path: PathBuf, width: u64, height: u64, reason: String, field: Option<&'static str> },
@@ -133,6 +136,10 @@ pub struct PassSources {
     pub depth_path: Option<PathBuf>,
     /// None: look in `color_path` if present there, else no velocity.
     pub velocity_path: Option<PathBuf>,
+    /// The view layer (Blender `<layer>.Combined`, `<layer>.Depth`, `<layer>.Vector`) every
+    /// pass is taken from; None: the colour override's, else the file's first (said in the
+    /// report).
+    pub layer: Option<String>,
     /// Override: a layer prefix ("ViewLayer.Combined") or an explicit comma list "R,G,B[,A]".
     pub color_channels: Option<String>,
     /// Override: exact channel name.
@@ -160,6 +167,7 @@ impl PassSources {
             color_path: color_path.into(),
             depth_path: None,
             velocity_path: None,
+            layer: None,
             color_channels: None,
             depth_channel: None,
             velocity_channels: None,

@@ -143,6 +143,10 @@ pub struct RenderArgs {
     /// Metres per depth unit in the file (0.01 for centimetres).
     #[arg(long = "depth-unit", default_value_t = PassSources::default().depth_unit_m)]
     depth_unit_m: f64,
+    /// The view layer of a multilayer EXR every pass is taken from (Blender: ViewLayer);
+    /// default: the colour override's, else the first (said in --explain and a warning).
+    #[arg(long)]
+    layer: Option<String>,
     /// Color channel override: a layer prefix (ViewLayer.Combined) or a list "R,G,B[,A]".
     #[arg(long = "color-channels")]
     color_channels: Option<String>,
@@ -243,6 +247,7 @@ impl RenderArgs {
             color_path: self.color.clone(),
             depth_path: self.depth.clone(),
             velocity_path: self.velocity.clone(),
+            layer: self.layer.clone(),
             color_channels: self.color_channels.clone(),
             depth_channel: self.depth_channel.clone(),
             velocity_channels: self.velocity_channels.clone(),
