@@ -1339,3 +1339,49 @@ fn view_layers_are_chosen_whole_and_said() {
     args.extend(s(&["--layer", "Alpha", "--color-channels", "Beta.Combined"]));
     assert_contains(&render(&dir, &args).failure(), "passes of two layers are never mixed");
 }
+
+/// --max-coc takes a diameter on the film (the default 1.2 mm) or in pixels; a clamp that
+/// changes the picture is said, in --explain and as a warning.
+#[test]
+fn a_clamp_that_changes_the_picture_is_said() {
+    let dir = TestDir::new("max_coc");
+    dir.scene("p", &SynthScene::point_on_plane(64, 48, 0.6, [5.0; 3]));
+    let base = s(&[
+        "--color",
+        &dir.arg("p_color.exr"),
+        "--depth",
+        &dir.arg("p_depth.exr"),
+        "-o",
+        &dir.arg("out.exr"),
+        "--fstop",
+        "1.4",
+        "--focus",
+        "5",
+        "--explain",
+    ]);
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args)
+    };
+    // Full frame on 64 px: 0.5625 mm pixels, so 1.2 mm is 2.13 px; the plane at 0.6 m is 4.6 px
+    // out of focus (f/1.4, 50 mm, focused at 5 m).
+    let err = run(&[]).success().stderr;
+    assert_contains(&err, "warning: the CoC is clamped to +-2.13 px (1.2 mm on the film): the lens gives -4.");
+    assert_contains(&err, "so the clamp changes the picture; raise the clamp with --max-coc");
+    assert_contains(&err, "[run ] coc           CoC from -2.13 px");
+    for wide in ["3mm", "8", "8px"] {
+        let err = run(&["--max-coc", wide]).success().stderr;
+        assert!(!err.contains("clamp"), "--max-coc {wide}:\n{err}");
+    }
+    let err = run(&["--max-coc", "1.2cm"]).failure();
+    assert_contains(
+        &err,
+        "error: --max-coc \"1.2cm\": \"1.2cm\" is not a diameter in px (64, 64px) or on the film in mm (1.2mm)",
+    );
+    let err = run(&["--max-coc=-1mm"]).failure();
+    assert_contains(
+        &err,
+        "error: maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)",
+    );
+}

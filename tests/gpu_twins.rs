@@ -113,7 +113,7 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     // The diffraction focus processor.
     let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
     camera.bokeh = BokehMode::Diffraction;
-    camera.max_coc_px = 12.0;
+    camera.max_coc = realcam::model::camera::CocLimit::Px(12.0);
     cases.push(("diffraction", busy_frame(24, 16), camera));
     cases
 }

@@ -45,7 +45,7 @@ pub enum CameraField {
     Blades,
     SphericalAberration,
     CatsEye,
-    MaxCocPx,
+    MaxCoc,
     Grain,
     BladeRotationDeg,
 }
@@ -61,7 +61,7 @@ impl CameraField {
         CameraField::Blades,
         CameraField::SphericalAberration,
         CameraField::CatsEye,
-        CameraField::MaxCocPx,
+        CameraField::MaxCoc,
         CameraField::Grain,
         CameraField::BladeRotationDeg,
     ];
@@ -78,7 +78,7 @@ impl CameraField {
             CameraField::Blades => "blades",
             CameraField::SphericalAberration => "spherical_aberration",
             CameraField::CatsEye => "cats_eye",
-            CameraField::MaxCocPx => "max_coc_px",
+            CameraField::MaxCoc => "max_coc",
             CameraField::Grain => "grain",
             CameraField::BladeRotationDeg => "blade_rotation_deg",
         }
@@ -96,7 +96,7 @@ impl CameraField {
             CameraField::Blades => "number of aperture blades",
             CameraField::SphericalAberration => "spherical aberration",
             CameraField::CatsEye => "cat's eye",
-            CameraField::MaxCocPx => "maximum CoC diameter",
+            CameraField::MaxCoc => "maximum CoC diameter",
             CameraField::Grain => "grain",
             CameraField::BladeRotationDeg => "aperture rotation",
         }
@@ -110,11 +110,48 @@ impl CameraField {
             CameraField::FocalLengthMm => " mm",
             CameraField::FocusDistanceM => " m",
             CameraField::ShutterS => " s",
-            CameraField::MaxCocPx => " px",
             CameraField::BladeRotationDeg => " deg",
             _ => "",
         };
         format!("{} {value}{unit}", self.label())
+    }
+}
+
+/// The clamp on the CoC diameter: on the film in mm, so that one camera looks the same at every
+/// resolution, or in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CocLimit {
+    FilmMm(f64),
+    Px(f64),
+}
+
+impl CocLimit {
+    /// 1.2 mm on the film: 64 px of a 1920 px wide full-frame (36 mm) image, the clamp realcam
+    /// had in pixels; a twentieth to a thirtieth of the frame's width on the usual sensors.
+    pub const DEFAULT: CocLimit = CocLimit::FilmMm(1.2);
+
+    /// The clamp in pixels of `pixel_pitch_mm`.
+    pub fn px(self, pixel_pitch_mm: f64) -> f64 {
+        match self {
+            CocLimit::FilmMm(mm) => mm / pixel_pitch_mm,
+            CocLimit::Px(px) => px,
+        }
+    }
+
+    /// The number as given, in its unit.
+    pub fn value(self) -> f64 {
+        match self {
+            CocLimit::FilmMm(v) | CocLimit::Px(v) => v,
+        }
+    }
+}
+
+impl std::fmt::Display for CocLimit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CocLimit::FilmMm(mm) => write!(f, "{} mm on the film", Num(*mm)),
+            CocLimit::Px(px) => write!(f, "{} px", Num(*px)),
+        }
     }
 }
 
@@ -203,8 +240,8 @@ pub struct Camera {
     pub exposure: bool,
     pub vignetting: bool,
     pub film: FilmMode,
-    /// User clamp on |CoC| in pixels.
-    pub max_coc_px: f64,
+    /// Clamp on |CoC| ([`CocLimit::px`] for a frame's pitch).
+    pub max_coc: CocLimit,
     pub bokeh: BokehMode,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
@@ -259,8 +296,8 @@ pub struct CameraRequest {
     pub vignetting: bool,
     /// The filmic curve when None.
     pub film: Option<FilmMode>,
-    /// Clamp on |CoC| in pixels.
-    pub max_coc_px: f64,
+    /// Clamp on |CoC|, on the film or in pixels.
+    pub max_coc: CocLimit,
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
@@ -274,7 +311,7 @@ impl Default for CameraRequest {
     /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
     /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
     /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
-    /// 64 px, tiled bokeh, no grain.
+    /// 1.2 mm on the film ([`CocLimit::DEFAULT`]), tiled bokeh, no grain.
     fn default() -> Self {
         CameraRequest {
             focal_length_mm: None,
@@ -292,7 +329,7 @@ impl Default for CameraRequest {
             exposure: true,
             vignetting: true,
             film: None,
-            max_coc_px: 64.0,
+            max_coc: CocLimit::DEFAULT,
             force: false,
             bokeh: BokehMode::Tiled,
             grain: 0.0,
@@ -374,7 +411,8 @@ impl Camera {
         require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
-        require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
+        let max_coc = req.max_coc.value();
+        require(CameraField::MaxCoc, max_coc, max_coc >= 0.0, "a diameter >= 0 (px, or mm on the film)")?;
         if let Some(c) = req.cats_eye {
             require(CameraField::CatsEye, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
         }
@@ -418,7 +456,7 @@ impl Camera {
             exposure: req.exposure,
             vignetting: req.vignetting,
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
-            max_coc_px: req.max_coc_px,
+            max_coc: req.max_coc,
             bokeh: req.bokeh,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
@@ -511,7 +549,9 @@ mod tests {
         let c = camera(&CameraRequest::default()).unwrap();
         assert_eq!((c.lens.focal_length_mm, c.lens.f_number, c.lens.focus_distance_mm), (50.0, 2.8, 2000.0));
         assert_eq!((c.sensor.width_mm, c.sensor.height_mm, c.sensor_fit), (36.0, 24.0, SensorFit::Horizontal));
-        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc_px), (0.02, 100.0, 160.0, 64.0));
+        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc), (0.02, 100.0, 160.0, CocLimit::FilmMm(1.2)));
+        // 64 px of a 1920 px wide full-frame image.
+        assert!((c.max_coc.px(36.0 / 1920.0) - 64.0).abs() < 1e-12);
         assert!(c.exposure && c.vignetting);
         assert_eq!(c.film, FilmMode::Curve(FilmCurve::default_filmic()));
         assert_eq!((c.bokeh, c.grain, c.seed), (BokehMode::Tiled, 0.0, 0));
@@ -542,9 +582,9 @@ mod tests {
                 "shutter time must be a positive number, got 0",
             ),
             (
-                CameraRequest { max_coc_px: -1.0, ..Default::default() },
-                CameraField::MaxCocPx,
-                "maximum CoC diameter must be >= 0 px, got -1",
+                CameraRequest { max_coc: CocLimit::Px(-1.0), ..Default::default() },
+                CameraField::MaxCoc,
+                "maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1",
             ),
             (
                 CameraRequest { cats_eye: Some(1.5), ..Default::default() },

@@ -181,7 +181,7 @@ impl Pass for BokehGather {
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();
         let mut push =
-            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, f.sa_full_strength_coc_px, input.frame.centre_px);
         push.aperture = push.aperture.with_pitch(camera, f.pixel_pitch_mm);
         let why = format!(
             "--bokeh reference: largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px, exact gather of radius {} px everywhere, {}",

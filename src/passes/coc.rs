@@ -49,7 +49,7 @@ impl CocPush {
         CocPush::new(
             &camera.lens,
             pixel_pitch_mm,
-            camera.max_coc_px,
+            camera.max_coc.px(pixel_pitch_mm),
             frame.width,
             frame.height,
             frame.centre_px,
@@ -180,6 +180,10 @@ impl Pass for Coc {
             camera.lens.f_number,
             camera.lens.focus_distance_mm / 1000.0
         );
+        let why = match f.coc_clamp_note(camera) {
+            Some(note) => format!("{why}; {note}"),
+            None => why,
+        };
         if !f.dof_visible() {
             return Decision::skip(format!(
                 "{why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible"

@@ -20,12 +20,15 @@ pub struct Plan {
     pub facts: SceneFacts,
     /// Effects the frame asks for that no pass renders yet (listed by `--explain`).
     pub notes: Vec<PlannedPass>,
+    /// The CoC clamp, when it changes the picture (also in the coc pass's reason).
+    pub coc_clamp_warning: Option<String>,
 }
 
 pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let input = PlanInput::new(frame, camera);
     let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
-    Plan { passes, facts: input.facts, notes: vec![motion_blur_note(frame)] }
+    let coc_clamp_warning = if input.facts.dof_visible() { input.facts.coc_clamp_note(camera) } else { None };
+    Plan { passes, facts: input.facts, notes: vec![motion_blur_note(frame)], coc_clamp_warning }
 }
 
 /// What the velocity pass would call for: this version reads it but has no motion-blur pass.
@@ -111,6 +114,56 @@ pub fn pass_order() -> String {
 
 #[cfg(test)]
 mod tests {
+    use crate::io::lens_file::LensFile;
+    use crate::model::camera::{Camera, CameraRequest, CocLimit};
+    use crate::model::frame::Frame;
+
+    /// A frame `width` px wide (16:9, the data window two pixels of it): a plane at 0.3 m and
+    /// the sky.
+    fn near_and_sky(width: u32) -> Frame {
+        let height = width * 9 / 16;
+        Frame {
+            display_window: (0, 0, width, height),
+            centre_px: [width as f64 / 2.0, height as f64 / 2.0],
+            ..Frame::new(2, 1, vec![0.5; 8], vec![0.3, 1.0e10])
+        }
+    }
+
+    #[test]
+    fn the_default_clamp_is_the_same_part_of_the_frame_at_every_resolution() {
+        // 50 mm f/1.4 focused at 0.5 m on full frame: at 1280 px the plane at 0.3 m has a CoC
+        // of -89 px; 1.2 mm on the film is 42.67 px there and 128 px at 3840.
+        let request = CameraRequest { force: true, ..CameraRequest::default().with_lens(50.0, 1.4, 0.5) };
+        let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
+        let (low, high) = (super::plan(&near_and_sky(1280), &camera), super::plan(&near_and_sky(3840), &camera));
+        let relative = |p: &super::Plan, width: f64| {
+            let f = &p.facts;
+            [f.max_coc_px, f.coc_range_px.0, f.coc_range_px.1, f.sa_full_strength_coc_px].map(|v| v / width)
+        };
+        let (a, b) = (relative(&low, 1280.0), relative(&high, 3840.0));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-12, "{a:?} at 1280 px, {b:?} at 3840 px");
+        }
+        assert!((low.facts.max_coc_px - 1280.0 / 30.0).abs() < 1e-9, "{}", low.facts.max_coc_px);
+        assert_eq!(low.facts.coc_range_px.0, -low.facts.max_coc_px);
+        // The clamp changes the picture: said in the plan and as a warning, with the true range.
+        let (lo, hi) = low.facts.unclamped_coc_range_px;
+        let warning = low.coc_clamp_warning.clone().expect("a warning");
+        assert_eq!(
+            warning,
+            format!("the CoC is clamped to +-42.67 px (1.2 mm on the film): the lens gives {lo:.2} to {hi:.2} px in this frame, so the clamp changes the picture")
+        );
+        assert!(low.explain().contains(&warning), "{}", low.explain());
+        assert!(high.coc_clamp_warning.as_deref().is_some_and(|w| w.starts_with("the CoC is clamped to +-128.00 px")));
+        // A clamp in pixels is the user's: the same 64 px is a third of the part at 3840.
+        let px = Camera { max_coc: CocLimit::Px(64.0), ..camera.clone() };
+        assert_eq!(super::plan(&near_and_sky(3840), &px).facts.max_coc_px, 64.0);
+        // A clamp that does not bind says nothing.
+        let wide = Camera { max_coc: CocLimit::FilmMm(5.0), ..camera };
+        let plan = super::plan(&near_and_sky(1280), &wide);
+        assert_eq!((plan.coc_clamp_warning, plan.facts.coc_range_px), (None, plan.facts.unclamped_coc_range_px));
+    }
+
     #[test]
     fn the_readme_quotes_the_pass_order() {
         let readme = include_str!("../../README.md");

@@ -24,9 +24,9 @@ pub struct AccuracyArgs {
     /// Aperture blades (0 = circular); default from the lens file.
     #[arg(long)]
     blades: Option<u32>,
-    /// Clamp on the CoC diameter in pixels.
-    #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
-    max_coc_px: f64,
+    /// Clamp on the CoC diameter: on the film in mm (1.2mm) or in pixels (64, 64px).
+    #[arg(long = "max-coc", default_value = "1.2mm")]
+    max_coc: String,
     /// Folder for accuracy.md, accuracy.csv and accuracy.svg.
     #[arg(long = "out-dir", default_value = "accuracy")]
     out_dir: PathBuf,
@@ -37,9 +37,11 @@ pub struct AccuracyArgs {
 pub fn run(args: &AccuracyArgs) -> Result<()> {
     let lens_file = args.lens.lens.load()?;
     // The blur alone, on the geometric reference (the report runs every method).
+    let max_coc = realcam::model::settings::parse_coc_limit(&args.max_coc)
+        .with_context(|| format!("--max-coc {:?}", args.max_coc))?;
     let request = args.lens.request(CameraRequest {
         blades: Some(args.blades.unwrap_or(0)),
-        max_coc_px: args.max_coc_px,
+        max_coc,
         bokeh: BokehMode::Reference,
         ..CameraRequest::blur_only()
     });

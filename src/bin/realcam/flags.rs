@@ -18,7 +18,7 @@ const FLAGS: [(&str, &str); 23] = [
     ("blades", "--blades"),
     ("spherical_aberration", "--spherical-aberration"),
     ("cats_eye", "--cats-eye"),
-    ("max_coc_px", "--max-coc"),
+    ("max_coc", "--max-coc"),
     ("grain", "--grain"),
     ("force", "--force"),
     ("depth_unit_m", "--depth-unit"),
@@ -127,8 +127,14 @@ mod tests {
     fn errors_show_the_flag() {
         let lens = realcam::io::lens_file::LensFile::default_lens();
         let camera = |req| realcam::model::camera::Camera::new(&lens, &req).name_flags().map(|_| ()).unwrap_err();
-        let req = realcam::model::camera::CameraRequest { max_coc_px: -1.0, ..Default::default() };
-        assert_eq!(camera(req).to_string(), "maximum CoC diameter must be >= 0 px, got -1 (--max-coc)");
+        let req = realcam::model::camera::CameraRequest {
+            max_coc: realcam::model::camera::CocLimit::Px(-1.0),
+            ..Default::default()
+        };
+        assert_eq!(
+            camera(req).to_string(),
+            "maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)"
+        );
         let req = realcam::model::camera::CameraRequest { f_number: Some(1.0), ..Default::default() };
         assert_eq!(
             camera(req).to_string(),

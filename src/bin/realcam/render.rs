@@ -8,7 +8,7 @@ use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
-use realcam::model::settings::{parse_shutter_s, parse_spherical_aberration};
+use realcam::model::settings::{parse_coc_limit, parse_shutter_s, parse_spherical_aberration};
 use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
 
@@ -134,9 +134,10 @@ pub struct RenderArgs {
     /// Do not apply natural (cos^4) vignetting.
     #[arg(long = "no-vignetting")]
     no_vignetting: bool,
-    /// Clamp on the CoC diameter in pixels.
-    #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
-    max_coc_px: f64,
+    /// Clamp on the CoC diameter: on the film in mm (1.2mm, the same look at every resolution)
+    /// or in pixels (64, 64px). A clamp that changes the picture is said.
+    #[arg(long = "max-coc", default_value = "1.2mm")]
+    max_coc: String,
     /// What the depth values measure.
     #[arg(long = "depth-kind", value_enum, default_value = "planar")]
     depth_kind: DepthKindArg,
@@ -194,6 +195,7 @@ impl RenderArgs {
             }
             None => None,
         };
+        let max_coc = parse_coc_limit(&self.max_coc).with_context(|| format!("--max-coc {:?}", self.max_coc))?;
         let request = self.lens.request(CameraRequest {
             shutter_s,
             iso: self.iso,
@@ -205,7 +207,7 @@ impl RenderArgs {
             exposure: !self.no_exposure,
             vignetting: !self.no_vignetting,
             film: Some(film),
-            max_coc_px: self.max_coc_px,
+            max_coc,
             bokeh: self.bokeh.into(),
             grain: self.grain,
             seed: self.seed,
@@ -268,6 +270,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         eprintln!("{}", plan.explain());
+    }
+    if let Some(warning) = &plan.coc_clamp_warning {
+        eprintln!("warning: {warning}; raise the clamp with --max-coc");
     }
 
     let gpu = args.gpu.open()?;
