@@ -70,6 +70,10 @@ struct ExrFile {
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
+/// How many times the exr crate panicked on a file and the panic became an error (the fuzzing
+/// harness counts them: each is a decoder bug to report).
+pub static DECODER_PANICS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
 /// Bytes per pixel that [`load_passes`] allocates beyond the decoded samples: the interleaved
 /// colour (4 f32), depth (1) and velocity (2), and one channel converted to f32 at a time.
 const LOADED_BYTES_PER_PX: u64 = 4 * (4 + 1 + 2 + 1);
@@ -110,7 +114,21 @@ impl ExrFile {
         let loaded = largest.0.saturating_mul(largest.1).saturating_mul(LOADED_BYTES_PER_PX);
         budget.check(what, path, largest.0, largest.1, decoded_bytes.saturating_add(loaded))?;
         drop(meta);
-        let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(exr_err)?;
+        // The decoder is not ours: should it panic on a malformed file, that is an error about
+        // the file, not the end of the run.
+        let decoded = std::panic::catch_unwind(|| exr::prelude::read_all_flat_layers_from_file(path));
+        let image = match decoded {
+            Ok(result) => result.map_err(exr_err)?,
+            Err(panic) => {
+                DECODER_PANICS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let message = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                return Err(exr_err(exr::error::Error::Invalid(format!("the decoder stopped: {message}").into())));
+            }
+        };
         let dw = image.attributes.display_window;
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();

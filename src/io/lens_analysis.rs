@@ -21,7 +21,7 @@ pub enum LensAnalysisError {
     Prescription(#[from] PrescriptionError),
     #[error("lens file {}: it has no [[surface]] tables to analyze", .path.display())]
     NoSurfaces { path: PathBuf },
-    /// The prescription has no positive, finite focal length: it forms no real image.
+    /// The prescription's focal length is not between 0.01 mm and 1 km: it forms no real image.
     #[error("lens file {}: the prescription forms no real image (EFL = {} mm)", .path.display(), crate::optics::Num(*.efl_mm))]
     NoImage { path: PathBuf, efl_mm: f64 },
     /// `f_number`.
@@ -101,7 +101,7 @@ pub fn analyze_text(
         None => f_number_min.unwrap_or_else(|| prescription.f_number_at_table_stop()),
     };
     let efl_mm = prescription.paraxial(crate::optics::prescription::LAMBDA_D_NM).efl_mm;
-    if !(efl_mm.is_finite() && efl_mm > 0.0) {
+    if !(efl_mm.is_finite() && (0.01..1e6).contains(&efl_mm)) {
         return Err(LensAnalysisError::NoImage { path: path.to_path_buf(), efl_mm });
     }
     let analysis = prescription.analyze(f_number, field_deg);

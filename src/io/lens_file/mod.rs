@@ -292,6 +292,17 @@ impl LensFile {
         )
     }
 
+    /// Whether `n` is an f-number this lens has (1% either way for rounding): the f-number at
+    /// which its blur tables or its spherical aberration were measured must be, or scaling them
+    /// to the lens's own f-numbers would blow them up.
+    fn is_own_f_number(&self, n: f64) -> bool {
+        n.is_finite() && n >= 0.99 * self.f_number_min && n <= 1.01 * self.f_number_max
+    }
+
+    fn f_number_range(&self) -> String {
+        format!("f/{} to f/{}", Num(self.f_number_min), Num(self.f_number_max))
+    }
+
     pub fn load(path: &Path) -> Result<LensFile, LensFileError> {
         let text =
             std::fs::read_to_string(path).map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
@@ -405,10 +416,15 @@ impl LensFile {
                     ));
                 }
             }
-            if let Some(n0) = t.at_f_number {
-                if !(n0.is_finite() && n0 > 0.0) {
-                    return at("at_f_number", format!("tables.at_f_number = {n0} must be a positive f-number"));
-                }
+            if let Some(n0) = t.at_f_number.filter(|&n0| !self.is_own_f_number(n0)) {
+                return at(
+                    "at_f_number",
+                    format!(
+                        "tables.at_f_number = {} must be an f-number of the lens ({})",
+                        Num(n0),
+                        self.f_number_range()
+                    ),
+                );
             }
         }
         let positive = [
@@ -464,10 +480,11 @@ impl LensFile {
                     l.rim_mm
                 ));
             }
-            if !(l.at_f_number.is_finite() && l.at_f_number > 0.0) {
+            if !self.is_own_f_number(l.at_f_number) {
                 return bad(format!(
-                    "longitudinal_spherical_aberration.at_f_number = {} must be a positive f-number",
-                    l.at_f_number
+                    "longitudinal_spherical_aberration.at_f_number = {} must be an f-number of the lens ({})",
+                    Num(l.at_f_number),
+                    self.f_number_range()
                 ));
             }
         }
@@ -642,6 +659,13 @@ mod tests {
             let err = LensFile::parse(&format!("{HEAD}{line}\n"), Path::new("t.toml")).unwrap_err().to_string();
             assert_eq!(err, format!("lens file t.toml, line 11: {message}"));
         }
+        let err = LensFile::parse(&format!("{HEAD}at_f_number = 1e308\ncoma_mm = [0, 1, 2]\n"), Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "lens file t.toml, line 11: tables.at_f_number = 1e308 must be an f-number of the lens (f/1.4 to f/16)"
+        );
         let ok = format!("{HEAD}relative_illumination = [1, 1.1, 0.4]\ncoma_mm = [0, -4.9, 4.9]\n");
         LensFile::parse(&ok, Path::new("t.toml")).unwrap();
     }

@@ -21,6 +21,9 @@ fn one() -> f64 {
     1.0
 }
 
+/// The longest thickness or semi-diameter a surface may have (10 m).
+const MAX_LENGTH_MM: f64 = 10_000.0;
+
 /// One `[[surface]]` table as written in a prescription or lens file (not yet validated).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -133,8 +136,16 @@ impl Prescription {
             if s.thickness_mm < 0.0 {
                 return Err(invalid(i, format!("thickness_mm = {} must not be negative", Num(s.thickness_mm))));
             }
-            if s.v_d < 0.0 {
-                return Err(invalid(i, format!("v_d = {} must be >= 0", s.v_d)));
+            // Lengths beyond 10 m are no camera lens and overflow the ray algebra.
+            for (key, v) in [("thickness_mm", s.thickness_mm), ("semi_diameter_mm", s.semi_diameter_mm)] {
+                if v > MAX_LENGTH_MM {
+                    return Err(invalid(i, format!("{key} = {} must be at most {MAX_LENGTH_MM} mm", Num(v))));
+                }
+            }
+            // Abbe numbers of real glasses lie between about 15 and 100; below 1 the dispersion
+            // (n_d - 1) / v_d would exceed any material's, and near 0 it overflows.
+            if s.v_d < 0.0 || (s.v_d > 0.0 && s.v_d < 1.0) {
+                return Err(invalid(i, format!("v_d = {} must be 0 (no dispersion) or at least 1", Num(s.v_d))));
             }
             let c = if s.radius_mm == 0.0 || s.radius_mm.is_infinite() { 0.0 } else { 1.0 / s.radius_mm };
             if c != 0.0 && s.semi_diameter_mm > 1.0 / c.abs() {
