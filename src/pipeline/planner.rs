@@ -165,6 +165,34 @@ mod tests {
     }
 
     #[test]
+    fn depth_0_1e30_and_infinity_give_finite_cocs() {
+        // 50 mm f/2 focused at 2 m on full frame, 1920 px wide: depth 0 is clamped to the near
+        // limit, 1e30 m and +inf both give the CoC at infinity, v^2 / (N' P S) (Kyaw eq 5.3).
+        let request = CameraRequest::default().with_lens(50.0, 2.0, 2.0);
+        let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
+        let frame = Frame {
+            display_window: (0, 0, 1920, 1080),
+            centre_px: [960.0, 540.0],
+            ..Frame::new(4, 1, vec![0.5; 16], vec![0.0, 2.0, 1.0e30, f32::INFINITY])
+        };
+        let facts = &super::plan(&frame, &camera).facts;
+        let pitch = 36.0 / 1920.0;
+        let l = &camera.lens;
+        let v = l.image_distance_mm();
+        let at_infinity_px = v * v / (l.effective_f_number() * l.pupil_magnification * 2000.0) / pitch;
+        assert_eq!(facts.coc_range_px.0, -facts.max_coc_px);
+        assert!((facts.coc_range_px.1 - at_infinity_px).abs() < 1e-9, "{:?} vs {at_infinity_px}", facts.coc_range_px);
+        // The CoC pass's twin, per pixel, in f32.
+        let push = crate::passes::coc::CocPush::for_frame(&camera, pitch, &frame);
+        let cocs: Vec<f32> = frame.depth_m.iter().map(|&d| push.coc_px(d)).collect();
+        assert!(cocs.iter().all(|c| c.is_finite()), "{cocs:?}");
+        assert_eq!(cocs[0], -facts.max_coc_px as f32);
+        assert_eq!(cocs[1], 0.0);
+        assert_eq!(cocs[2], cocs[3]);
+        assert!((cocs[3] as f64 - at_infinity_px).abs() < 1e-3 * at_infinity_px);
+    }
+
+    #[test]
     fn the_readme_quotes_the_pass_order() {
         let readme = include_str!("../../README.md");
         let quoted = readme
