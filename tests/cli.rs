@@ -155,15 +155,15 @@ fn write_depth(path: &Path, w: u32, h: u32, z: &[f32]) {
 /// A small valid scene (`scene_color.exr`, `scene_depth.exr`) and the render arguments that
 /// read it; the camera settings under test are appended by the caller.
 fn small_scene(dir: &TestDir) -> Vec<String> {
-    dir.scene("scene", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]));
-    vec![
-        "--color".into(),
-        dir.arg("scene_color.exr"),
-        "--depth".into(),
-        dir.arg("scene_depth.exr"),
-        "-o".into(),
-        dir.arg("out.exr"),
-    ]
+    scene_args(dir, "scene", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]))
+}
+
+/// Writes `scene` as `<name>_color.exr` and `<name>_depth.exr`; the arguments that read it and
+/// write `out.exr`.
+fn scene_args(dir: &TestDir, name: &str, scene: &SynthScene) -> Vec<String> {
+    dir.scene(name, scene);
+    let (color, depth) = (format!("{name}_color.exr"), format!("{name}_depth.exr"));
+    vec!["--color".into(), dir.arg(&color), "--depth".into(), dir.arg(&depth), "-o".into(), dir.arg("out.exr")]
 }
 
 /// The text attributes of the first header of an EXR file.
@@ -1345,20 +1345,8 @@ fn view_layers_are_chosen_whole_and_said() {
 #[test]
 fn a_clamp_that_changes_the_picture_is_said() {
     let dir = TestDir::new("max_coc");
-    dir.scene("p", &SynthScene::point_on_plane(64, 48, 0.6, [5.0; 3]));
-    let base = s(&[
-        "--color",
-        &dir.arg("p_color.exr"),
-        "--depth",
-        &dir.arg("p_depth.exr"),
-        "-o",
-        &dir.arg("out.exr"),
-        "--fstop",
-        "1.4",
-        "--focus",
-        "5",
-        "--explain",
-    ]);
+    let mut base = scene_args(&dir, "p", &SynthScene::point_on_plane(64, 48, 0.6, [5.0; 3]));
+    base.extend(s(&["--fstop", "1.4", "--focus", "5", "--explain"]));
     let run = |extra: &[&str]| {
         let mut args = base.clone();
         args.extend(s(extra));

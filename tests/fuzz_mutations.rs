@@ -63,31 +63,28 @@ fn refused(size: usize) {
     unsafe { libc::write(2, buf.as_ptr().cast(), n) };
 }
 
+/// `allocate()` unless `size` is beyond [`CASE_LIMIT`], counted.
+fn counted(size: usize, allocate: impl FnOnce() -> *mut u8) -> *mut u8 {
+    if size > CASE_LIMIT {
+        refused(size);
+        return std::ptr::null_mut();
+    }
+    let p = allocate();
+    if !p.is_null() {
+        added(size);
+    }
+    p
+}
+
 // SAFETY: every call is forwarded to the system allocator with the same layout; the counters
 // are plain atomics.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if layout.size() > CASE_LIMIT {
-            refused(layout.size());
-            return std::ptr::null_mut();
-        }
-        let p = System.alloc(layout);
-        if !p.is_null() {
-            added(layout.size());
-        }
-        p
+        counted(layout.size(), || System.alloc(layout))
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if layout.size() > CASE_LIMIT {
-            refused(layout.size());
-            return std::ptr::null_mut();
-        }
-        let p = System.alloc_zeroed(layout);
-        if !p.is_null() {
-            added(layout.size());
-        }
-        p
+        counted(layout.size(), || System.alloc_zeroed(layout))
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -96,14 +93,9 @@ unsafe impl GlobalAlloc for Counting {
     }
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if new_size > CASE_LIMIT {
-            refused(new_size);
-            return std::ptr::null_mut();
-        }
-        let p = System.realloc(ptr, layout, new_size);
+        let p = counted(new_size, || System.realloc(ptr, layout, new_size));
         if !p.is_null() {
             LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-            added(new_size);
         }
         p
     }
@@ -252,7 +244,7 @@ fn repo(path: &str) -> PathBuf {
 }
 
 /// The `.ext` files of a folder of the repository, sorted by name.
-fn seeds(folder: &str, ext: &str) -> Vec<(String, Vec<u8>)> {
+fn seeds(folder: &str, ext: &str) -> Seeds {
     let mut files: Vec<PathBuf> = std::fs::read_dir(repo(folder))
         .unwrap_or_else(|e| panic!("{folder}: {e}"))
         .map(|e| e.unwrap().path())
@@ -263,6 +255,9 @@ fn seeds(folder: &str, ext: &str) -> Vec<(String, Vec<u8>)> {
 }
 
 type Entry = fn(&[u8]) -> Result<fuzz::Outcome, fuzz::Violation>;
+
+/// Named files and their bytes.
+type Seeds = Vec<(String, Vec<u8>)>;
 
 /// Runs `entry` on every seed and `count` mutations of them; returns the cases run and how
 /// many were accepted.
@@ -314,7 +309,7 @@ fn seeded_mutations_neither_panic_nor_abort_nor_overallocate_nor_give_nan() {
     let lenses = seeds("lenses", "toml");
     let films = seeds("films", "toml");
     let prescriptions: Vec<_> = lenses.iter().filter(|(p, _)| p.contains("tessar")).cloned().collect();
-    let groups: [(&str, Entry, Vec<(String, Vec<u8>)>, usize, bool); 4] = [
+    let groups: [(&str, Entry, Seeds, usize, bool); 4] = [
         ("exr_passes", fuzz::exr_passes, seeds("testdata/fuzz", "exr"), 6000, false),
         ("lens_file", fuzz::lens_file, lenses, 6000, true),
         ("film_file", fuzz::film_file, films, 3000, true),

@@ -75,11 +75,10 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
     for entry in entries.flatten() {
         let name = entry.file_name();
         let Some((owner, pid)) = name.to_str().and_then(temporary_owner) else { continue };
-        if owner == host && !process_alive(pid) && entry.file_type().is_ok_and(|t| t.is_file()) {
-            if std::fs::remove_file(entry.path()).is_ok() {
-                log::info!("removed {}, left by process {pid} which no longer runs", entry.path().display());
-                removed += 1;
-            }
+        let stale = owner == host && !process_alive(pid) && entry.file_type().is_ok_and(|t| t.is_file());
+        if stale && std::fs::remove_file(entry.path()).is_ok() {
+            log::info!("removed {}, left by process {pid} which no longer runs", entry.path().display());
+            removed += 1;
         }
     }
     removed
