@@ -9,6 +9,7 @@
 //  - A sharp subject (tiny CoC) reaches only its own pixel, so it does not bleed into the background.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 3
+#define APERTURE_SHAPE_BINDING 4
 #include "aperture.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;

@@ -1,6 +1,14 @@
 #version 450
 // Circle of confusion: signed diameter in pixels from planar depth (Kyaw 2013 eq 5.3).
 // Foreground (nearer than the focus distance) negative, background positive, 0 in focus.
+//
+// Anti-aliased edges: renderers filter the colour pass over about 1.5 px but take the depth of
+// one sample per pixel, so a pixel at an edge may carry one surface's depth and mostly another
+// surface's light (a bright in-focus point's fringe with the sky's depth). Where the 3x3
+// neighbourhood spans two depths whose CoCs differ by more than a pixel, the pixel's colour is
+// read as a mix of the two layers' colours (least squares for the near layer's share alpha),
+// and it takes the depth of the layer that brings more of its light: alpha L_near against
+// (1 - alpha) L_far.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -8,6 +16,7 @@ layout(binding = 0, r32f) uniform readonly image2D depth_m;
 layout(binding = 1, r32f) uniform writeonly image2D coc_px;
 // Field curvature: [heights mm (entries), film-plane offset mm of the sharp image surface].
 layout(binding = 2, std430) readonly buffer FieldCurvature { float table[]; };
+layout(binding = 3, rgba32f) uniform readonly image2D color_in;
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -25,17 +34,66 @@ layout(push_constant) uniform Push {
     // Longitudinal colour: this run's channel focuses elsewhere than green, which shifts its
     // signed CoC by a constant (Camera::longitudinal_color_coc_px); 0 for green.
     float coc_offset_px;
+    int resolve_edges;         // 1: the anti-aliased-edge depth resolve above; 0: depth as stored
 } pc;
 
 #include "height_table.glsl"
 
+float inverse_depth(ivec2 q) {
+    q = clamp(q, ivec2(0), pc.size - 1);
+    return 1.0 / max(imageLoad(depth_m, q).r * pc.mm_per_depth_unit, 1.0e-30);
+}
+
+float brightness(vec3 c) { return max(c.r, 0.0) + max(c.g, 0.0) + max(c.b, 0.0); }
+
+// The inverse depth (1/mm) whose light pixel p mostly holds (see the top of the file).
+float resolved_inverse_depth(ivec2 p) {
+    float w_p = inverse_depth(p);
+    if (pc.resolve_edges == 0) return w_p;
+    float w[9];
+    float w_near = w_p, w_far = w_p;
+    for (int i = 0; i < 9; ++i) {
+        w[i] = inverse_depth(p + ivec2(i % 3 - 1, i / 3 - 1));
+        w_near = max(w_near, w[i]);
+        w_far = min(w_far, w[i]);
+    }
+    // Two layers only matter if their CoCs differ by more than a pixel.
+    if (pc.coc_scale_px_mm * (w_near - w_far) <= 1.0) return w_p;
+    float w_mid = 0.5 * (w_near + w_far);
+    vec3 near_sum = vec3(0.0), far_sum = vec3(0.0);
+    float near_n = 0.0, far_n = 0.0, near_w = 0.0, far_w = 0.0;
+    for (int i = 0; i < 9; ++i) {
+        if (i == 4) continue;
+        vec3 c = finite_or_zero(imageLoad(color_in, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1))).rgb;
+        if (w[i] > w_mid) {
+            near_sum += c;
+            near_n += 1.0;
+            near_w += w[i];
+        } else {
+            far_sum += c;
+            far_n += 1.0;
+            far_w += w[i];
+        }
+    }
+    if (near_n == 0.0 || far_n == 0.0) return w_p;
+    vec3 c_near = near_sum / near_n, c_far = far_sum / far_n;
+    vec3 d = c_near - c_far;
+    float dd = dot(d, d);
+    if (dd <= 1.0e-12) return w_p;
+    vec3 c_p = finite_or_zero(imageLoad(color_in, p)).rgb;
+    float alpha = clamp(dot(c_p - c_far, d) / dd, 0.0, 1.0);
+    bool near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
+    // The pixel keeps its own depth if it lies in the chosen layer.
+    if (near == (w_p > w_mid)) return w_p;
+    return near ? near_w / near_n : far_w / far_n;
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    float u_mm = imageLoad(depth_m, p).r * pc.mm_per_depth_unit;
     // Kyaw 2013 eq 5.3 in reciprocal form: exactly 0 at u = S, the finite limit at u = inf
     // (1/inf = 0), and -inf (then clamped) at u = 0. Depth was validated (no NaN, >= 0) on load.
-    float inv_u = 1.0 / max(u_mm, 1.0e-30);
+    float inv_u = resolved_inverse_depth(p);
     float coc = pc.coc_scale_px_mm * (pc.inv_focus_distance_per_mm - inv_u);
     if (pc.entries > 0) {
         // Field curvature (Kyaw 2013 sec 6.3.4, 7.6): at image height h the sharp image surface

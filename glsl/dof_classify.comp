@@ -1,7 +1,9 @@
 #version 450
 // Tiled depth of field, step 2: how far the gather of each tile must reach (the largest CoC
-// radius of any tile near enough to cover part of it: dilation), and the tile's class, appended
-// to that class's list with the indirect dispatch counts.
+// radius of any tile near enough to cover part of it: dilation), and the tile's class: a copy,
+// the exact full-resolution gather, or the gather at the pyramid level where that radius is
+// at most LEVEL_RADIUS texels. Each tile is appended to its class's list, whose indirect
+// dispatch counts its tiles.
 #include "common.glsl"
 #include "dof_tiles.glsl"
 
@@ -9,8 +11,8 @@ layout(local_size_x = 64) in;
 layout(binding = 0, std430) readonly buffer TileCoc { vec2 tile_coc[]; };
 layout(binding = 1, std430) buffer Args { uint args[]; };
 layout(binding = 2, std430) writeonly buffer TileLists { uint tile_list[]; }; // CLASS_COUNT lists of tile_count
-// [0, tile_count): the gather radius; [tile_count, 2 tile_count): the largest radius of a
-// foreground sample (in front of the focus plane) that reaches the tile.
+// [0, n): the gather radius (px); [n, 2n): the largest radius of a foreground sample (in front
+// of the focus plane) that reaches the tile; [2n, 3n): the class, as a float.
 layout(binding = 3, std430) writeonly buffer TileRadius { float tile_radius_px[]; };
 
 layout(push_constant) uniform Push {
@@ -24,9 +26,15 @@ void main() {
     int tile_count = pc.tiles.x * pc.tiles.y;
     if (t == 0) {
         for (int c = 0; c < CLASS_COUNT; ++c) {
-            args[ARGS_DISPATCH(c) + 1] = 1u;
-            args[ARGS_DISPATCH(c) + 2] = 1u;
+            args[ARGS_TILES(c) + 1] = 1u;
+            args[ARGS_TILES(c) + 2] = 1u;
         }
+        for (int level = 1; level <= LEVELS; ++level) {
+            args[ARGS_LEVEL_GATHER(level) + 1] = 1u;
+            args[ARGS_LEVEL_GATHER(level) + 2] = 1u;
+        }
+        args[ARGS_BIN_DISPATCH + 1] = 1u;
+        args[ARGS_BIN_DISPATCH + 2] = 1u;
     }
     if (t >= tile_count) return;
     ivec2 tc = ivec2(t % pc.tiles.x, t / pc.tiles.x);
@@ -44,9 +52,16 @@ void main() {
             if (fg_n + 1.0 > length(gap)) fg_radius = max(fg_radius, fg_n);
         }
     }
-    int cls = radius <= 0.5 ? CLASS_COPY : (radius <= pc.small_radius_px ? CLASS_SMALL : CLASS_LARGE);
+    int cls = CLASS_COPY;
+    if (radius > 0.5) cls = CLASS_SMALL;
+    if (radius > pc.small_radius_px) {
+        int level = 1;
+        while (level < LEVELS && radius > float(LEVEL_RADIUS << level)) ++level;
+        cls = CLASS_LEVEL1 + level - 1;
+    }
     tile_radius_px[t] = radius;
     tile_radius_px[tile_count + t] = fg_radius;
-    uint slot = atomicAdd(args[ARGS_DISPATCH(cls)], 1u);
+    tile_radius_px[2 * tile_count + t] = float(cls);
+    uint slot = atomicAdd(args[ARGS_TILES(cls)], 1u);
     tile_list[cls * tile_count + int(slot)] = uint(t);
 }

@@ -1,82 +1,121 @@
 #version 450
-// Tiled depth of field, large-CoC tiles at full resolution: the upsampled half-resolution
-// background, or for pixels that are themselves nearly sharp the exact gather (so a sharp
-// subject stays sharp at full resolution), with the half-resolution foreground composited over.
+// Tiled depth of field, the level tiles at full resolution: the background upsampled from the
+// tile's pyramid level, or for pixels that are themselves nearly sharp the exact gather (so a
+// sharp subject stays sharp at full resolution), the level's foreground composited over, then
+// the highlight sprites binned to the tile (dof_bin.comp), each with the exact aperture shape,
+// under the gather's occlusion rule: a sprite behind a pixel spreads no farther than the
+// pixel's own CoC. One workgroup per tile, dispatched over the lists of the four levels.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
+#define APERTURE_SHAPE_BINDING 13
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
-layout(binding = 0, rgba32f) uniform readonly image2D color_in;
+layout(binding = 0, rgba32f) uniform readonly image2D color_in;   // less the sprites' energy
 layout(binding = 1, r32f) uniform readonly image2D coc_px;
-layout(binding = 2, rgba32f) uniform readonly image2D bg_half;
-layout(binding = 3, rgba32f) uniform readonly image2D fg_half;
+layout(binding = 2, rgba32f) uniform readonly image2D bg_level;
+layout(binding = 3, rgba32f) uniform readonly image2D fg_level;
 layout(binding = 4, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
-layout(binding = 7, r32f) uniform readonly image2D coc_half;
-layout(binding = 8, rgba32f) uniform readonly image2D fg_big_half;
+layout(binding = 7, rg32f) uniform readonly image2D coc_level;
+layout(binding = 8, rgba32f) uniform readonly image2D fg_big_level;
 layout(binding = 9, std430) readonly buffer TileRadius { float tile_radius_px[]; };
+layout(binding = 10, std430) readonly buffer Sprites { Sprite sprites[]; };
+layout(binding = 11, std430) readonly buffer BinCounts { uint bin_count[]; };
+layout(binding = 12, std430) readonly buffer Bins { uint bin[]; };
+layout(binding = 14, std430) readonly buffer Args { uint args[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
-    ivec2 half_size;
+    ivec2 level_size;
     ivec2 tiles;
+    int level;
     float small_radius_px;
     Aperture ap;
     float layer_transition_px;
+    int sprite_capacity;
 } pc;
 
 #include "gather.glsl"
 
-vec4 load_half_bg(ivec2 q) { return imageLoad(bg_half, clamp(q, ivec2(0), pc.half_size - 1)); }
-vec4 load_half_fg(ivec2 q) { return imageLoad(fg_half, clamp(q, ivec2(0), pc.half_size - 1)); }
-vec4 load_half_fg_big(ivec2 q) { return imageLoad(fg_big_half, clamp(q, ivec2(0), pc.half_size - 1)); }
+vec4 load_level(int which, ivec2 q) {
+    q = clamp(q, ivec2(0), pc.level_size - 1);
+    return which == 0 ? imageLoad(bg_level, q) : (which == 1 ? imageLoad(fg_level, q) : imageLoad(fg_big_level, q));
+}
+
+vec4 bilinear_level(int which, ivec2 h0, vec2 f) {
+    return mix(mix(load_level(which, h0), load_level(which, h0 + ivec2(1, 0)), f.x),
+               mix(load_level(which, h0 + ivec2(0, 1)), load_level(which, h0 + ivec2(1, 1)), f.x), f.y);
+}
+
+// The light of one sprite at pixel p (of signed CoC coc_p).
+vec3 sprite_light(Sprite s, ivec2 p, float coc_p, Aperture ap) {
+    float radius_p = max(0.5 * abs(coc_p), 0.5);
+    float radius_q = max(0.5 * abs(s.coc_px), 0.5);
+    float reach = s.coc_px > coc_p ? min(radius_q, radius_p) : radius_q;
+    int flip = s.coc_px < 0.0 ? -1 : 1;
+    // Sprites sit at pixel centres: the offset is a whole number of pixels.
+    ivec2 o = (p - ivec2(floor(s.centre_px))) * flip;
+    return s.color.rgb * (aperture_weight_at(o, reach, ap, s.centre_px, float(flip), 1.0)
+        * sa_weight(vec2(o), radius_q, s.coc_px, ap));
+}
 
 void main() {
-    uint t = tile_list[CLASS_LARGE * pc.tiles.x * pc.tiles.y + int(gl_WorkGroupID.x)];
+    int cls = CLASS_LEVEL1 + pc.level - 1;
+    int tile_count = pc.tiles.x * pc.tiles.y;
+    uint t = tile_list[cls * tile_count + int(gl_WorkGroupID.x)];
     ivec2 p = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * TILE_SIZE + ivec2(gl_LocalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    // Bilinear upsampling: full-res pixel centre (p + 0.5) is half-res position (p + 0.5)/2 - 0.5.
-    vec2 h = (vec2(p) + 0.5) * 0.5 - 0.5;
+    float scale = float(1 << pc.level);
+    // Bilinear upsampling: pixel centre (p + 0.5) is level position (p + 0.5) / 2^L - 0.5.
+    vec2 h = (vec2(p) + 0.5) / scale - 0.5;
     ivec2 h0 = ivec2(floor(h));
     vec2 f = h - vec2(h0);
-    // Joint bilateral upsampling of the background: each half-resolution texel also weighted by
-    // how close its CoC is to this pixel's, so a blurred pixel next to a sharp subject (or an
-    // in-focus highlight) does not pull that content in from the coarser grid.
+    // Joint bilateral upsampling of the background: each level texel also weighted by how close
+    // its CoC is to this pixel's, so a blurred pixel next to a sharp subject (or an in-focus
+    // highlight) does not pull that content in from the coarser grid.
     float coc_here = imageLoad(coc_px, p).r;
     vec4 bg = vec4(0.0);
     float bg_weight = 0.0;
     for (int j = 0; j < 2; ++j) {
         for (int i = 0; i < 2; ++i) {
-            ivec2 q = clamp(h0 + ivec2(i, j), ivec2(0), pc.half_size - 1);
+            ivec2 q = clamp(h0 + ivec2(i, j), ivec2(0), pc.level_size - 1);
+            vec2 cw = imageLoad(coc_level, q).rg;
             float bilinear = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
-            float similar = 1.0 / (1.0 + abs(imageLoad(coc_half, q).r - coc_here));
-            bg += (bilinear * similar) * imageLoad(bg_half, q);
+            float similar = cw.y;
+            bg += (bilinear * similar) * imageLoad(bg_level, q);
             bg_weight += bilinear * similar;
         }
     }
-    bg = bg_weight > 0.0 ? bg / bg_weight : load_half_bg(h0);
-    vec4 fg = mix(mix(load_half_fg(h0), load_half_fg(h0 + ivec2(1, 0)), f.x),
-                  mix(load_half_fg(h0 + ivec2(0, 1)), load_half_fg(h0 + ivec2(1, 1)), f.x), f.y);
+    bg = bg_weight > 0.0 ? bg / bg_weight : load_level(0, h0);
+    vec4 fg = bilinear_level(1, h0, f);
     float radius_p = 0.5 * abs(coc_here);
     // Pixels whose own CoC is small are gathered exactly, as in the small-CoC tiles (so nothing
     // changes across a tile border), with only the large-CoC foreground composited over them;
-    // blurred pixels take the half-resolution layers. A blend over the last 1.5 px below the
-    // small-CoC radius joins the two, so a pixel at or above it costs only the half path.
+    // blurred pixels take the level's layers. A blend over the last 1.5 px below the small-CoC
+    // radius joins the two, so a pixel at or above it costs only the upsampling.
     float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
     vec4 base = bg;
+    Aperture ap = pc.ap;
     if (blurred < 1.0) {
-        Aperture ap = pc.ap;
         // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
-        float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
+        float fg_radius = tile_radius_px[tile_count + int(t)];
         int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;
         vec4 exact = gather_exact(p, pc.size, r, ap, pc.layer_transition_px);
-        vec4 fg_big = mix(mix(load_half_fg_big(h0), load_half_fg_big(h0 + ivec2(1, 0)), f.x),
-                          mix(load_half_fg_big(h0 + ivec2(0, 1)), load_half_fg_big(h0 + ivec2(1, 1)), f.x), f.y);
+        vec4 fg_big = bilinear_level(2, h0, f);
         exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);
         base = mix(exact, bg, blurred);
         fg = vec4(fg.rgb, fg.a * blurred);
     }
-    imageStore(color_out, p, vec4(mix(base.rgb, fg.rgb, fg.a), base.a));
+    vec3 color = mix(base.rgb, fg.rgb, fg.a);
+    // The sprites of the tile's bin; all of them if the bin overflowed.
+    uint count = bin_count[t];
+    uint listed = min(count, uint(BIN_CAPACITY));
+    uint total = count > uint(BIN_CAPACITY) ? min(args[ARGS_SPRITE_COUNT], uint(pc.sprite_capacity)) : listed;
+    for (uint k = 0u; k < total; ++k) {
+        uint i = count > uint(BIN_CAPACITY) ? k : bin[int(t) * BIN_CAPACITY + int(k)];
+        color += sprite_light(sprites[i], p, coc_here, ap);
+    }
+    imageStore(color_out, p, vec4(color, base.a));
 }

@@ -4,6 +4,7 @@
 // indirectly, one workgroup per tile of the class's list.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 5
+#define APERTURE_SHAPE_BINDING 6
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
 

@@ -1373,3 +1373,59 @@ fn a_clamp_that_changes_the_picture_is_said() {
         "error: maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)",
     );
 }
+
+#[test]
+fn motion_blur_settings_and_velocity_conventions_are_checked_with_their_flags() {
+    let dir = TestDir::new("motion_settings");
+    let base = small_scene(&dir);
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args)
+    };
+    let err = run(&["--fps=-24"]).failure();
+    assert_contains(&err, "error: frame rate must be a positive number of frames per second, got -24 (--fps)");
+    let err = run(&["--shutter-angle", "400"]).failure();
+    assert_contains(&err, "error: shutter angle must be in (0, 360] degrees, got 400 (--shutter-angle)");
+    let err = run(&["--shutter-curve", "trapezoid:0.7"]).failure();
+    assert_contains(&err, "error: shutter curve ramp must be in (0, 0.5] of the open time, got 0.7 (--shutter-curve)");
+    let err = run(&["--shutter-curve", "round"]).failure();
+    assert_contains(&err, "error: --shutter-curve: \"round\" is not box, trapezoid or trapezoid:RAMP");
+    let both = run(&["--shutter", "1/50", "--shutter-angle", "180"]);
+    assert_ne!(both.code, Some(0), "{}", both.describe());
+    assert_contains(&both.stderr, "--shutter-angle");
+    // Arnold's raw vectors without the renderer's shutter interval: the file, the channels and
+    // the flag.
+    let (w, h) = (16u32, 12u32);
+    let n = (w * h) as usize;
+    let path = dir.join("arnold.exr");
+    let (one, z, v) = (vec![1.0f32; n], vec![3.0f32; n], vec![2.0f32; n]);
+    let channels: Vec<(&str, &[f32])> =
+        vec![("R", &one), ("G", &one), ("B", &one), ("Z", &z), ("motion_vector.R", &v), ("motion_vector.G", &v)];
+    write_exr_channels(&path, w, h, &channels, &float_opts()).unwrap();
+    let arnold = |extra: &[&str]| {
+        let mut args = s(&["--color", &dir.arg("arnold.exr"), "-o", &dir.arg("arnold_out.exr"), "--explain"]);
+        args.extend(s(extra));
+        render(&dir, &args)
+    };
+    let err = arnold(&[]).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: velocity: \"{}\" holds Arnold motion vectors (motion_vector.R, motion_vector.G), which span the renderer's shutter interval; the file does not say how long it was; give velocity_interval_frames (--velocity-interval)",
+            path.display()
+        ),
+    );
+    let ok = arnold(&["--velocity-interval", "0.5", "--fps", "24", "--shutter-angle", "180"]);
+    assert_eq!(ok.code, Some(0), "{}", ok.describe());
+    // (2, 2) px over half a frame is (4, -4) px per frame (y up in the file), 5.66 px per frame:
+    // 2.83 px of blur over a 180 degree shutter; the plan says so, and the order with the depth
+    // of field.
+    assert_contains(&ok.stderr, "Arnold raw motion_vector");
+    assert_contains(
+        &ok.stderr,
+        "[run ] motion_blur   velocity up to 5.7 px/frame (arnold) at 24 fps, shutter 0.0208 s = 180 deg centred, box",
+    );
+    assert_contains(&ok.stderr, "blur up to 2.8 px");
+    assert_contains(&ok.stderr, "before the depth of field");
+}

@@ -111,6 +111,27 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     camera.astigmatism = Some((table(vec![0.0, 0.05, 0.2]), table(vec![0.0, 0.02, 0.1])));
     camera.coma = Some(table(vec![0.0, 0.1, 0.3]));
     cases.push(("tiled, longitudinal colour, distortion, astigmatism, coma", banded_frame(160, 48), camera));
+    // Motion blur: a bar moving over a textured background along a bent path (its previous and
+    // next vectors differ), a trapezoid shutter and a rolling readout; then the reference on a
+    // smaller frame (its sub-frame times are many dispatches).
+    let mut camera = motion_camera(24.0, 0.5);
+    camera.motion.timing = realcam::optics::shutter::ShutterTiming::new(
+        0.5 / 24.0,
+        24.0,
+        realcam::optics::shutter::ShutterPosition::Centred,
+        realcam::optics::shutter::ShutterCurve::Trapezoid { ramp: 0.25 },
+    )
+    .with_rolling(0.01, 24.0, realcam::optics::shutter::RollingDirection::Down);
+    let texture = |x: u32, y: u32| [0.2 + 0.1 * ((x / 3 + y / 5) % 3) as f32, 0.3, 0.1 * (y % 4) as f32];
+    let bar = |w, h, next, prev| moving_bar_frame(w, h, (14, 22), [4.0, 1.0, 0.5], (1.0, 6.0), next, prev, texture);
+    cases.push((
+        "motion blur, bent path, rolling trapezoid shutter",
+        bar(48, 34, [12.0, 3.0], Some([-10.0, 4.0])),
+        camera,
+    ));
+    let mut camera = motion_camera(24.0, 0.5);
+    camera.motion.mode = realcam::model::camera::MotionBlurMode::Reference;
+    cases.push(("motion blur reference", bar(36, 20, [6.0, 1.0], None), camera));
     // The diffraction focus processor.
     let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
     camera.bokeh = BokehMode::Diffraction;
@@ -171,10 +192,10 @@ fn whole_pipeline_matches_the_chained_cpu_twins() {
         assert_validation_clean(&gpu);
 
         let coc_params = plan.params::<coc::Coc>().unwrap();
-        let coc_cpu = coc::coc_cpu(&frame.depth_m, &coc_params.push, &coc_params.table);
+        let coc_cpu = coc::coc_resolved_cpu(&frame.depth_m, &frame.color, &coc_params.push, &coc_params.table);
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let gather = plan.params::<bokeh_gather::BokehGather>().unwrap();
-        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture_mask);
+        let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture);
         let v = plan.params::<vignette::Vignette>().unwrap();
         let vig = vignette::vignette_cpu(&dof, &v.push, &v.table);
         let f = plan.params::<film::Film>().unwrap();

@@ -15,11 +15,21 @@ struct Aperture {
     float centre_y_px;
     float cats_eye_per_px; // cat's-eye amount / distance from the centre to the farthest corner
     float sa_lsa_coc_px;   // traced spherical aberration: the rim's focus shift as a CoC; 0: sa_amount
+    float shape_b;         // mix(cos(pi/n), 1, curvature): the polygon's edge at sdf = g(o) - r shape_b
+    float area_factor;     // the aperture image's area over r^2
+    int shape_radius;      // the shape table covers offsets with |x|, |y| <= this; 0: no table
 };
 
 // The user's aperture image (src/model/aperture.rs): [size, mean, size*size values], size 0 when
 // none. Each shader that includes this file defines APERTURE_MASK_BINDING.
 layout(binding = APERTURE_MASK_BINDING, std430) readonly buffer ApertureMask { float aperture_mask[]; };
+
+// The aperture's shape at integer offsets (src/passes/aperture.rs shape_table), so gathers and
+// sprites need no atan per tap: g(o) = |o| mix(cos(phi), 1, curvature), phi the angle of o from
+// the nearest blade's edge normal; the signed distance to the edge of the image of
+// circumradius r is g(o) - r shape_b. Texel (o + shape_radius) holds g(o); each shader that
+// includes this file defines APERTURE_SHAPE_BINDING.
+layout(binding = APERTURE_SHAPE_BINDING, r32f) uniform readonly image2D aperture_shape;
 
 float mask_texel(ivec2 i, int n) {
     if (any(lessThan(i, ivec2(0))) || any(greaterThanEqual(i, ivec2(n)))) return 0.0;
@@ -131,6 +141,25 @@ float aperture_weight(vec2 o, float r, Aperture ap, vec2 sample_px, float flip, 
         area *= max(overlap, 1e-3);
     }
     return cov / area;
+}
+
+// aperture_weight for an integer offset o (already flipped) from the shape table: exact for a
+// bladed or round aperture; the aperture image and the cat's eye take the general path.
+float aperture_weight_at(ivec2 o, float r, Aperture ap, vec2 sample_px, float flip, float ramp) {
+    bool table = ap.shape_radius > 0 && ap.cats_eye_per_px <= 0.0 && !(aperture_mask[0] > 0.0 && r > 1.0)
+        && all(lessThanEqual(abs(o), ivec2(ap.shape_radius)));
+    if (!table) return aperture_weight(vec2(o), r, ap, sample_px, flip, ramp);
+    float limit = r + 0.5 * ramp;
+    if (float(o.x * o.x + o.y * o.y) >= limit * limit) return 0.0;
+    float g = imageLoad(aperture_shape, o + ivec2(ap.shape_radius)).r;
+    float cov = clamp(0.5 - (g - r * ap.shape_b) / ramp, 0.0, 1.0);
+    return cov / (ap.area_factor * r * r);
+}
+
+// Spherical aberration's intensity for a sample of signed CoC coc_q at offset o (1 without it).
+float sa_weight(vec2 o, float radius_q, float coc_q, Aperture ap) {
+    if (ap.sa_amount == 0.0 && ap.sa_lsa_coc_px == 0.0) return 1.0;
+    return sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
 }
 
 #endif

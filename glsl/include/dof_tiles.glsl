@@ -4,18 +4,33 @@
 #define REALCAM_DOF_TILES_GLSL
 
 // Tile classes: a copy (nothing defocused reaches the tile), the exact full-resolution gather
-// (small CoC), or the half-resolution gather with sprites (large CoC).
+// (small CoC), or a gather at level L of the pyramid (L = 1 .. 4: 1/2 .. 1/16 resolution),
+// the level at which the tile's largest CoC radius is at most LEVEL_RADIUS texels (4 at L4).
 #define CLASS_COPY 0
 #define CLASS_SMALL 1
-#define CLASS_LARGE 2
-#define CLASS_COUNT 3
+#define CLASS_LEVEL1 2
+#define LEVELS 4
+#define CLASS_COUNT 6
+#define LEVEL_RADIUS 2
 
-// The args buffer: three indirect dispatches (x, y, z) then the sprite counters.
+// The args buffer of indirect dispatches (x, y, z): per class one workgroup per tile (its x is
+// the class's tile count), per level the level gather's workgroups, the sprite binning's (one
+// invocation per sprite); the sprite counters; the level gathers' tile counts.
 #define ARGS_DISPATCH_WORDS 3
-#define ARGS_DISPATCH(c) ((c) * ARGS_DISPATCH_WORDS)
-#define ARGS_SPRITE_COUNT 9
-#define ARGS_SPRITES_DROPPED 10
-#define ARGS_WORDS 12
+#define ARGS_TILES(c) ((c) * ARGS_DISPATCH_WORDS)
+#define ARGS_LEVEL_GATHER_BASE 18
+#define ARGS_LEVEL_GATHER(level) (ARGS_LEVEL_GATHER_BASE + ((level) - 1) * ARGS_DISPATCH_WORDS)
+#define ARGS_BIN_DISPATCH 30
+#define ARGS_SPRITE_COUNT 33
+#define ARGS_SPRITES_DROPPED 34
+#define ARGS_BIN_OVERFLOWS 35
+// The number of tiles in each level's gather list (dof_level_lists.comp).
+#define ARGS_LEVEL_TILES_BASE 36
+#define ARGS_LEVEL_TILES(level) (ARGS_LEVEL_TILES_BASE + (level) - 1)
+#define ARGS_WORDS 40
+
+// Invocations per workgroup of the level gathers and of the sprite binning.
+#define GROUP_SIZE 64
 
 // A sprite: vec2 + float + float + vec4 (std430: 32 bytes, 8 words).
 #define SPRITE_WORDS 8
@@ -25,5 +40,9 @@ struct Sprite {
     float pad;
     vec4 color;
 };
+
+// Sprites binned per tile: for each tile a count, then BIN_CAPACITY sprite indices. A tile
+// with more sprites than that reads every sprite (and the overflow is counted).
+#define BIN_CAPACITY 128
 
 #endif

@@ -24,10 +24,10 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
             float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
             if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
             // The aperture's image is upright behind the focus plane and inverted in front.
-            float flip = coc_q < 0.0 ? -1.0 : 1.0;
-            vec2 o = vec2(-dx, -dy) * flip;
-            float w = aperture_weight(o, reach, ap, vec2(p + ivec2(dx, dy)) + 0.5, flip, 1.0)
-                * sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
+            int flip = coc_q < 0.0 ? -1 : 1;
+            ivec2 o = ivec2(-dx, -dy) * flip;
+            float w = aperture_weight_at(o, reach, ap, vec2(p + ivec2(dx, dy)) + 0.5, float(flip), 1.0)
+                * sa_weight(vec2(o), radius_q, coc_q, ap);
             if (w <= 0.0) continue;
             vec4 c = finite_or_zero(imageLoad(color_in, q));
             float f = clamp((coc_p - coc_q) / layer_transition_px, 0.0, 1.0);

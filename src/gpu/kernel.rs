@@ -346,8 +346,8 @@ mod tests {
 
     #[test]
     fn a_declaration_that_matches_the_shader_passes() {
-        let declared = [image("depth_m"), image("coc_px"), buffer("FieldCurvature")];
-        check_interface("coc", &declared, 56, &coc_interface()).unwrap();
+        let declared = [image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("color_in")];
+        check_interface("coc", &declared, 60, &coc_interface()).unwrap();
     }
 
     #[test]
@@ -356,23 +356,24 @@ mod tests {
             check_interface("coc", declared, push, &coc_interface()).unwrap_err().to_string()
         };
         // Swapped bindings.
-        let swapped = error(&[image("coc_px"), image("depth_m"), buffer("FieldCurvature")], 56);
+        let swapped = error(&[image("coc_px"), image("depth_m"), buffer("FieldCurvature"), image("color_in")], 60);
         assert_eq!(
             swapped,
             "shader coc: binding 0 is a storage image named \"depth_m\" in the shader but a storage image named \"coc_px\" in the pass"
         );
         // An image declared where the shader has a buffer.
-        let kind = error(&[image("depth_m"), image("coc_px"), image("FieldCurvature")], 56);
+        let kind = error(&[image("depth_m"), image("coc_px"), image("FieldCurvature"), image("color_in")], 60);
         assert!(
             kind.contains("binding 2 is a storage buffer named \"FieldCurvature\" in the shader but a storage image"),
             "{kind}"
         );
         // A binding the pass forgot, one it invented, a push-constant struct of the wrong size.
-        assert!(error(&[image("depth_m"), image("coc_px")], 56).contains("the shader has binding 2 (FieldCurvature"));
-        let extra = error(&[image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("x")], 56);
-        assert!(extra.contains("declares binding 3 (x"), "{extra}");
-        let push = error(&[image("depth_m"), image("coc_px"), buffer("FieldCurvature")], 52);
-        assert_eq!(push, "shader coc: the push constants are 52 bytes in the pass but 56 bytes in the shader");
+        assert!(error(&[image("depth_m"), image("coc_px")], 60).contains("the shader has binding 2 (FieldCurvature"));
+        let all = [image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("color_in")];
+        let extra = error(&[&all[..], &[image("x")]].concat(), 60);
+        assert!(extra.contains("declares binding 4 (x"), "{extra}");
+        let push = error(&all, 56);
+        assert_eq!(push, "shader coc: the push constants are 56 bytes in the pass but 60 bytes in the shader");
     }
 
     #[test]

@@ -93,12 +93,15 @@ impl Recorder {
                 .vk("vkAllocateCommandBuffers")?[0];
             gpu.set_name(cb, label);
             let sizes = [
-                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: 512 },
-                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 512 },
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: 8192 },
+                vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: 8192 },
                 vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 64 },
             ];
             let descriptor_pool = device
-                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(128).pool_sizes(&sizes), None)
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default().max_sets(2048).pool_sizes(&sizes),
+                    None,
+                )
                 .vk("vkCreateDescriptorPool")?;
             let query_pool = if gpu.shared.timestamps && !twin_checks {
                 let pool = device

@@ -310,8 +310,8 @@ mod tests {
 
     #[test]
     fn reads_the_bindings_and_push_constants_of_the_compiled_shaders() {
-        // glsl/coc.comp: depth (image), coc_px (image), the field-curvature buffer; push block of
-        // 14 four-byte fields.
+        // glsl/coc.comp: depth (image), coc_px (image), the field-curvature buffer, the colour
+        // (image, for the depth edges); push block of 15 four-byte fields.
         let coc = shader("coc");
         let names: Vec<(u32, BindingKind, &str)> =
             coc.bindings.iter().map(|b| (b.binding, b.kind, b.name.as_str())).collect();
@@ -320,10 +320,11 @@ mod tests {
             [
                 (0, BindingKind::StorageImage, "depth_m"),
                 (1, BindingKind::StorageImage, "coc_px"),
-                (2, BindingKind::StorageBuffer, "FieldCurvature")
+                (2, BindingKind::StorageBuffer, "FieldCurvature"),
+                (3, BindingKind::StorageImage, "color_in")
             ]
         );
-        assert_eq!(coc.push_constant_bytes, 14 * 4);
+        assert_eq!(coc.push_constant_bytes, 15 * 4);
         // glsl/dof_composite.comp: a nested struct (Aperture, 9 fields) inside the push block,
         // and binding numbers declared out of order through an include.
         let composite = shader("dof_composite");

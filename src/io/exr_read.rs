@@ -13,20 +13,26 @@
 //! | depth    | `<Layer>.Depth.Z`                         | Blender                                                                 |
 //! | depth    | `Z`, `depth.Z`, `depth.R`, `depth`        | common, Nuke                                                            |
 //! | depth    | the only channel of a one-channel file    | whatever its name (`Y`, `R`, ...)                                       |
-//! | velocity | `<Layer>.Vector.X,Y,Z,W`                  | Blender raster space (x right, y UP); Z,W = p[f]-p[f+1]: (dx, dy) = (-Z, +W) |
-//! | velocity | `<Layer>.Vector.X,Y` (no Z,W)             | Blender; X,Y = p[f-1]-p[f], constant velocity assumed: (dx, dy) = (-X, +Y) |
-//! | velocity | `X,Y,Z,W`, the file's only channels       | Blender Vector pass file, as above: (dx, dy) = (-Z, +W)                 |
-//! | velocity | `forward.u,forward.v`                     | Nuke: px toward the next frame, y UP: (dx, dy) = (u, -v)                |
-//! | velocity | `motion.u,motion.v` / `motion.x,motion.y` | as `forward`: (dx, dy) = (u, -v)                                        |
-//! | velocity | `velocity.X,Y` / `vel.X,Y`                | px toward the next frame, y UP: (dx, dy) = (X, -Y)                      |
+//! | velocity | `<Layer>.Vector.X,Y,Z,W`, `X,Y,Z,W` (whole file) | Blender, y UP: next (-Z, +W), previous (X, -Y)              |
+//! | velocity | `<Layer>.Vector.X,Y` (no Z,W)             | Blender: previous (X, -Y), next = -previous (constant velocity)         |
+//! | velocity | `forward.u,v` [+ `backward.u,v`]          | Nuke, y UP: next (u, -v), previous (bu, -bv)                            |
+//! | velocity | `motion.u,v` / `motion.x,y`               | Nuke single vector: next (u, -v)                                        |
+//! | velocity | `motion_vector.R,G` (or `.X,Y`)           | Arnold raw, over the renderer's shutter: next (R, -G) / interval        |
+//! | velocity | `velocity.X,Y`/`.R,G`, `VRayVelocity.R,G` | V-Ray, current to next frame, y UP: next (x, -y)                        |
+//! | velocity | `vel.X,Y`                                 | RE:Vision single vector, y UP: next (x, -y)                             |
+//!
+//! With [`VelocityFormat::Auto`] the format comes from the names, and names of two formats in
+//! one file are an error; a named format reads only its own names (`ndc` and `revision` also the
+//! generic single-vector names, read as that format). `velocity_scale` and `velocity_flip_y`
+//! apply after the conversion.
 //!
 //! Overrides ([`PassSources`]): color takes a layer prefix `P` (reads `P.R,P.G,P.B[,P.A]`) or an
 //! explicit list `R,G,B[,A]`; depth takes one exact channel name; velocity takes 4 names
-//! (Blender `X,Y,Z,W`: (-Z, +W)) or 2 names `x,y`, read as Blender previous-frame vectors
-//! (-x, +y) when the first contains `.Vector.`, else as px toward the next frame with y UP
+//! (Blender `X,Y,Z,W`) or 2 names `x,y`, read in the named format, or with `auto` as Blender
+//! previous-frame vectors when the first contains `.Vector.`, else as px toward the next frame, y UP
 //! (x, -y). The conventions used are written to [`ScenePasses::channel_report`].
 
-use super::{Image, IoError, MemoryBudget, PassSources, ScenePasses};
+use super::{Image, IoError, MemoryBudget, PassSources, ScenePasses, VelocityFormat};
 use exr::image::FlatSamples;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -379,24 +385,109 @@ fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Res
     Err(f.missing("depth", "<layer>.Depth.Z, Z, depth.Z, depth.R, depth, or the only channel of a one-channel file"))
 }
 
-/// Velocity channels: (dx, dy) = (sx * x, sy * y) in px per frame, x right, y down.
-struct Velocity<'a> {
+/// Two channels of a velocity pass and their conversion: (dx, dy) = (sx * x, sy * y) px per
+/// frame, x right, y down.
+struct Vector<'a> {
     x: &'a Chan,
     y: &'a Chan,
     sx: f32,
     sy: f32,
+}
+
+/// The velocity channels found: toward the next frame and, when present, toward the previous.
+struct Velocity<'a> {
+    next: Option<Vector<'a>>,
+    prev: Option<Vector<'a>>,
+    format: VelocityFormat,
     rule: String,
 }
 
-const BLENDER_ZW: &str = "Blender Vector Z,W = p[f]-p[f+1], x right/y up: dx = -Z, dy = +W px/frame";
+const BLENDER_XYZW: &str =
+    "Blender Vector, x right/y up: X,Y = p[f-1]-p[f] -> previous (X, -Y); Z,W = p[f]-p[f+1] -> next (-Z, +W) px/frame";
 const BLENDER_XY: &str =
-    "Blender Vector X,Y = p[f-1]-p[f], x right/y up, constant velocity assumed: dx = -X, dy = +Y px/frame";
-const NEXT_Y_UP: &str = "px toward the next frame, x right/y up: dx = +x, dy = -y px/frame";
-const VELOCITY_LOOKED_FOR: &str =
-    "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v, motion.u/v, motion.x/y, velocity.X/Y, vel.X/Y";
+    "Blender Vector X,Y = p[f-1]-p[f], x right/y up: previous (X, -Y) px/frame, constant velocity assumed";
+const NEXT_Y_UP: &str = "px toward the next frame, x right/y up: next (x, -y) px/frame";
+const VELOCITY_LOOKED_FOR: &str = "<layer>.Vector.X/Y[/Z/W], X,Y,Z,W (whole file), forward.u/v [+ backward.u/v], motion.u/v, motion.x/y, motion_vector.R/G, velocity.X/Y, velocity.R/G, VRayVelocity.R/G, vel.X/Y";
 
-fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Option<Velocity<'a>>, IoError> {
-    let vel = |x, y, sx, sy, rule: String| Ok(Some(Velocity { x, y, sx, sy, rule }));
+/// Single-vector channel pairs, by the format their names stand for.
+const SINGLE_VECTORS: [(&str, &str, VelocityFormat); 10] = [
+    ("motion.u", "motion.v", VelocityFormat::Nuke),
+    ("motion.x", "motion.y", VelocityFormat::Nuke),
+    ("motion_vector.R", "motion_vector.G", VelocityFormat::Arnold),
+    ("motion_vector.X", "motion_vector.Y", VelocityFormat::Arnold),
+    ("velocity.X", "velocity.Y", VelocityFormat::Vray),
+    ("velocity.R", "velocity.G", VelocityFormat::Vray),
+    ("VRayVelocity.R", "VRayVelocity.G", VelocityFormat::Vray),
+    ("VRayVelocity.X", "VRayVelocity.Y", VelocityFormat::Vray),
+    ("vel.X", "vel.Y", VelocityFormat::Revision),
+    ("vel.x", "vel.y", VelocityFormat::Revision),
+];
+
+/// What a single forward vector of `format` means, in words.
+fn single_rule(format: VelocityFormat) -> &'static str {
+    match format {
+        VelocityFormat::Arnold => "Arnold raw motion_vector: px over the renderer's shutter interval, forward, x right/y up: next (x, -y) / interval",
+        VelocityFormat::Vray => "V-Ray velocity: px from the current to the next frame, x right/y up: next (x, -y) px/frame",
+        VelocityFormat::Revision => "RE:Vision single vector: px per frame, forward, +y up: next (x, -y) px/frame",
+        VelocityFormat::Ndc => "NDC: a frame width (height) of 2 per frame, forward, y up: next (x W/2, -y H/2) px/frame",
+        _ => NEXT_Y_UP,
+    }
+}
+
+fn forward<'a>(x: &'a Chan, y: &'a Chan) -> Option<Vector<'a>> {
+    Some(Vector { x, y, sx: 1.0, sy: -1.0 })
+}
+
+/// Every velocity format whose channel names the file has, in the order tried.
+fn velocity_candidates<'a>(f: &'a ExrFile, layer: Option<&str>) -> Vec<Velocity<'a>> {
+    let mut found = Vec::new();
+    let blender = |next, prev, rule: &str| Velocity { next, prev, format: VelocityFormat::Blender, rule: rule.into() };
+    for c in f.chans.iter().filter(in_layer(f, layer)) {
+        if let Some(layer) = c.name.strip_suffix(".Vector.X") {
+            let n = |s: &str| f.find(&format!("{layer}.Vector.{s}"));
+            match (n("Y"), n("Z"), n("W")) {
+                (Some(y), Some(z), Some(w)) => {
+                    let next = Some(Vector { x: z, y: w, sx: -1.0, sy: 1.0 });
+                    let prev = Some(Vector { x: c, y, sx: 1.0, sy: -1.0 });
+                    found.push(blender(next, prev, BLENDER_XYZW));
+                }
+                (Some(y), _, _) => found.push(blender(None, Some(Vector { x: c, y, sx: 1.0, sy: -1.0 }), BLENDER_XY)),
+                _ => {}
+            }
+        }
+    }
+    if f.chans.len() == 4 {
+        if let Some(c) = f.find_all(&["X", "Y", "Z", "W"]) {
+            let next = Some(Vector { x: c[2], y: c[3], sx: -1.0, sy: 1.0 });
+            found.push(blender(next, Some(Vector { x: c[0], y: c[1], sx: 1.0, sy: -1.0 }), BLENDER_XYZW));
+        }
+    }
+    if let (Some(u), Some(v)) = (f.find("forward.u"), f.find("forward.v")) {
+        let prev = match (f.find("backward.u"), f.find("backward.v")) {
+            (Some(bu), Some(bv)) => forward(bu, bv),
+            _ => None,
+        };
+        let rule = if prev.is_some() {
+            "Nuke forward/backward: px toward the next/previous frame, x right/y up: next (u, -v), previous (bu, -bv) px/frame"
+        } else {
+            "Nuke forward: px toward the next frame, x right/y up: next (u, -v) px/frame, constant velocity assumed"
+        };
+        found.push(Velocity { next: forward(u, v), prev, format: VelocityFormat::Nuke, rule: rule.into() });
+    }
+    for (x, y, format) in SINGLE_VECTORS {
+        if let (Some(cx), Some(cy)) = (f.find(x), f.find(y)) {
+            found.push(Velocity { next: forward(cx, cy), prev: None, format, rule: single_rule(format).into() });
+        }
+    }
+    found
+}
+
+fn find_velocity<'a>(
+    f: &'a ExrFile,
+    ovr: Option<&str>,
+    format: VelocityFormat,
+    layer: Option<&str>,
+) -> Result<Option<Velocity<'a>>, IoError> {
     if let Some(o) = ovr {
         let names = split_list(o);
         let c = match names.len() {
@@ -409,41 +500,93 @@ fn find_velocity<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> 
                 })
             }
         };
-        return if c.len() == 4 {
-            vel(c[2], c[3], -1.0, 1.0, format!("override \"{o}\" as {BLENDER_ZW}"))
-        } else if names[0].contains(".Vector.") {
-            vel(c[0], c[1], -1.0, 1.0, format!("override \"{o}\" as {BLENDER_XY}"))
+        let blender_like = format == VelocityFormat::Blender
+            || (format == VelocityFormat::Auto && (c.len() == 4 || names[0].contains(".Vector.")));
+        return Ok(Some(if c.len() == 4 {
+            if !matches!(format, VelocityFormat::Auto | VelocityFormat::Blender) {
+                return Err(IoError::BadOverride {
+                    what: "velocity".into(),
+                    requested: o.into(),
+                    reason: format!("4 channels are Blender's X,Y,Z,W; the {} format has 2", format.name()),
+                });
+            }
+            Velocity {
+                next: Some(Vector { x: c[2], y: c[3], sx: -1.0, sy: 1.0 }),
+                prev: Some(Vector { x: c[0], y: c[1], sx: 1.0, sy: -1.0 }),
+                format: VelocityFormat::Blender,
+                rule: format!("override \"{o}\" as {BLENDER_XYZW}"),
+            }
+        } else if blender_like {
+            Velocity {
+                next: None,
+                prev: Some(Vector { x: c[0], y: c[1], sx: 1.0, sy: -1.0 }),
+                format: VelocityFormat::Blender,
+                rule: format!("override \"{o}\" as {BLENDER_XY}"),
+            }
         } else {
-            vel(c[0], c[1], 1.0, -1.0, format!("override \"{o}\" as {NEXT_Y_UP}"))
+            let format = if format == VelocityFormat::Auto { VelocityFormat::Nuke } else { format };
+            Velocity {
+                next: forward(c[0], c[1]),
+                prev: None,
+                format,
+                rule: format!("override \"{o}\" as {}", single_rule(format)),
+            }
+        }));
+    }
+    let mut candidates = velocity_candidates(f, layer);
+    match format {
+        VelocityFormat::Auto => {
+            let mut formats: Vec<&str> = candidates.iter().map(|v| v.format.name()).collect();
+            formats.dedup();
+            if formats.len() > 1 {
+                return Err(IoError::AmbiguousChannels {
+                    what: "velocity".into(),
+                    path: f.path.clone(),
+                    candidates: format!("formats {}; choose one with --velocity-format", formats.join(", ")),
+                });
+            }
+            Ok(candidates.into_iter().next())
+        }
+        // Channels named for no format in particular, read as the format the user named.
+        VelocityFormat::Ndc | VelocityFormat::Revision => {
+            let format_of = |mut v: Velocity<'a>| {
+                v.format = format;
+                v.rule = single_rule(format).into();
+                v
+            };
+            let single = |v: &Velocity| v.prev.is_none() && v.next.is_some();
+            let own = candidates.iter().position(|v| v.format == format && single(v));
+            let index = own.or_else(|| candidates.iter().position(single));
+            Ok(index.map(|i| format_of(candidates.swap_remove(i))))
+        }
+        _ => {
+            candidates.retain(|v| v.format == format);
+            Ok(candidates.into_iter().next())
+        }
+    }
+}
+
+/// A velocity vector image (2 channels, px per frame, x right, y down) from its channels, with
+/// the format's extra factor and the user's scale and flip; NaN/Inf become 0 (counted).
+fn vector_image(v: &Vector, factor: [f32; 2], scale: f32, flip_y: bool, nonfinite: &mut u64) -> Image {
+    let mut im = interleave(&[v.x, v.y], 2, 0.0);
+    let flip = if flip_y { -1.0 } else { 1.0 };
+    let s = [v.sx * factor[0] * scale, v.sy * factor[1] * scale * flip];
+    for (px, s) in im.data.iter_mut().zip(s.iter().cycle()) {
+        *px = if px.is_finite() {
+            // `+ 0.0` turns -0 into +0.
+            *px * s + 0.0
+        } else {
+            *nonfinite += 1;
+            0.0
         };
     }
-    for c in f.chans.iter().filter(in_layer(f, layer)) {
-        if let Some(layer) = c.name.strip_suffix(".Vector.X") {
-            let n = |s: &str| f.find(&format!("{layer}.Vector.{s}"));
-            match (n("Y"), n("Z"), n("W")) {
-                (Some(_), Some(z), Some(w)) => return vel(z, w, -1.0, 1.0, BLENDER_ZW.into()),
-                (Some(y), _, _) => return vel(c, y, -1.0, 1.0, BLENDER_XY.into()),
-                _ => {}
-            }
-        }
-    }
-    if f.chans.len() == 4 {
-        if let Some(c) = f.find_all(&["X", "Y", "Z", "W"]) {
-            return vel(c[2], c[3], -1.0, 1.0, BLENDER_ZW.into());
-        }
-    }
-    for (x, y) in [
-        ("forward.u", "forward.v"),
-        ("motion.u", "motion.v"),
-        ("motion.x", "motion.y"),
-        ("velocity.X", "velocity.Y"),
-        ("vel.X", "vel.Y"),
-    ] {
-        if let (Some(cx), Some(cy)) = (f.find(x), f.find(y)) {
-            return vel(cx, cy, 1.0, -1.0, NEXT_Y_UP.into());
-        }
-    }
-    Ok(None)
+    im
+}
+
+/// -v of a 2-channel vector image (the other half of a constant motion).
+fn negated(im: &Image) -> Image {
+    Image { data: im.data.iter().map(|v| -v + 0.0).collect(), ..im.clone() }
 }
 
 /// Errors unless `b` has the size of `a`.
@@ -599,39 +742,94 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
     // Velocity.
     let explicit = src.velocity_path.is_some() || src.velocity_channels.is_some();
     let mut origins = vec![("depth", dc.origin)];
-    let velocity_px = match find_velocity(vf, src.velocity_channels.as_deref(), layer)? {
+    if !(src.velocity_scale.is_finite() && src.velocity_scale != 0.0) {
+        return Err(IoError::InvalidArgument {
+            field: "velocity_scale",
+            value: src.velocity_scale,
+            allowed: "a finite, non-zero factor",
+        });
+    }
+    let (velocity_px, velocity_prev_px, velocity_format) = match find_velocity(
+        vf,
+        src.velocity_channels.as_deref(),
+        src.velocity_format,
+        layer,
+    )? {
         Some(v) => {
-            same_size("color", &cf, c0, "velocity", vf, v.x)?;
-            same_size("velocity", vf, v.x, "velocity", vf, v.y)?;
-            origins.push(("velocity", v.x.origin));
-            let mut im = interleave(&[v.x, v.y], 2, 0.0);
-            let mut nonfinite = 0u64;
-            for (px, s) in im.data.iter_mut().zip([v.sx, v.sy].iter().cycle()) {
-                *px = if px.is_finite() {
-                    // `+ 0.0` turns -0 into +0.
-                    *px * s + 0.0
-                } else {
-                    nonfinite += 1;
-                    0.0
-                };
+            let first = v.next.as_ref().or(v.prev.as_ref()).map(|c| c.x).unwrap_or(c0);
+            let mut chans = Vec::new();
+            for c in v.next.iter().chain(&v.prev) {
+                same_size("color", &cf, c0, "velocity", vf, c.x)?;
+                same_size("velocity", vf, c.x, "velocity", vf, c.y)?;
+                chans.extend([c.x, c.y]);
             }
+            origins.push(("velocity", first.origin));
+            // Per-frame pixels from the format's own unit.
+            let factor = match v.format {
+                    VelocityFormat::Ndc => [0.5 * c0.size.0 as f32, 0.5 * c0.size.1 as f32],
+                    VelocityFormat::Arnold => match src.velocity_interval_frames {
+                        Some(i) if i.is_finite() && i > 0.0 => [1.0 / i as f32; 2],
+                        Some(i) => {
+                            return Err(IoError::InvalidArgument {
+                                field: "velocity_interval_frames",
+                                value: i,
+                                allowed: "a positive number of frames",
+                            })
+                        }
+                        None => {
+                            return Err(IoError::MissingSetting {
+                                field: "velocity_interval_frames",
+                                path: vf.path.clone(),
+                                why: format!(
+                                    "holds Arnold motion vectors ({}), which span the renderer's shutter interval; the file does not say how long it was",
+                                    names(&chans)
+                                ),
+                            })
+                        }
+                    },
+                    _ => [1.0, 1.0],
+                };
+            let (scale, flip) = (src.velocity_scale as f32, src.velocity_flip_y);
+            let mut nonfinite = 0u64;
+            let next = v.next.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
+            let prev = v.prev.as_ref().map(|c| vector_image(c, factor, scale, flip, &mut nonfinite));
             if nonfinite > 0 {
                 log::warn!("velocity: {nonfinite} NaN/Inf value(s) in \"{}\" replaced by 0", vf.path.display());
             }
+            let mut adjust = String::new();
+            if scale != 1.0 {
+                adjust += &format!(", scaled by {scale}");
+            }
+            if flip {
+                adjust += ", y flipped";
+            }
             report.push(format!(
-                "velocity: \"{}\" channels {} ({}), {}{}",
+                "velocity: \"{}\" channels {} ({}{adjust}), {}{}",
                 vf.path.display(),
-                names(&[v.x, v.y]),
+                names(&chans),
                 v.rule,
-                v.x.type_name(),
+                first.type_name(),
                 if nonfinite > 0 { format!(", {nonfinite} NaN/Inf value(s) replaced by 0") } else { String::new() }
             ));
-            Some(im)
+            // Only the previous-frame vector: constant velocity gives the next one.
+            let next = match (next, &prev) {
+                (Some(n), _) => n,
+                (None, Some(p)) => negated(p),
+                (None, None) => return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR)),
+            };
+            let prev = if v.next.is_some() { prev } else { None };
+            (Some(next), prev, Some(v.format))
         }
-        None if explicit || src.require_velocity => return Err(vf.missing("velocity", VELOCITY_LOOKED_FOR)),
+        None if explicit || src.require_velocity => {
+            let looked_for = match src.velocity_format {
+                VelocityFormat::Auto => VELOCITY_LOOKED_FOR.to_string(),
+                f => format!("{} (the {} format)", VELOCITY_LOOKED_FOR, f.name()),
+            };
+            return Err(vf.missing("velocity", &looked_for));
+        }
         None => {
             report.push(format!("velocity: none (no velocity channels in \"{}\")", vf.path.display()));
-            None
+            (None, None, None)
         }
     };
 
@@ -653,6 +851,8 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         color,
         depth_m,
         velocity_px,
+        velocity_prev_px,
+        velocity_format,
         display_window: dw,
         data_origin: c0.origin,
         channel_report: report.join("\n"),
@@ -717,7 +917,7 @@ mod tests {
         let r = &p.channel_report;
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
-        assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("dx = -Z, dy = +W"), "{r}");
+        assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("next (-Z, +W)"), "{r}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -793,7 +993,7 @@ mod tests {
         write(&path, &[&chans[..], &[("forward.u", 3.0), ("forward.v", 2.0)]].concat(), true);
         let p = load_passes(&sources(&path)).unwrap();
         assert_const(p.velocity_px.as_ref().unwrap(), &[3.0, -2.0]);
-        assert!(p.channel_report.contains("channels forward.u, forward.v (px toward the next frame"));
+        assert!(p.channel_report.contains("channels forward.u, forward.v (Nuke forward: px toward the next frame"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -916,6 +1116,50 @@ mod tests {
                 format!("depth_unit_m must be a positive number of metres per depth unit, got {unit_m}")
             );
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn velocity_formats_that_need_a_setting_or_a_choice_say_so() {
+        let dir = test_dir("read-velocity-formats");
+        let path = dir.join("v.exr");
+        let base = [("R", 1.0), ("G", 1.0), ("B", 1.0), ("Z", 2.0)];
+        // Arnold's raw vectors span the renderer's shutter: without it, an error naming the file,
+        // the channels and the setting; with it, px per frame.
+        write(&path, &[&base[..], &[("motion_vector.R", 3.0), ("motion_vector.G", 1.0)]].concat(), true);
+        let e = load_passes(&sources(&path)).unwrap_err();
+        assert_eq!(e.field(), Some("velocity_interval_frames"));
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "velocity: \"{}\" holds Arnold motion vectors (motion_vector.R, motion_vector.G), which span the renderer's shutter interval; the file does not say how long it was; give velocity_interval_frames",
+                path.display()
+            )
+        );
+        let src = PassSources { velocity_interval_frames: Some(0.5), ..sources(&path) };
+        let p = load_passes(&src).unwrap();
+        assert_const(p.velocity_px.as_ref().unwrap(), &[6.0, -2.0]);
+        assert_eq!(p.velocity_format, Some(VelocityFormat::Arnold));
+        // Scale and flip apply after the format's conversion.
+        let src = PassSources { velocity_scale: 2.0, velocity_flip_y: true, ..src };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[12.0, 4.0]);
+        // Two formats' names in one file: auto refuses to guess; a named format reads its own.
+        write(
+            &path,
+            &[&base[..], &[("forward.u", 3.0), ("forward.v", 1.0), ("vel.X", 5.0), ("vel.Y", 5.0)]].concat(),
+            true,
+        );
+        let e = load_passes(&sources(&path)).unwrap_err().to_string();
+        assert!(e.contains("formats nuke, revision; choose one with --velocity-format"), "{e}");
+        let src = PassSources { velocity_format: VelocityFormat::Revision, ..sources(&path) };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[5.0, -5.0]);
+        // NDC: a frame width of 2 per frame (W = 4 px, H = 3 px).
+        let src = PassSources {
+            velocity_format: VelocityFormat::Ndc,
+            velocity_channels: Some("vel.X,vel.Y".into()),
+            ..sources(&path)
+        };
+        assert_const(load_passes(&src).unwrap().velocity_px.as_ref().unwrap(), &[10.0, -7.5]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

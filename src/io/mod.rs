@@ -59,6 +59,9 @@ pub enum IoError {
     /// A setting of [`PassSources`] out of range, by its field name.
     #[error("{field} must be {allowed}, got {value}")]
     InvalidArgument { field: &'static str, value: f64, allowed: &'static str },
+    /// A setting of [`PassSources`] that the file needs but nobody gave, by its field name.
+    #[error("velocity: \"{}\" {why}; give {field}", .path.display())]
+    MissingSetting { field: &'static str, path: PathBuf, why: String },
     #[error("cannot write \"{}\": the image has {got} channel(s) per pixel, expected {expected}", .path.display())]
     WrongChannelCount { path: PathBuf, expected: String, got: u32 },
     #[error("cannot write \"{}\": channel {channel} holds {got} values, expected {expected} (width x height x channels)", .path.display())]
@@ -152,6 +155,51 @@ pub struct PassSources {
     pub require_velocity: bool,
     /// What reading may allocate; checked against each file's declared size before reading it.
     pub budget: MemoryBudget,
+    /// How the velocity channels are to be read; [`VelocityFormat::Auto`] from their names.
+    pub velocity_format: VelocityFormat,
+    /// Multiplies the velocity after its format's conversion (1: as the format says).
+    pub velocity_scale: f64,
+    /// Flips the velocity's y after its format's conversion (a pass written with y the other way).
+    pub velocity_flip_y: bool,
+    /// The time (frames) the vectors span, for formats that measure over the renderer's
+    /// shutter interval rather than per frame (Arnold's raw `motion_vector`).
+    pub velocity_interval_frames: Option<f64>,
+}
+
+/// The conventions of the velocity passes renderers write; each becomes pixels per frame, x right,
+/// y down, toward the next frame (and toward the previous one when the pass has both).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum VelocityFormat {
+    /// From the channel names, when only one format's names are present.
+    #[default]
+    Auto,
+    /// Blender/Cycles `Vector` X,Y,Z,W: px per frame, y up; X,Y = p[f-1]-p[f], Z,W = p[f]-p[f+1].
+    Blender,
+    /// Nuke `forward.u,v` (+ `backward.u,v`) or `motion.u,v`: px toward the next (previous)
+    /// frame, y up.
+    Nuke,
+    /// Arnold `motion_vector` R,G (raw): px over the renderer's shutter interval, forward, y up.
+    Arnold,
+    /// V-Ray `velocity`: px from the current to the next frame, y up.
+    Vray,
+    /// RE:Vision-style single vector: px per frame, forward, +y up.
+    Revision,
+    /// Normalised device coordinates: a frame width (and height) of 2 per frame, forward, y up.
+    Ndc,
+}
+
+impl VelocityFormat {
+    pub fn name(self) -> &'static str {
+        match self {
+            VelocityFormat::Auto => "auto",
+            VelocityFormat::Blender => "blender",
+            VelocityFormat::Nuke => "nuke",
+            VelocityFormat::Arnold => "arnold",
+            VelocityFormat::Vray => "vray",
+            VelocityFormat::Revision => "revision",
+            VelocityFormat::Ndc => "ndc",
+        }
+    }
 }
 
 impl Default for PassSources {
@@ -174,6 +222,10 @@ impl PassSources {
             depth_unit_m: 1.0,
             require_velocity: false,
             budget: MemoryBudget::system(),
+            velocity_format: VelocityFormat::Auto,
+            velocity_scale: 1.0,
+            velocity_flip_y: false,
+            velocity_interval_frames: None,
         }
     }
 }
@@ -258,7 +310,9 @@ impl IoError {
     /// The field of [`PassSources`] the error is about, if it is about one.
     pub fn field(&self) -> Option<&'static str> {
         match self {
-            IoError::InvalidArgument { field, .. } | IoError::Output { field, .. } => Some(field),
+            IoError::InvalidArgument { field, .. }
+            | IoError::Output { field, .. }
+            | IoError::MissingSetting { field, .. } => Some(field),
             IoError::TooLarge { field, .. } => *field,
             _ => None,
         }
@@ -274,6 +328,11 @@ pub struct ScenePasses {
     pub depth_m: Image,
     /// 2 channels: motion in pixels per frame toward the NEXT frame, x right, y DOWN.
     pub velocity_px: Option<Image>,
+    /// 2 channels: motion in pixels per frame toward the PREVIOUS frame, x right, y DOWN, when
+    /// the pass has it (Blender's X,Y; Nuke's backward); None: constant velocity is assumed.
+    pub velocity_prev_px: Option<Image>,
+    /// The format the velocity was read as.
+    pub velocity_format: Option<VelocityFormat>,
     /// x, y, width, height (px) of the display window.
     pub display_window: (i32, i32, u32, u32),
     /// Position (px) of pixel (0,0) of these images in the same absolute coordinates as

@@ -48,10 +48,16 @@ pub enum CameraField {
     MaxCoc,
     Grain,
     BladeRotationDeg,
+    BladeCurvature,
+    Fps,
+    ShutterAngleDeg,
+    ShutterRamp,
+    RollingShutterS,
+    MaxBlurPx,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 12] = [
+    pub const ALL: [CameraField; 18] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -64,6 +70,12 @@ impl CameraField {
         CameraField::MaxCoc,
         CameraField::Grain,
         CameraField::BladeRotationDeg,
+        CameraField::BladeCurvature,
+        CameraField::Fps,
+        CameraField::ShutterAngleDeg,
+        CameraField::ShutterRamp,
+        CameraField::RollingShutterS,
+        CameraField::MaxBlurPx,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -81,6 +93,12 @@ impl CameraField {
             CameraField::MaxCoc => "max_coc",
             CameraField::Grain => "grain",
             CameraField::BladeRotationDeg => "blade_rotation_deg",
+            CameraField::BladeCurvature => "blade_curvature",
+            CameraField::Fps => "fps",
+            CameraField::ShutterAngleDeg => "shutter_angle_deg",
+            CameraField::ShutterRamp => "shutter_ramp",
+            CameraField::RollingShutterS => "rolling_shutter_s",
+            CameraField::MaxBlurPx => "max_blur_px",
         }
     }
 
@@ -99,6 +117,12 @@ impl CameraField {
             CameraField::MaxCoc => "maximum CoC diameter",
             CameraField::Grain => "grain",
             CameraField::BladeRotationDeg => "aperture rotation",
+            CameraField::BladeCurvature => "blade curvature",
+            CameraField::Fps => "frame rate",
+            CameraField::ShutterAngleDeg => "shutter angle",
+            CameraField::ShutterRamp => "shutter curve ramp",
+            CameraField::RollingShutterS => "rolling-shutter readout time",
+            CameraField::MaxBlurPx => "largest motion blur",
         }
     }
 
@@ -153,6 +177,17 @@ impl std::fmt::Display for CocLimit {
             CocLimit::Px(px) => write!(f, "{} px", Num(*px)),
         }
     }
+}
+
+/// How the circle of confusion follows depth (see [`crate::optics::ThinLens::coc_renderer_mm`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CocModel {
+    /// Kyaw 2013 eq 5.3: the film at the image distance v, the exit pupil v/(N' P).
+    #[default]
+    Physical,
+    /// The renderers' thin lens: aperture f/N at the pinhole, image scale f.
+    Renderer,
 }
 
 /// Which depth-of-field method renders the bokeh.
@@ -243,6 +278,11 @@ pub struct Camera {
     /// Clamp on |CoC| ([`CocLimit::px`] for a frame's pitch).
     pub max_coc: CocLimit,
     pub bokeh: BokehMode,
+    /// How the CoC follows depth.
+    pub coc_model: CocModel,
+    /// At anti-aliased depth edges, give each pixel the depth of the layer that brings most of
+    /// its light (the CoC pass); off: the depth as stored.
+    pub resolve_depth_edges: bool,
     /// A user-supplied aperture image replacing the bladed polygon in the bokeh.
     pub aperture_mask: Option<crate::model::aperture::ApertureMask>,
     /// Distortion and lateral colour against image height, from the lens file's tables.
@@ -262,7 +302,38 @@ pub struct Camera {
     pub coma: Option<crate::optics::distortion::HeightTable>,
     /// Longitudinal colour: red and blue focus minus green focus (mm, + = behind).
     pub longitudinal_color_mm: Option<[f64; 2]>,
+    /// The shutter in time and the motion-blur method.
+    pub motion: Motion,
 }
+
+/// Which motion-blur method renders the velocity pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MotionBlurMode {
+    /// The tiled reconstruction gather (src/passes/motion_blur.rs): a fixed sample count.
+    #[default]
+    Fast,
+    /// Every source pixel scattered along its path at many sub-frame times with depth ordering
+    /// (src/passes/motion_reference.rs): the accuracy reference, cost grows with the blur length.
+    Reference,
+    /// No motion blur.
+    Off,
+}
+
+/// The shutter in time: the frame rate that turns pixels per frame into pixels per exposure,
+/// when the shutter is open and how, and the motion-blur method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    pub fps: f64,
+    /// False: the user gave no frame rate and `fps` is the default.
+    pub fps_given: bool,
+    pub timing: crate::optics::shutter::ShutterTiming,
+    pub mode: MotionBlurMode,
+    /// Blur longer than this (px) is clamped.
+    pub max_blur_px: f64,
+}
+
+/// The frame rate when none is given (film, Blender's and Nuke's default).
+pub const DEFAULT_FPS: f64 = 24.0;
 
 /// What the user asked for; `None` takes the lens file's or the default. [`Default`] is the
 /// command line's defaults; set what differs with `..CameraRequest::default()`.
@@ -301,10 +372,29 @@ pub struct CameraRequest {
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
+    /// The lens file's (or its default) when None.
+    pub coc_model: Option<CocModel>,
+    /// Blade curvature, 0 straight .. 1 round; the lens file's when None.
+    pub blade_curvature: Option<f64>,
+    /// Resolve anti-aliased depth edges ([`Camera::resolve_depth_edges`]).
+    pub resolve_depth_edges: bool,
     /// Sensor noise at ISO 100 ([`Camera::grain`]); 0: none.
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
+    /// Frames per second of the sequence; [`DEFAULT_FPS`] when None.
+    pub fps: Option<f64>,
+    /// The shutter as an angle (degrees of a frame) instead of `shutter_s`; the exposure uses the
+    /// time it makes.
+    pub shutter_angle_deg: Option<f64>,
+    pub shutter_position: crate::optics::shutter::ShutterPosition,
+    pub shutter_curve: crate::optics::shutter::ShutterCurve,
+    /// A rolling (focal-plane) shutter: the readout time from the first line to the last.
+    pub rolling_shutter_s: Option<f64>,
+    pub rolling_direction: crate::optics::shutter::RollingDirection,
+    pub motion_blur: MotionBlurMode,
+    /// Clamp on the motion blur length in pixels.
+    pub max_blur_px: f64,
 }
 
 impl Default for CameraRequest {
@@ -332,8 +422,19 @@ impl Default for CameraRequest {
             max_coc: CocLimit::DEFAULT,
             force: false,
             bokeh: BokehMode::Tiled,
+            coc_model: None,
+            blade_curvature: None,
+            resolve_depth_edges: true,
             grain: 0.0,
             seed: 0,
+            fps: None,
+            shutter_angle_deg: None,
+            shutter_position: Default::default(),
+            shutter_curve: Default::default(),
+            rolling_shutter_s: None,
+            rolling_direction: Default::default(),
+            motion_blur: MotionBlurMode::Fast,
+            max_blur_px: 512.0,
         }
     }
 }
@@ -386,7 +487,7 @@ impl Camera {
         };
         // What no lens can do (f/0, focus inside the focal length) first: --force cannot help.
         let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
-        if !req.force {
+        if !req.force && !lens_file.ideal {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
                 let allowed = format!("f/{} to f/{}", Num(lens_file.f_number_min), Num(lens_file.f_number_max));
                 return out_of_range(CameraField::FNumber, f_number, allowed);
@@ -408,7 +509,26 @@ impl Camera {
                 Err(CameraError::Invalid { field, value, allowed })
             }
         };
-        require(CameraField::ShutterS, req.shutter_s, req.shutter_s > 0.0, "a positive number")?;
+        let fps = req.fps.unwrap_or(DEFAULT_FPS);
+        require(CameraField::Fps, fps, fps > 0.0, "a positive number of frames per second")?;
+        if let Some(angle) = req.shutter_angle_deg {
+            require(CameraField::ShutterAngleDeg, angle, angle > 0.0 && angle <= 360.0, "in (0, 360] degrees")?;
+        }
+        // A shutter angle is a time: angle / 360 of a frame. The exposure uses it too.
+        let shutter_s = req.shutter_angle_deg.map_or(req.shutter_s, |angle| angle / 360.0 / fps);
+        require(CameraField::ShutterS, shutter_s, shutter_s > 0.0, "a positive number")?;
+        if let crate::optics::shutter::ShutterCurve::Trapezoid { ramp } = req.shutter_curve {
+            require(CameraField::ShutterRamp, ramp, ramp > 0.0 && ramp <= 0.5, "in (0, 0.5] of the open time")?;
+        }
+        if let Some(r) = req.rolling_shutter_s {
+            require(CameraField::RollingShutterS, r, r >= 0.0, "a time >= 0 s")?;
+        }
+        require(CameraField::MaxBlurPx, req.max_blur_px, req.max_blur_px > 0.0, "a positive number of pixels")?;
+        let mut timing =
+            crate::optics::shutter::ShutterTiming::new(shutter_s, fps, req.shutter_position, req.shutter_curve);
+        if let Some(r) = req.rolling_shutter_s {
+            timing = timing.with_rolling(r, fps, req.rolling_direction);
+        }
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
         let max_coc = req.max_coc.value();
@@ -430,13 +550,18 @@ impl Camera {
         if let Some(r) = req.blade_rotation_deg {
             require(CameraField::BladeRotationDeg, r, true, "a finite angle in degrees")?;
         }
+        if let Some(c) = req.blade_curvature {
+            require(CameraField::BladeCurvature, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
+        }
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
             aperture: ApertureShape {
                 blades,
                 rotation_deg: req.blade_rotation_deg.unwrap_or(lens_file.aperture.rotation_deg),
-                curvature: lens_file.aperture.curvature_at(f_number, lens_file.f_number_min),
+                curvature: req
+                    .blade_curvature
+                    .unwrap_or_else(|| lens_file.aperture.curvature_at(f_number, lens_file.f_number_min)),
                 spherical_aberration: req.spherical_aberration.unwrap_or(lens_file.spherical_aberration),
                 cats_eye: req.cats_eye.unwrap_or(lens_file.aperture.cats_eye),
                 // A requested cat's eye holds at the frame corner; the lens file's may name its height.
@@ -450,14 +575,20 @@ impl Camera {
             },
             sensor,
             sensor_fit: req.sensor_fit.unwrap_or(SensorFit::Horizontal),
-            shutter_s: req.shutter_s,
+            shutter_s,
             iso: req.iso,
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
-            vignetting: req.vignetting,
+            vignetting: req.vignetting && lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc: req.max_coc,
             bokeh: req.bokeh,
+            coc_model: req.coc_model.or(lens_file.coc_model).unwrap_or(if lens_file.ideal {
+                CocModel::Renderer
+            } else {
+                CocModel::Physical
+            }),
+            resolve_depth_edges: req.resolve_depth_edges,
             aperture_mask: None,
             distortion: lens_file.tables.as_ref().map(|t| t.distortion()),
             grain: req.grain,
@@ -473,7 +604,23 @@ impl Camera {
             }),
             coma: lens_file.tables.as_ref().and_then(|t| t.coma(f_number)),
             longitudinal_color_mm: lens_file.longitudinal_color.map(|c| [c.red_mm, c.blue_mm]),
+            motion: Motion {
+                fps,
+                fps_given: req.fps.is_some(),
+                timing,
+                mode: req.motion_blur,
+                max_blur_px: req.max_blur_px,
+            },
         })
+    }
+
+    /// The signed CoC diameter (mm on the film) of a point at `object_distance_mm`, by the
+    /// camera's CoC model.
+    pub fn coc_mm(&self, object_distance_mm: f64) -> f64 {
+        match self.coc_model {
+            CocModel::Physical => self.lens.coc_mm(object_distance_mm),
+            CocModel::Renderer => self.lens.coc_renderer_mm(object_distance_mm),
+        }
     }
 
     /// Pixel pitch on the film for an image of this size.
@@ -678,6 +825,42 @@ mod tests {
             err.to_string(),
             "f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/1e308)"
         );
+    }
+
+    #[test]
+    fn a_shutter_angle_is_a_time_and_the_exposure_uses_it() {
+        // 180 degrees at 24 fps: 1/48 s, open a quarter frame either side of the frame time;
+        // 90 degrees lets in half the light.
+        let req = |angle| CameraRequest { fps: Some(24.0), shutter_angle_deg: Some(angle), ..Default::default() };
+        let (half, quarter) = (camera(&req(180.0)).unwrap(), camera(&req(90.0)).unwrap());
+        assert!((half.shutter_s - 1.0 / 48.0).abs() < 1e-15);
+        let t = half.motion.timing;
+        assert!((t.open_frames + 0.25).abs() < 1e-12 && (t.close_frames - 0.25).abs() < 1e-12);
+        assert!((half.exposure_gain() / quarter.exposure_gain() - 2.0).abs() < 1e-12);
+        // Without a frame rate: 24 assumed, and said to be.
+        let assumed = camera(&CameraRequest::default()).unwrap();
+        assert_eq!((assumed.motion.fps, assumed.motion.fps_given), (DEFAULT_FPS, false));
+        for (req, field, message) in [
+            (
+                CameraRequest { fps: Some(0.0), ..Default::default() },
+                CameraField::Fps,
+                "frame rate must be a positive number of frames per second, got 0",
+            ),
+            (req(0.0), CameraField::ShutterAngleDeg, "shutter angle must be in (0, 360] degrees, got 0"),
+            (
+                CameraRequest { rolling_shutter_s: Some(-0.01), ..Default::default() },
+                CameraField::RollingShutterS,
+                "rolling-shutter readout time must be a time >= 0 s, got -0.01",
+            ),
+            (
+                CameraRequest { max_blur_px: 0.0, ..Default::default() },
+                CameraField::MaxBlurPx,
+                "largest motion blur must be a positive number of pixels, got 0",
+            ),
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert_eq!((err.field(), err.to_string()), (Some(field), message.to_string()));
+        }
     }
 
     #[test]

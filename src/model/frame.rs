@@ -14,6 +14,11 @@ pub struct Frame {
     pub depth_m: Vec<f32>,
     /// Motion toward the next frame in pixels (x right, y down), 2 values per pixel.
     pub velocity_px: Option<Vec<f32>>,
+    /// Motion toward the previous frame in pixels (x right, y down), 2 values per pixel, when the
+    /// pass has it; None: constant velocity (the negated `velocity_px`).
+    pub velocity_prev_px: Option<Vec<f32>>,
+    /// The convention the velocity was read in.
+    pub velocity_format: Option<crate::io::VelocityFormat>,
     /// Optical centre (the display window's centre) in this frame's pixel coordinates.
     pub centre_px: [f64; 2],
     pub display_window: (i32, i32, u32, u32),
@@ -46,6 +51,8 @@ impl Frame {
             color: passes.color.data,
             depth_m,
             velocity_px: passes.velocity_px.map(|v| v.data),
+            velocity_prev_px: passes.velocity_prev_px.map(|v| v.data),
+            velocity_format: passes.velocity_format,
             centre_px,
             display_window: passes.display_window,
             data_origin: passes.data_origin,
@@ -60,10 +67,37 @@ impl Frame {
             color,
             depth_m,
             velocity_px: None,
+            velocity_prev_px: None,
+            velocity_format: None,
             centre_px: [width as f64 / 2.0, height as f64 / 2.0],
             display_window: (0, 0, width, height),
             data_origin: (0, 0),
         }
+    }
+
+    /// This frame with a velocity toward the next frame (px, x right, y down) and, when given,
+    /// toward the previous one (synthetic scenes, tests).
+    pub fn with_velocity(mut self, next_px: Vec<f32>, prev_px: Option<Vec<f32>>) -> Frame {
+        self.velocity_px = Some(next_px);
+        self.velocity_prev_px = prev_px;
+        self
+    }
+
+    /// The velocity as the GPU reads it: per pixel (next x, next y, previous x, previous y), px
+    /// per frame, x right, y down; the previous vector is the negated next one when the pass has
+    /// none (constant velocity).
+    pub fn velocity_rgba(&self) -> Option<Vec<f32>> {
+        let next = self.velocity_px.as_ref()?;
+        let prev = self.velocity_prev_px.as_ref();
+        Some(
+            (0..next.len() / 2)
+                .flat_map(|i| {
+                    let (nx, ny) = (next[2 * i], next[2 * i + 1]);
+                    let (px, py) = prev.map_or((-nx + 0.0, -ny + 0.0), |p| (p[2 * i], p[2 * i + 1]));
+                    [nx, ny, px, py]
+                })
+                .collect(),
+        )
     }
 
     /// Distance (px) from the optical centre to the frame's farthest corner.

@@ -24,6 +24,7 @@ pub mod focus_processor;
 pub mod lens;
 pub mod prescription;
 pub mod sensor;
+pub mod shutter;
 pub mod spherical;
 
 pub use dof::{dof_limits, dof_report, CocCriterion, DofLimits};

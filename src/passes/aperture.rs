@@ -3,7 +3,10 @@
 //! [`ApertureShape`](crate::model::aperture::ApertureShape), and the CPU twins of that file's
 //! functions.
 
+use crate::gpu::{GpuBuffer, GpuImage, GpuResult, Recorder};
 use crate::model::aperture::ApertureShape;
+use ash::vk;
+use std::sync::Arc;
 
 /// The `Aperture` struct of glsl/include/aperture.glsl: part of every bokeh pass's push
 /// constants (4-byte fields only, no padding).
@@ -23,6 +26,14 @@ pub struct ApertureConstants {
     /// Traced spherical aberration: the rim's focus shift seen as a signed CoC (px),
     /// -LSA / (N' P pitch); 0: the amount model (sa_amount) instead.
     pub sa_lsa_coc_px: f32,
+    /// mix(cos(pi/n), 1, curvature): with the shape table's g(o), the signed distance to the
+    /// edge of the aperture image of circumradius r is g(o) - r shape_b.
+    pub shape_b: f32,
+    /// The aperture image's area over r^2 (aperture_area).
+    pub area_factor: f32,
+    /// The shape table covers offsets with |x|, |y| <= this; 0: no table (every weight takes
+    /// the general path). Set by [`ApertureConstants::with_shape_table`].
+    pub shape_radius: i32,
 }
 
 impl ApertureConstants {
@@ -39,7 +50,51 @@ impl ApertureConstants {
             centre_y_px: centre_px[1] as f32,
             cats_eye_per_px: shape.cats_eye_per_px(width, height, centre_px) as f32,
             sa_lsa_coc_px: 0.0,
+            shape_b: 1.0,
+            area_factor: std::f32::consts::PI,
+            shape_radius: 0,
         }
+        .with_shape_b()
+    }
+
+    /// `shape_b` and `area_factor` of the blades and curvature.
+    fn with_shape_b(self) -> Self {
+        let b = if self.blades < 3 {
+            1.0
+        } else {
+            let half_sector = std::f32::consts::PI / self.blades as f32;
+            half_sector.cos() + (1.0 - half_sector.cos()) * self.curvature
+        };
+        ApertureConstants { shape_b: b, area_factor: aperture_area(1.0, &self), ..self }
+    }
+
+    /// These constants with a shape table of offsets up to `radius` (in the units the shader
+    /// gathers in), and the table: texel (x + radius, y + radius) holds g((x, y)), the support
+    /// of the aperture's outline in the direction of (x, y) scaled by |(x, y)|: |o| mix(cos phi,
+    /// 1, curvature), phi the angle from the nearest blade edge's normal (f64, then f32).
+    pub fn with_shape_table(self, radius: u32) -> (Self, Vec<f32>) {
+        let r = radius as i32;
+        let mut table = Vec::with_capacity(((2 * r + 1) * (2 * r + 1)) as usize);
+        for y in -r..=r {
+            for x in -r..=r {
+                table.push(self.shape_g(x, y));
+            }
+        }
+        (ApertureConstants { shape_radius: r, ..self }, table)
+    }
+
+    /// g(o) of the shape table for the integer offset (x right, y down).
+    fn shape_g(&self, x: i32, y: i32) -> f32 {
+        let len = ((x * x + y * y) as f64).sqrt();
+        if self.blades < 3 {
+            return len as f32;
+        }
+        let sector = 2.0 * std::f64::consts::PI / self.blades as f64;
+        let mut phi =
+            (-(y as f64)).atan2(x as f64) - (0.5 * std::f64::consts::PI + self.rotation as f64 + 0.5 * sector);
+        phi -= sector * (phi / sector + 0.5).floor();
+        let c = self.curvature as f64;
+        (len * (phi.cos() * (1.0 - c) + c)) as f32
     }
 
     /// What of the aperture depends on the pixel pitch: traced spherical aberration (the rim's
@@ -65,14 +120,15 @@ impl ApertureConstants {
         }
     }
 
-    /// The same aperture in half-resolution pixel units.
-    pub fn half_resolution(&self) -> Self {
+    /// The same aperture in the pixel units of pyramid level `level` (1/2^level resolution).
+    pub fn at_level(&self, level: u32) -> Self {
+        let s = 0.5f32.powi(level as i32);
         ApertureConstants {
-            sa_max_coc_px: 0.5 * self.sa_max_coc_px,
-            sa_lsa_coc_px: 0.5 * self.sa_lsa_coc_px,
-            centre_x_px: 0.5 * self.centre_x_px,
-            centre_y_px: 0.5 * self.centre_y_px,
-            cats_eye_per_px: 2.0 * self.cats_eye_per_px,
+            sa_max_coc_px: s * self.sa_max_coc_px,
+            sa_lsa_coc_px: s * self.sa_lsa_coc_px,
+            centre_x_px: s * self.centre_x_px,
+            centre_y_px: s * self.centre_y_px,
+            cats_eye_per_px: self.cats_eye_per_px / s,
             ..*self
         }
     }
@@ -127,6 +183,34 @@ pub fn mask_value(mask: &[f32], uv: [f32; 2]) -> f32 {
     top + (bottom - top) * fy
 }
 
+/// The weight of aperture_weight_at in glsl/include/aperture.glsl: from the shape table (texels
+/// `table`, of half-size `p.shape_radius`) for an integer offset `o`, the general
+/// [`aperture_weight`] otherwise.
+pub fn aperture_weight_at(
+    o: [i32; 2],
+    r: f32,
+    p: &ApertureConstants,
+    sample_px: [f32; 2],
+    flip: f32,
+    ramp: f32,
+    mask: &[f32],
+    table: &[f32],
+) -> f32 {
+    let with_mask = mask.first().copied().unwrap_or(0.0) > 0.0 && r > 1.0;
+    let in_table = p.shape_radius > 0 && o[0].abs() <= p.shape_radius && o[1].abs() <= p.shape_radius;
+    if !in_table || p.cats_eye_per_px > 0.0 || with_mask {
+        return aperture_weight([o[0] as f32, o[1] as f32], r, p, sample_px, flip, ramp, mask);
+    }
+    let limit = r + 0.5 * ramp;
+    if ((o[0] * o[0] + o[1] * o[1]) as f32) >= limit * limit {
+        return 0.0;
+    }
+    let side = 2 * p.shape_radius + 1;
+    let g = table[((o[1] + p.shape_radius) * side + o[0] + p.shape_radius) as usize];
+    let cov = (0.5 - (g - r * p.shape_b) / ramp).clamp(0.0, 1.0);
+    cov / (p.area_factor * r * r)
+}
+
 /// Coverage over area of a sample's aperture image, with the cat's eye
 /// (aperture_weight in glsl/include/aperture.glsl): the edge is a linear ramp `ramp` px wide.
 pub fn aperture_weight(
@@ -168,8 +252,58 @@ pub fn aperture_weight(
 }
 
 /// The weight of a sample of signed CoC `coc_q` at offset `o` (already flipped) for spherical
-/// aberration: sa_intensity(|o| / radius_q, sa_strength(coc_q)) of glsl/include/aperture.glsl.
+/// aberration: sa_weight of glsl/include/aperture.glsl (1 without it).
 pub fn sa_weight(o: [f32; 2], radius_q: f32, coc_q: f32, p: &ApertureConstants) -> f32 {
+    if p.sa_amount == 0.0 && p.sa_lsa_coc_px == 0.0 {
+        return 1.0;
+    }
     let r_norm = (o[0] * o[0] + o[1] * o[1]).sqrt() / radius_q;
     crate::optics::spherical::intensity(p.sa_strength(coc_q), r_norm as f64) as f32
+}
+
+/// The aperture's data on the CPU: the user's aperture image ([`mask_buffer_data`]) and the
+/// shape table ([`ApertureConstants::with_shape_table`]) of a depth-of-field run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ApertureData {
+    pub mask: Vec<f32>,
+    pub shape: Vec<f32>,
+    pub shape_radius: u32,
+}
+
+impl ApertureData {
+    /// The camera's aperture image, and a shape table for `constants` covering offsets up to
+    /// `shape_radius`; returns the constants that name the table.
+    pub fn new(
+        constants: ApertureConstants,
+        mask: Option<&crate::model::aperture::ApertureMask>,
+        shape_radius: u32,
+    ) -> (ApertureConstants, ApertureData) {
+        let (constants, shape) = constants.with_shape_table(shape_radius);
+        (constants, ApertureData { mask: mask_buffer_data(mask), shape, shape_radius })
+    }
+
+    /// The data back from a shader's bindings (twins): the mask buffer and the shape image.
+    pub fn from_bindings(mask: &crate::gpu::HostData, shape: &crate::gpu::HostData, shape_radius: i32) -> ApertureData {
+        ApertureData {
+            mask: super::twin::floats(mask.words()),
+            shape: shape.image().texels.clone(),
+            shape_radius: shape_radius.max(0) as u32,
+        }
+    }
+
+    /// Upload both: the mask as a storage buffer, the shape table as an R32F image (each with
+    /// the upload's own barrier to compute reads).
+    pub fn upload(&self, rec: &mut Recorder) -> GpuResult<(Arc<GpuBuffer>, Arc<GpuImage>)> {
+        let mask = rec.upload_buffer("aperture image", &self.mask)?;
+        let side = 2 * self.shape_radius + 1;
+        let shape = rec.create_image("aperture shape table", side, side, vk::Format::R32_SFLOAT)?;
+        rec.upload_images(&[(&shape, &self.shape)])?;
+        Ok((mask, shape))
+    }
+}
+
+/// The largest offset (px) an exact gather or a sprite of the largest CoC `max_abs_coc_px`
+/// reaches, plus the anti-aliasing ramp: the shape table's radius.
+pub fn shape_radius_for(max_abs_coc_px: f64) -> u32 {
+    (0.5 * max_abs_coc_px).ceil().max(0.0) as u32 + 2
 }

@@ -1,7 +1,7 @@
 //! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
-use super::aperture::{aperture_weight, mask_buffer_data, sa_weight, ApertureConstants};
+use super::aperture::{aperture_weight_at, sa_weight, shape_radius_for, ApertureConstants, ApertureData};
 use super::barriers::{after_compute_write, overwrite};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::finite_or_zero;
@@ -44,22 +44,13 @@ impl GatherPush {
 }
 
 /// CPU twin of the gather, same rules and f32 arithmetic, for tiny images.
-/// `aperture_mask`: the buffer data of [`super::aperture::mask_buffer_data`] ([0, 0] for none).
-pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherPush, aperture_mask: &[f32]) -> Vec<f32> {
+pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherPush, aperture: &ApertureData) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
     let mut out = vec![0.0f32; rgba.len()];
     for y in 0..h {
         for x in 0..w {
-            let texel = gather_exact(
-                rgba,
-                coc_px,
-                [w, h],
-                [x, y],
-                p.radius_px,
-                &p.aperture,
-                p.layer_transition_px,
-                aperture_mask,
-            );
+            let texel =
+                gather_exact(rgba, coc_px, [w, h], [x, y], p.radius_px, &p.aperture, p.layer_transition_px, aperture);
             let o = (y * w + x) as usize * 4;
             out[o..o + 4].copy_from_slice(&texel);
         }
@@ -78,7 +69,7 @@ pub fn gather_exact(
     r: i32,
     aperture: &ApertureConstants,
     layer_transition_px: f32,
-    aperture_mask: &[f32],
+    data: &ApertureData,
 ) -> [f32; 4] {
     let (w, h) = (size[0], size[1]);
     let coc_p = coc_px[(p[1] * w + p[0]) as usize];
@@ -96,11 +87,11 @@ pub fn gather_exact(
             if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
                 continue;
             }
-            let flip = if coc_q < 0.0 { -1.0 } else { 1.0 };
-            let o = [-dx as f32 * flip, -dy as f32 * flip];
+            let flip = if coc_q < 0.0 { -1 } else { 1 };
+            let o = [-dx * flip, -dy * flip];
             let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
-            let wgt = aperture_weight(o, reach, aperture, sample_px, flip, 1.0, aperture_mask)
-                * sa_weight(o, radius_q, coc_q, aperture);
+            let wgt = aperture_weight_at(o, reach, aperture, sample_px, flip as f32, 1.0, &data.mask, &data.shape)
+                * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, aperture);
             if wgt <= 0.0 {
                 continue;
             }
@@ -129,6 +120,7 @@ crate::shader_bindings! {
         coc_px: image(coc_px),
         color_out: image(color_out),
         aperture_mask: buffer(ApertureMask),
+        aperture_shape: image(aperture_shape),
     }
 }
 
@@ -143,17 +135,17 @@ impl Shader for GatherShader {
 
 impl Twin for GatherShader {
     fn cpu(push: &GatherPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let mask: Vec<f32> = b[3].words().iter().map(|&w| f32::from_bits(w)).collect();
-        let out = gather_cpu(&b[0].image().texels, &b[1].image().texels, push, &mask);
+        let data = ApertureData::from_bindings(&b[3], &b[4], push.aperture.shape_radius);
+        let out = gather_cpu(&b[0].image().texels, &b[1].image().texels, push, &data);
         b[2].image_mut().texels = out;
     }
 }
 
-/// One run: the constants, the aperture image's buffer, and the channel it is for.
+/// One run: the constants, the aperture's data, and the channel it is for.
 #[derive(Clone, Debug)]
 pub struct GatherParams {
     pub push: GatherPush,
-    pub aperture_mask: Vec<f32>,
+    pub aperture: ApertureData,
     pub channel: Option<Channel>,
 }
 
@@ -165,7 +157,8 @@ pub struct BokehGather {
 impl From<GatherPush> for GatherParams {
     /// One run for all channels, without an aperture image.
     fn from(push: GatherPush) -> GatherParams {
-        GatherParams { push, aperture_mask: mask_buffer_data(None), channel: None }
+        let (aperture, data) = ApertureData::new(push.aperture, None, push.radius_px as u32 + 1);
+        GatherParams { push: GatherPush { aperture, ..push }, aperture: data, channel: None }
     }
 }
 
@@ -182,17 +175,21 @@ impl Pass for BokehGather {
         let max_abs_coc_px = f.max_abs_coc_px();
         let mut push =
             GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, f.sa_full_strength_coc_px, input.frame.centre_px);
-        push.aperture = push.aperture.with_pitch(camera, f.pixel_pitch_mm);
+        let (aperture, data) = ApertureData::new(
+            push.aperture.with_pitch(camera, f.pixel_pitch_mm),
+            camera.aperture_mask.as_ref(),
+            shape_radius_for(max_abs_coc_px),
+        );
+        push.aperture = aperture;
         let why = format!(
             "--bokeh reference: largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px, exact gather of radius {} px everywhere, {}",
             push.radius_px,
             input.aperture_text()
         );
-        let aperture_mask = mask_buffer_data(camera.aperture_mask.as_ref());
         let runs = input
             .dof_runs()
             .into_iter()
-            .map(|(channel, _)| GatherParams { push, aperture_mask: aperture_mask.clone(), channel })
+            .map(|(channel, _)| GatherParams { push, aperture: data.clone(), channel })
             .collect();
         Decision::run_each(runs, why)
     }
@@ -206,13 +203,19 @@ impl Pass for BokehGather {
         let (color, coc) = (images.color().clone(), images.coc(p.channel)?.clone());
         let output =
             rec.create_image("color (depth of field)", images.width, images.height, vk::Format::R32G32B32A32_SFLOAT)?;
-        let mask = rec.upload_buffer("aperture image", &p.aperture_mask)?;
+        let (mask, shape) = p.aperture.upload(rec)?;
         // coc: written by the CoC pass just before: wait for it (read-after-write).
         // color: the upload's barrier already made it visible to compute reads; waiting on
         //   compute writes as well keeps this pass correct if a compute pass ever precedes it.
         // output: written from scratch.
         rec.image_barriers(&[after_compute_write(&coc), after_compute_write(&color), overwrite(&output)]);
-        let bindings = GatherBindings { color_in: &color, coc_px: &coc, color_out: &output, aperture_mask: &mask };
+        let bindings = GatherBindings {
+            color_in: &color,
+            coc_px: &coc,
+            color_out: &output,
+            aperture_mask: &mask,
+            aperture_shape: &shape,
+        };
         self.kernel.dispatch(rec, &bindings, &p.push, groups_for(color.width, color.height))?;
         rec.end_pass();
         images.set_color(p.channel, output);

@@ -3,9 +3,10 @@
 
 use super::barriers::overwrite;
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
+use super::twin::{finite_or_zero, floats};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
-use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use crate::model::camera::{BokehMode, Camera};
+use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Kernel, Recorder, Shader, Twin};
+use crate::model::camera::{BokehMode, Camera, CocModel};
 use crate::model::frame::Frame;
 use crate::optics::ThinLens;
 use ash::vk;
@@ -33,6 +34,9 @@ pub struct CocPush {
     /// Added to the signed CoC (longitudinal colour: a channel focusing behind or in front of
     /// green); 0 for green.
     pub coc_offset_px: f32,
+    /// 1: each pixel at an anti-aliased depth edge takes the depth of the layer that brings most
+    /// of its light (glsl/coc.comp); 0: the depth as stored.
+    pub resolve_edges: i32,
 }
 
 /// The field-curvature buffer: heights, then offsets in mm; `[0]` for none.
@@ -46,15 +50,30 @@ pub fn table_data(table: Option<&crate::optics::distortion::HeightTable>) -> Vec
 impl CocPush {
     /// The camera's CoC on this frame (its size and optical centre), before any channel offset.
     pub fn for_frame(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> CocPush {
-        CocPush::new(
+        let push = CocPush::new(
             &camera.lens,
             pixel_pitch_mm,
-            camera.max_coc.px(pixel_pitch_mm),
+            super::scene::coc_clamp_px(camera, pixel_pitch_mm, frame),
             frame.width,
             frame.height,
             frame.centre_px,
             camera.field_curvature.as_ref(),
-        )
+        );
+        let push = CocPush { resolve_edges: camera.resolve_depth_edges as i32, ..push };
+        match camera.coc_model {
+            CocModel::Physical => push,
+            // The renderers' CoC, f^2/N (1/S - 1/u) (ThinLens::coc_renderer_mm); a film offset
+            // (field curvature) scales with it: aperture_px v = coc_scale, as in eq 5.3's form.
+            CocModel::Renderer => {
+                let f = camera.lens.focal_length_mm;
+                let scale_px_mm = f * f / camera.lens.f_number / pixel_pitch_mm;
+                CocPush {
+                    coc_scale_px_mm: scale_px_mm as f32,
+                    aperture_px: (scale_px_mm / camera.lens.image_distance_mm()) as f32,
+                    ..push
+                }
+            }
+        }
     }
 
     /// `field_curvature`: the film-plane offset (mm) of the sharp image surface against height,
@@ -84,38 +103,109 @@ impl CocPush {
             aperture_px: (v_mm / (lens.effective_f_number() * lens.pupil_magnification) / pixel_pitch_mm) as f32,
             entries: field_curvature.map_or(0, |t| t.image_height_mm.len() as i32),
             coc_offset_px: 0.0,
+            resolve_edges: 0,
         }
+    }
+
+    /// The inverse depth (1/mm) of a depth value as the shader reads it.
+    pub fn inverse_depth(&self, depth_m: f32) -> f32 {
+        1.0 / (depth_m * self.mm_per_depth_unit).max(1.0e-30)
     }
 
     /// CPU twin at pixel (x, y) with the field-curvature table (`table_data` layout).
     pub fn coc_px_at(&self, depth_m: f32, x: u32, y: u32, table: &[f32]) -> f32 {
+        self.coc_px_of_inverse_depth(self.inverse_depth(depth_m), x, y, table)
+    }
+
+    /// The shader's CoC at pixel (x, y) for an inverse depth `inv_u` (1/mm).
+    pub fn coc_px_of_inverse_depth(&self, inv_u: f32, x: u32, y: u32, table: &[f32]) -> f32 {
         let n = self.entries as usize;
-        if n == 0 {
-            return self.coc_px(depth_m);
-        }
-        let u_mm = depth_m * self.mm_per_depth_unit;
-        let inv_u = 1.0 / u_mm.max(1.0e-30);
-        let (dx, dy) = (x as f32 + 0.5 - self.centre_px[0], y as f32 + 0.5 - self.centre_px[1]);
-        let h = (dx * dx + dy * dy).sqrt() * self.pixel_pitch_mm;
-        let delta = super::height_table_lookup(table, 1, n, h);
-        let w = self.inv_focal_length_per_mm - inv_u;
-        let coc = self.aperture_px * (self.image_distance_mm * w / (1.0 + delta * w) - 1.0);
+        let coc = if n == 0 {
+            self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - inv_u)
+        } else {
+            let (dx, dy) = (x as f32 + 0.5 - self.centre_px[0], y as f32 + 0.5 - self.centre_px[1]);
+            let h = (dx * dx + dy * dy).sqrt() * self.pixel_pitch_mm;
+            let delta = super::height_table_lookup(table, 1, n, h);
+            let w = self.inv_focal_length_per_mm - inv_u;
+            self.aperture_px * (self.image_distance_mm * w / (1.0 + delta * w) - 1.0)
+        };
         (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
     }
 
     /// CPU twin of the shader for one depth value, in the same f32 arithmetic.
     pub fn coc_px(&self, depth_m: f32) -> f32 {
-        let u_mm = depth_m * self.mm_per_depth_unit;
-        let inv_u = 1.0 / u_mm.max(1.0e-30);
-        let coc = self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - inv_u);
+        let coc = self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - self.inverse_depth(depth_m));
         (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
     }
 }
 
-/// CPU twin: the CoC of every pixel.
+/// CPU twin without the edge resolve: the CoC of every pixel from its own depth.
 pub fn coc_cpu(depth_m: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
     let w = push.size[0].max(1) as u32;
     depth_m.iter().enumerate().map(|(i, &d)| push.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
+}
+
+/// CPU twin of the whole pass: the CoC of every pixel from the depth its colour belongs to
+/// (the edge resolve when `push.resolve_edges` is set). `rgba` is the colour pass.
+pub fn coc_resolved_cpu(depth_m: &[f32], rgba: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
+    let (w, h) = (push.size[0].max(1) as u32, push.size[1].max(1) as u32);
+    let depth = HostImage::new(w, h, 1, depth_m.to_vec());
+    let color = HostImage::new(w, h, 4, rgba.to_vec());
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let inv_u = resolved_inverse_depth(&depth, &color, push, x as i32, y as i32);
+            push.coc_px_of_inverse_depth(inv_u, x, y, table)
+        })
+        .collect()
+}
+
+/// The inverse depth (1/mm) whose light pixel (x, y) mostly holds: glsl/coc.comp's
+/// resolved_inverse_depth, in the same f32 arithmetic.
+pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
+    let w_p = push.inverse_depth(depth.clamped(x, y)[0]);
+    if push.resolve_edges == 0 {
+        return w_p;
+    }
+    let offset = |i: i32| (x + i % 3 - 1, y + i / 3 - 1);
+    let w: Vec<f32> = (0..9).map(|i| offset(i)).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
+    let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
+    if push.coc_scale_px_mm * (w_near - w_far) <= 1.0 {
+        return w_p;
+    }
+    let w_mid = 0.5 * (w_near + w_far);
+    let (mut near, mut far) = (([0.0f32; 3], 0.0f32, 0.0f32), ([0.0f32; 3], 0.0f32, 0.0f32));
+    for i in (0..9).filter(|&i| i != 4) {
+        let (qx, qy) = offset(i);
+        let c = color.clamped(qx, qy);
+        let layer = if w[i as usize] > w_mid { &mut near } else { &mut far };
+        for k in 0..3 {
+            layer.0[k] += finite_or_zero(c[k]);
+        }
+        layer.1 += 1.0;
+        layer.2 += w[i as usize];
+    }
+    if near.1 == 0.0 || far.1 == 0.0 {
+        return w_p;
+    }
+    let c_near = near.0.map(|v| v / near.1);
+    let c_far = far.0.map(|v| v / far.1);
+    let d: [f32; 3] = std::array::from_fn(|k| c_near[k] - c_far[k]);
+    let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if dd <= 1.0e-12 {
+        return w_p;
+    }
+    let c_p = color.clamped(x, y);
+    let alpha = ((0..3).map(|k| (finite_or_zero(c_p[k]) - c_far[k]) * d[k]).sum::<f32>() / dd).clamp(0.0, 1.0);
+    let brightness = |c: [f32; 3]| c.iter().map(|v| v.max(0.0)).sum::<f32>();
+    let to_near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
+    if to_near == (w_p > w_mid) {
+        w_p
+    } else if to_near {
+        near.2 / near.1
+    } else {
+        far.2 / far.1
+    }
 }
 
 crate::shader_bindings! {
@@ -124,6 +214,7 @@ crate::shader_bindings! {
         depth_m: image(depth_m),
         coc_px: image(coc_px),
         field_curvature: buffer(FieldCurvature),
+        color_in: image(color_in),
     }
 }
 
@@ -138,9 +229,15 @@ impl Shader for CocShader {
 
 impl Twin for CocShader {
     fn cpu(push: &CocPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let table: Vec<f32> = b[2].words().iter().map(|&w| f32::from_bits(w)).collect();
-        let coc = coc_cpu(&b[0].image().texels, push, &table);
-        b[1].image_mut().texels = coc;
+        let table = floats(b[2].words());
+        let (depth, color) = (b[0].image().clone(), b[3].image().clone());
+        let out = b[1].image_mut();
+        for y in 0..push.size[1] {
+            for x in 0..push.size[0] {
+                let inv_u = resolved_inverse_depth(&depth, &color, push, x, y);
+                out.texel_mut(x as u32, y as u32)[0] = push.coc_px_of_inverse_depth(inv_u, x as u32, y as u32, &table);
+            }
+        }
     }
 }
 
@@ -226,7 +323,10 @@ impl Pass for Coc {
         //   compute reads in layout GENERAL; nothing to wait for here.
         // coc: written from scratch; discard old contents.
         rec.image_barriers(&[overwrite(&coc)]);
-        let bindings = CocBindings { depth_m: &depth, coc_px: &coc, field_curvature: &table };
+        let color = images.color().clone();
+        // color: the upload's own barrier made it visible to compute reads (the CoC pass runs
+        //   before any pass that writes the colour).
+        let bindings = CocBindings { depth_m: &depth, coc_px: &coc, field_curvature: &table, color_in: &color };
         self.kernel.dispatch(rec, &bindings, &p.push, groups_for(images.width, images.height))?;
         rec.end_pass();
         images.set_coc(p.channel, coc);

@@ -1,10 +1,13 @@
 //! Tiled depth of field, step 2: dilate each tile's CoC to the neighbours it can reach, classify
-//! tiles (copy / exact small gather / half-resolution large), build the tile lists and the
-//! indirect dispatch counts. Shader: glsl/dof_classify.comp.
+//! tiles (copy / exact small gather / a pyramid level), build the tile lists and the indirect
+//! dispatch counts. Shader: glsl/dof_classify.comp.
 
 use super::barriers::buffer_after_compute_write;
 use super::TILE_SIZE;
-use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_COUNT, CLASS_LARGE, CLASS_SMALL};
+use crate::gpu::shaders::dof_tiles::{
+    ARGS_BIN_DISPATCH, ARGS_DISPATCH_WORDS, ARGS_LEVEL_GATHER_BASE, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL,
+    GROUP_SIZE, LEVELS, LEVEL_RADIUS,
+};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use ash::vk;
 
@@ -43,7 +46,7 @@ impl Twin for ClassifyShader {
     fn cpu(pc: &ClassifyPush, _groups: [u32; 3], b: &mut [HostData]) {
         let tile_coc = super::twin::floats(b[0].words());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
-        let (mut radii, mut lists) = (vec![0.0f32; 2 * tile_count], vec![Vec::new(); CLASS_COUNT as usize]);
+        let (mut radii, mut lists) = (vec![0.0f32; 3 * tile_count], vec![Vec::new(); CLASS_COUNT as usize]);
         for t in 0..tile_count {
             let (tx, ty) = ((t as i32) % pc.tiles[0], (t as i32) / pc.tiles[0]);
             let (mut radius, mut fg_radius) = (0.0f32, 0.0f32);
@@ -70,15 +73,17 @@ impl Twin for ClassifyShader {
                     }
                 }
             }
-            let class = if radius <= 0.5 {
-                CLASS_COPY
-            } else if radius <= pc.small_radius_px {
-                CLASS_SMALL
-            } else {
-                CLASS_LARGE
-            };
+            let mut class = if radius <= 0.5 { CLASS_COPY } else { CLASS_SMALL };
+            if radius > pc.small_radius_px {
+                let mut level = 1;
+                while level < LEVELS && radius > (LEVEL_RADIUS << level) as f32 {
+                    level += 1;
+                }
+                class = CLASS_LEVEL1 + level - 1;
+            }
             radii[t] = radius;
             radii[tile_count + t] = fg_radius;
+            radii[2 * tile_count + t] = class as f32;
             lists[class as usize].push(t as u32);
         }
         let args = b[1].words_mut();
@@ -88,6 +93,14 @@ impl Twin for ClassifyShader {
             args[at + 1] = 1;
             args[at + 2] = 1;
         }
+        for level in 1..=LEVELS {
+            let at = level_gather_args_words(level);
+            args[at + 1] = 1;
+            args[at + 2] = 1;
+        }
+        let bin = ARGS_BIN_DISPATCH as usize;
+        args[bin + 1] = 1;
+        args[bin + 2] = 1;
         let tile_lists = b[2].words_mut();
         for (class, list) in lists.iter().enumerate() {
             tile_lists[class * tile_count..class * tile_count + list.len()].copy_from_slice(list);
@@ -107,6 +120,23 @@ impl Twin for ClassifyShader {
             lists[start..end].sort_unstable();
         }
     }
+}
+
+/// Tiles of pyramid level `level` one workgroup of the level gather takes.
+pub fn tiles_per_group(level: u32) -> u32 {
+    let side = super::TILE_SIZE >> level;
+    GROUP_SIZE / (side * side)
+}
+
+/// The word of the args buffer holding the number of tiles of class `class` (the x of its
+/// one-workgroup-per-tile dispatch).
+pub fn class_tiles_args_word(class: u32) -> usize {
+    (class * ARGS_DISPATCH_WORDS) as usize
+}
+
+/// The first word of the level gather's indirect dispatch in the args buffer.
+pub fn level_gather_args_words(level: u32) -> usize {
+    (ARGS_LEVEL_GATHER_BASE + (level - 1) * ARGS_DISPATCH_WORDS) as usize
 }
 
 /// Record the classification of the tiles in `tile_coc` into `args` (zeroed first), the tile

@@ -6,7 +6,7 @@ use super::aperture::ApertureConstants;
 use super::bokeh_gather::gather_exact;
 use super::twin::{finite_or_zero, floats, listed_tiles};
 use super::TILE_SIZE;
-use crate::gpu::shaders::dof_tiles::{ARGS_DISPATCH_WORDS, CLASS_COPY, CLASS_SMALL};
+use crate::gpu::shaders::dof_tiles::{CLASS_COPY, CLASS_SMALL};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_tile_gather";
@@ -31,6 +31,7 @@ crate::shader_bindings! {
         tile_lists: buffer(TileLists),
         tile_radius: buffer(TileRadius),
         aperture_mask: buffer(ApertureMask),
+        aperture_shape: image(aperture_shape),
     }
 }
 
@@ -46,7 +47,8 @@ impl Shader for TileGatherShader {
 impl Twin for TileGatherShader {
     fn cpu(pc: &TileGatherPush, groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
-        let (lists, radii, mask) = (b[3].words().to_vec(), floats(b[4].words()), floats(b[5].words()));
+        let (lists, radii) = (b[3].words().to_vec(), floats(b[4].words()));
+        let data = super::aperture::ApertureData::from_bindings(&b[5], &b[6], pc.aperture.shape_radius);
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let out = b[2].image_mut();
         for tile in listed_tiles(&lists, pc.tile_class as u32, pc.tiles, groups[0], TILE_SIZE, pc.size) {
@@ -61,7 +63,7 @@ impl Twin for TileGatherShader {
                     let radius_p = 0.5 * coc.clamped(p[0], p[1])[0].abs();
                     let r = radii[t].min(radius_p.max(radii[tile_count + t])).ceil() as i32 + 1;
                     let (a, l) = (&pc.aperture, pc.layer_transition_px);
-                    gather_exact(&color.texels, &coc.texels, pc.size, p, r, a, l, &mask).to_vec()
+                    gather_exact(&color.texels, &coc.texels, pc.size, p, r, a, l, &data).to_vec()
                 };
                 out.texel_mut(x, y).copy_from_slice(&texel);
             }
@@ -82,7 +84,8 @@ pub fn record(
     for (class, label) in [(CLASS_COPY, "dof_copy_tiles"), (CLASS_SMALL, "dof_small_tiles")] {
         rec.begin_pass(label);
         let p = TileGatherPush { tile_class: class as i32, ..*push };
-        kernel.dispatch_indirect(rec, b, &p, args, (class * ARGS_DISPATCH_WORDS * 4) as u64)?;
+        let offset = super::dof_classify::class_tiles_args_word(class) as u64 * 4;
+        kernel.dispatch_indirect(rec, b, &p, args, offset)?;
         rec.end_pass();
     }
     Ok(())

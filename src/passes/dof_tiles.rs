@@ -1,5 +1,5 @@
-//! Tiled depth of field, step 1: the signed CoC range of every 16x16 tile.
-//! Shader: glsl/dof_tiles.comp.
+//! Tiled depth of field, step 1: the signed CoC range of every 16x16 tile, one invocation per
+//! tile. Shader: glsl/dof_tiles.comp.
 
 use super::barriers::after_compute_write;
 use crate::gpu::{GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
@@ -21,7 +21,7 @@ crate::shader_bindings! {
     }
 }
 
-/// glsl/dof_tiles.comp: one workgroup per tile.
+/// glsl/dof_tiles.comp: one invocation per tile, 8x8 tiles per workgroup.
 pub struct TilesShader;
 
 impl Shader for TilesShader {
@@ -31,12 +31,12 @@ impl Shader for TilesShader {
 }
 
 impl Twin for TilesShader {
-    fn cpu(push: &TilesPush, groups: [u32; 3], b: &mut [HostData]) {
+    fn cpu(push: &TilesPush, _groups: [u32; 3], b: &mut [HostData]) {
         let coc = b[0].image().clone();
         let tile_size = super::TILE_SIZE;
         let words = b[1].words_mut();
-        for ty in 0..groups[1] {
-            for tx in 0..groups[0] {
+        for ty in 0..push.tiles[1] as u32 {
+            for tx in 0..push.tiles[0] as u32 {
                 let (mut lo, mut hi) = (3.0e38f32, -3.0e38f32);
                 for y in ty * tile_size..(ty + 1) * tile_size {
                     for x in tx * tile_size..(tx + 1) * tile_size {
@@ -67,7 +67,7 @@ pub fn record(
     // coc: written by the CoC pass (read-after-write). tile_coc is fully overwritten and no
     // earlier pass of this recording touched it, so it needs no barrier.
     rec.image_barriers(&[after_compute_write(coc)]);
-    let groups = [push.tiles[0] as u32, push.tiles[1] as u32, 1];
+    let groups = [(push.tiles[0] as u32).div_ceil(8), (push.tiles[1] as u32).div_ceil(8), 1];
     kernel.dispatch(rec, &TilesBindings { coc_px: coc, tile_coc }, push, groups)?;
     rec.end_pass();
     Ok(())

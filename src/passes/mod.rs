@@ -20,16 +20,26 @@ pub mod coma;
 pub mod copy;
 pub mod diffraction;
 pub mod distortion;
+pub mod dof_bin;
 pub mod dof_classify;
 pub mod dof_composite;
 pub mod dof_downsample;
-pub mod dof_half_gather;
-pub mod dof_sprites;
+pub mod dof_level_gather;
+pub mod dof_level_lists;
+pub mod dof_pyramid;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
 pub mod filter;
 pub mod longitudinal_color;
+pub mod mb_gather;
+pub mod mb_neighbor;
+pub mod mb_ref_resolve;
+pub mod mb_ref_splat;
+pub mod mb_tiles;
+pub mod motion_blur;
+pub mod motion_path;
+pub mod motion_reference;
 pub mod scene;
 pub mod tiled_dof;
 pub mod vignette;
@@ -40,10 +50,22 @@ use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Recorder};
 use std::any::Any;
 use std::sync::Arc;
 
-/// The pass order: every pass the renderer can record, in recording order. Depth of field
-/// comes first (it needs the pinhole image and its depth, before anything moves pixels), then the
-/// lens's aberrations of the image, then the light's falloff and the film.
+/// The pass order: every pass the renderer can record, in recording order. Motion blur and depth
+/// of field come first (they need the pinhole image and its depth and velocity, before anything
+/// moves pixels), then the lens's aberrations of the image, then the light's falloff and the film.
+///
+/// Motion blur before depth of field: both act while the shutter is open. The film integrates,
+/// over the open time, the defocused image of each instant; for one surface point that is its
+/// aperture disk swept along its path, a convolution of the two that is the same in either order.
+/// The orders differ only at depth edges, in which pinhole attributes the second pass sees where
+/// the first moved light. Motion first keeps each velocity and depth with the sharp pixel it
+/// describes (blurring first would leave a moving object's defocused halo on static background
+/// pixels, which then would not streak); the streak then takes the CoC of the surface it lies
+/// over, wrong only where a defocused object moves over a surface at another depth. Kyaw 2013
+/// sec 7.3 orders its passes the same way.
 pub static PASS_ORDER: &[PassEntry] = &[
+    entry::<motion_blur::MotionBlur>(),
+    entry::<motion_reference::MotionReference>(),
     entry::<coc::Coc>(),
     entry::<bokeh_gather::BokehGather>(),
     entry::<tiled_dof::TiledDof>(),
@@ -62,6 +84,8 @@ pub static PASS_ORDER: &[PassEntry] = &[
 pub enum Input {
     /// Planar depth in metres.
     Depth,
+    /// Velocity toward the next and the previous frame (px per frame, x right, y down).
+    Velocity,
 }
 
 /// One compute pass: see the module documentation.
@@ -224,6 +248,7 @@ pub struct FrameImages {
     pub height: u32,
     color: Arc<GpuImage>,
     depth: Option<Arc<GpuImage>>,
+    velocity: Option<Arc<GpuImage>>,
     /// Signed CoC (px) of each run: one for all channels, or one per channel.
     coc: Vec<(Option<Channel>, Arc<GpuImage>)>,
     /// Longitudinal colour: one channel's depth of field, joined by the longitudinal_color pass.
@@ -237,6 +262,7 @@ impl FrameImages {
             height: color.height,
             color,
             depth,
+            velocity: None,
             coc: Vec::new(),
             channel_color: Vec::new(),
         }
@@ -268,6 +294,17 @@ impl FrameImages {
     /// Planar depth in metres (R32F), for passes that declare [`Input::Depth`].
     pub fn depth(&self) -> GpuResult<&Arc<GpuImage>> {
         self.depth.as_ref().ok_or_else(|| missing("the depth"))
+    }
+
+    /// These images with the velocity (RGBA32F: next.xy, previous.xy px per frame).
+    pub fn with_velocity(mut self, velocity: Option<Arc<GpuImage>>) -> FrameImages {
+        self.velocity = velocity;
+        self
+    }
+
+    /// The velocity, for passes that declare [`Input::Velocity`].
+    pub fn velocity(&self) -> GpuResult<&Arc<GpuImage>> {
+        self.velocity.as_ref().ok_or_else(|| missing("the velocity"))
     }
 
     /// The signed CoC of a run (R32F px), written by the coc pass.

@@ -18,6 +18,19 @@ pub enum Channel {
     Blue,
 }
 
+/// The clamp on |CoC| (px) for `camera` on `frame` of pixel pitch `pixel_pitch_mm`: the
+/// camera's (`--max-coc`), and at most twice the frame's diagonal, where a disk centred on any
+/// pixel covers the whole frame; larger disks would only size tables and images (the aperture
+/// shape, the diffraction kernels) beyond any offset the frame has.
+pub fn coc_clamp_px(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> f64 {
+    camera.max_coc.px(pixel_pitch_mm).min(frame_cover_px(frame))
+}
+
+/// Twice the diagonal of the frame's data window (px).
+fn frame_cover_px(frame: &Frame) -> f64 {
+    2.0 * (frame.width as f64).hypot(frame.height as f64)
+}
+
 /// The input of every pass's plan.
 pub struct PlanInput<'a> {
     pub frame: &'a Frame,
@@ -37,8 +50,10 @@ pub struct SceneFacts {
     pub coc_range_px: (f64, f64),
     /// The same before the clamp (infinite for depth 0).
     pub unclamped_coc_range_px: (f64, f64),
-    /// The clamp on |CoC| in pixels of this frame.
+    /// The clamp on |CoC| in pixels of this frame ([`coc_clamp_px`]).
     pub max_coc_px: f64,
+    /// The clamp is twice the frame's diagonal, not the camera's (smaller) one.
+    pub clamp_is_frame_cover: bool,
     /// The CoC diameter (px) at which the amount model of spherical aberration reaches its
     /// full strength ([`crate::optics::spherical::FULL_STRENGTH_COC_MM`] on the film).
     pub sa_full_strength_coc_px: f64,
@@ -52,8 +67,8 @@ impl SceneFacts {
         let pitch_mm = camera.pixel_pitch_mm(dw, dh);
         // The CoC is monotonic in depth, so the nearest and farthest depths bound it.
         let depth_range_m = frame.depth_m.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
-        let max_coc_px = camera.max_coc.px(pitch_mm);
-        let coc_px = |d_m: f32| camera.lens.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
+        let max_coc_px = coc_clamp_px(camera, pitch_mm, frame);
+        let coc_px = |d_m: f32| camera.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
         let mut coc_range_px =
             if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(depth_range_m.0), coc_px(depth_range_m.1)) };
         // With field curvature the CoC also depends on the image height: evaluate every pixel
@@ -78,6 +93,7 @@ impl SceneFacts {
             coc_range_px: (clamp(coc_range_px.0), clamp(coc_range_px.1)),
             unclamped_coc_range_px: coc_range_px,
             max_coc_px,
+            clamp_is_frame_cover: max_coc_px < camera.max_coc.px(pitch_mm),
             sa_full_strength_coc_px: crate::optics::spherical::FULL_STRENGTH_COC_MM / pitch_mm,
             channel_offsets_px,
         }
@@ -90,9 +106,14 @@ impl SceneFacts {
         if lo.abs().max(hi.abs()) <= self.max_coc_px + 0.01 {
             return None;
         }
+        let clamp = if self.clamp_is_frame_cover {
+            "twice the frame's diagonal".to_string()
+        } else {
+            camera.max_coc.to_string()
+        };
         Some(format!(
-            "the CoC is clamped to +-{:.2} px ({}): the lens gives {lo:.2} to {hi:.2} px in this frame, so the clamp changes the picture",
-            self.max_coc_px, camera.max_coc
+            "the CoC is clamped to +-{:.2} px ({clamp}): the lens gives {lo:.2} to {hi:.2} px in this frame, so the clamp changes the picture",
+            self.max_coc_px
         ))
     }
 

@@ -1,28 +1,34 @@
 //! The tiled depth-of-field path (`--bokeh tiled`, the default), in order: tiles -> classify ->
-//! (copy | exact small gather) tiles, and for large-CoC tiles downsample (+ highlight sprites)
-//! -> half-resolution fixed-tap gather -> composite -> sprites. Its cost is nearly flat in the
-//! CoC radius: full-resolution work is bounded by `small_radius_px`, the half-resolution gather
-//! has a fixed tap count, and only highlights are scattered. Each step is its own module with
-//! its shader and CPU twin; this pass plans the path, owns the buffers the steps share and the
-//! barriers between the classification and its indirect dispatches.
+//! copy tiles and exact small-CoC tiles at full resolution; for the rest a pyramid of the
+//! blurring pixels (halving down to 1/16, highlights taken out as sprites), a gather per tile at
+//! the level where its radius is a couple of texels, sprites binned per tile, and a composite at
+//! full resolution. Its cost is nearly flat in the CoC radius: full-resolution gathers are
+//! bounded by `small_radius_px`, a level's gather has a bounded number of taps per texel while
+//! the texels are 4x fewer per level, and only highlights are scattered. Each step is its own
+//! module with its shader and CPU twin; this pass plans the path, owns the buffers the steps
+//! share and the barriers between the classification and its indirect dispatches.
 
-use super::aperture::{mask_buffer_data, ApertureConstants};
+use super::aperture::{shape_radius_for, ApertureConstants, ApertureData};
 use super::barriers::{buffer_after_compute_write, overwrite};
+use super::dof_bin::{args_for_indirect, BinBindings, BinPush, BinShader};
 use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
-use super::dof_downsample::{DownsampleBindings, DownsamplePush, DownsampleShader};
-use super::dof_half_gather::{HalfGatherBindings, HalfGatherPush, HalfGatherShader};
-use super::dof_sprites::{SpritesBindings, SpritesPush, SpritesShader};
+use super::dof_downsample::{sprite_buffer_bytes, DownsampleBindings, DownsamplePush, DownsampleShader};
+use super::dof_level_gather::{LevelGatherBindings, LevelGatherPush, LevelGatherShader};
+use super::dof_level_lists::{LevelListsBindings, LevelListsShader};
+use super::dof_pyramid::{PyramidBindings, PyramidShader};
 use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShader};
 use super::dof_tiles::{TilesPush, TilesShader};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
-use super::{dof_classify, dof_composite, dof_downsample, dof_half_gather, dof_sprites, dof_tile_gather, dof_tiles};
+use super::{dof_bin, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid};
+use super::{dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
-use crate::gpu::shaders::dof_tiles::{ARGS_WORDS, CLASS_COUNT, SPRITE_WORDS};
-use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
+use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
+use crate::gpu::{Gpu, GpuImage, GpuResult, Kernel, Recorder};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::BokehMode;
 use ash::vk;
+use std::sync::Arc;
 
 pub const NAME: &str = "bokeh_tiled";
 
@@ -31,10 +37,9 @@ pub const NAME: &str = "bokeh_tiled";
 pub struct TiledDofParams {
     pub width: u32,
     pub height: u32,
-    /// Tiles whose gather radius is at most this use the exact full-resolution gather.
+    /// Tiles whose gather radius is at most this use the exact full-resolution gather; so do
+    /// the pixels of a smaller own CoC radius in the other tiles.
     pub small_radius_px: f32,
-    /// Rings of the half-resolution gather (1 + 3 r (r + 1) taps).
-    pub rings: i32,
     /// A highlight is at least this bright (luminance, in input units) ...
     pub highlight_min: f32,
     /// ... and this many times brighter than its neighbours' mean.
@@ -47,8 +52,8 @@ pub struct TiledDofParams {
     pub max_abs_coc_px: f32,
     /// The aperture, in full-resolution pixel units.
     pub aperture: ApertureConstants,
-    /// The aperture image's buffer ([`mask_buffer_data`]).
-    pub aperture_mask: Vec<f32>,
+    /// The aperture image and the shape table.
+    pub aperture_data: ApertureData,
     /// The channel of this run (longitudinal colour), or all.
     pub channel: Option<Channel>,
 }
@@ -62,18 +67,19 @@ impl TiledDofParams {
         sa_max_coc_px: f64,
         centre_px: [f64; 2],
     ) -> Self {
+        let constants = ApertureConstants::new(aperture, sa_max_coc_px, centre_px, width, height);
+        let (aperture, aperture_data) = ApertureData::new(constants, None, shape_radius_for(max_abs_coc_px));
         TiledDofParams {
             width,
             height,
-            small_radius_px: 8.0,
-            rings: 8,
+            small_radius_px: 2.0,
             highlight_min: 1.0,
-            highlight_ratio: 4.0,
+            highlight_ratio: 2.0,
             sprite_capacity: 16384,
             sprite_visibility: 0.05,
             max_abs_coc_px: max_abs_coc_px as f32,
-            aperture: ApertureConstants::new(aperture, sa_max_coc_px, centre_px, width, height),
-            aperture_mask: mask_buffer_data(None),
+            aperture,
+            aperture_data,
             channel: None,
         }
     }
@@ -82,8 +88,9 @@ impl TiledDofParams {
         [self.width.div_ceil(TILE_SIZE) as i32, self.height.div_ceil(TILE_SIZE) as i32]
     }
 
-    fn half_size(&self) -> [i32; 2] {
-        [self.width.div_ceil(2) as i32, self.height.div_ceil(2) as i32]
+    /// The size of pyramid level `level` (1/2^level resolution, rounded up).
+    fn level_size(&self, level: u32) -> [u32; 2] {
+        [self.width.div_ceil(1 << level), self.height.div_ceil(1 << level)]
     }
 }
 
@@ -93,9 +100,20 @@ pub struct TiledDof {
     classify: Kernel<ClassifyShader>,
     tile_gather: Kernel<TileGatherShader>,
     downsample: Kernel<DownsampleShader>,
-    half_gather: Kernel<HalfGatherShader>,
+    pyramid: Kernel<PyramidShader>,
+    bin: Kernel<BinShader>,
+    level_lists: Kernel<LevelListsShader>,
+    level_gather: Kernel<LevelGatherShader>,
     composite: Kernel<CompositeShader>,
-    sprites: Kernel<SpritesShader>,
+}
+
+/// One level of the pyramid: its colour and CoC, and the layers its gather writes.
+struct Level {
+    color: Arc<GpuImage>,
+    coc: Arc<GpuImage>,
+    bg: Arc<GpuImage>,
+    fg: Arc<GpuImage>,
+    fg_big: Arc<GpuImage>,
 }
 
 impl Pass for TiledDof {
@@ -117,14 +135,16 @@ impl Pass for TiledDof {
             f.sa_full_strength_coc_px,
             input.frame.centre_px,
         );
-        base.aperture = base.aperture.with_pitch(camera, f.pixel_pitch_mm);
-        base.aperture_mask = mask_buffer_data(camera.aperture_mask.as_ref());
+        (base.aperture, base.aperture_data) = ApertureData::new(
+            base.aperture.with_pitch(camera, f.pixel_pitch_mm),
+            camera.aperture_mask.as_ref(),
+            shape_radius_for(max_abs_coc_px),
+        );
         let why = format!(
-            "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {TILE_SIZE} px; in-focus tiles copied, CoC radius <= {} px gathered exactly, larger at half resolution ({} rings) with highlight sprites; {}",
+            "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {TILE_SIZE} px; in-focus tiles copied, CoC radius <= {} px gathered exactly, larger on a pyramid of 1/2 to 1/16 resolution with highlight sprites; {}",
             base.tiles()[0],
             base.tiles()[1],
             base.small_radius_px,
-            base.rings,
             input.aperture_text()
         );
         let runs =
@@ -138,9 +158,11 @@ impl Pass for TiledDof {
             classify: Kernel::new(gpu)?,
             tile_gather: Kernel::new(gpu)?,
             downsample: Kernel::new(gpu)?,
-            half_gather: Kernel::new(gpu)?,
+            pyramid: Kernel::new(gpu)?,
+            bin: Kernel::new(gpu)?,
+            level_lists: Kernel::new(gpu)?,
+            level_gather: Kernel::new(gpu)?,
             composite: Kernel::new(gpu)?,
-            sprites: Kernel::new(gpu)?,
         })
     }
 
@@ -151,26 +173,37 @@ impl Pass for TiledDof {
         let tile_count = (tiles[0] * tiles[1]) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let args = rec.create_buffer(
-            "dof args (indirect dispatches, sprite count)",
+            "dof args (indirect dispatches, counters)",
             ARGS_WORDS as u64 * 4,
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
         let tile_coc = rec.create_buffer("dof tile CoC range", tile_count * 8, storage)?;
         let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * CLASS_COUNT as u64, storage)?;
-        // Per tile: the gather radius, then the largest foreground radius reaching it.
-        let tile_radius = rec.create_buffer("dof tile radius", tile_count * 4 * 2, storage)?;
-        let sprites = rec.create_buffer("dof sprites", p.sprite_capacity as u64 * SPRITE_WORDS as u64 * 4, storage)?;
-        let [hw, hh] = p.half_size();
+        let level_lists = rec.create_buffer("dof level gather lists", tile_count * 4 * LEVELS as u64, storage)?;
+        // Per tile: the gather radius, the largest foreground radius reaching it, the class.
+        let tile_radius = rec.create_buffer("dof tile radius and class", tile_count * 4 * 3, storage)?;
+        let sprites = rec.create_buffer("dof sprites", sprite_buffer_bytes(p.sprite_capacity), storage)?;
+        let bin_counts =
+            rec.create_buffer("dof sprite bin counts", tile_count * 4, storage | vk::BufferUsageFlags::TRANSFER_DST)?;
+        let bins = rec.create_buffer("dof sprite bins", tile_count * 4 * BIN_CAPACITY as u64, storage)?;
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
-        let half_image = |rec: &mut Recorder, name: &str, format| rec.create_image(name, hw as u32, hh as u32, format);
-        let color_half = half_image(rec, "dof colour (half)", rgba)?;
-        let coc_half = half_image(rec, "dof coc (half)", vk::Format::R32_SFLOAT)?;
-        let bg_half = half_image(rec, "dof background (half)", rgba)?;
-        let fg_half = half_image(rec, "dof foreground (half)", rgba)?;
-        let fg_big_half = half_image(rec, "dof large-CoC foreground (half)", rgba)?;
         let color_base = rec.create_image("dof colour less sprites", p.width, p.height, rgba)?;
         let output = rec.create_image("color (depth of field)", p.width, p.height, rgba)?;
-        let aperture_mask = rec.upload_buffer("aperture image", &p.aperture_mask)?;
+        let mut levels = Vec::new();
+        for level in 1..=LEVELS {
+            let [lw, lh] = p.level_size(level);
+            let image = |rec: &mut Recorder, what: &str, format| {
+                rec.create_image(&format!("dof {what} (level {level})"), lw, lh, format)
+            };
+            levels.push(Level {
+                color: image(rec, "colour", rgba)?,
+                coc: image(rec, "CoC and weight", vk::Format::R32G32_SFLOAT)?,
+                bg: image(rec, "background", rgba)?,
+                fg: image(rec, "foreground", rgba)?,
+                fg_big: image(rec, "large-CoC foreground", rgba)?,
+            });
+        }
+        let (aperture_mask, aperture_shape) = p.aperture_data.upload(rec)?;
         let (aperture, size, layer_transition_px) = (p.aperture, [p.width as i32, p.height as i32], 1.0);
 
         dof_tiles::record(&self.tiles, rec, &coc, &tile_coc, &TilesPush { size, tiles })?;
@@ -181,26 +214,18 @@ impl Pass for TiledDof {
         dof_classify::record(&self.classify, rec, &classify_bindings, &classify)?;
 
         // The classification -> everything after it: the args feed indirect dispatches
-        // (DRAW_INDIRECT stage, indirect-command reads) and the sprite counter; the lists and
-        // radii are read by the tile passes. `output` is written from scratch by the tile passes.
-        let indirect = vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(
-                vk::AccessFlags2::INDIRECT_COMMAND_READ
-                    | vk::AccessFlags2::SHADER_STORAGE_READ
-                    | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-            )
-            .buffer(args.buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE);
+        // (DRAW_INDIRECT stage, indirect-command reads) and the counters; the lists and radii are
+        // read by the tile passes. `output` is written from scratch by the tile passes.
         rec.buffer_barriers(&[
-            indirect,
+            args_for_indirect(&args),
             buffer_after_compute_write(&tile_lists),
             buffer_after_compute_write(&tile_radius),
         ]);
         rec.image_barriers(&[overwrite(&output)]);
+        let lists_bindings = LevelListsBindings { args: &args, tile_radius: &tile_radius, level_lists: &level_lists };
+        dof_level_lists::record(&self.level_lists, rec, &lists_bindings, tiles)?;
+        // The level lists and their counts -> the level gathers' indirect dispatches and reads.
+        rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&level_lists)]);
 
         let gather_bindings = TileGatherBindings {
             color: &color,
@@ -209,12 +234,15 @@ impl Pass for TiledDof {
             tile_lists: &tile_lists,
             tile_radius: &tile_radius,
             aperture_mask: &aperture_mask,
+            aperture_shape: &aperture_shape,
         };
         let tile_gather = TileGatherPush { size, tiles, tile_class: 0, aperture, layer_transition_px };
         dof_tile_gather::record(&self.tile_gather, rec, &gather_bindings, &args, &tile_gather)?;
+
+        let level1 = &levels[0];
         let downsample = DownsamplePush {
             size,
-            half_size: [hw, hh],
+            half_size: [level1.color.width as i32, level1.color.height as i32],
             small_radius_px: p.small_radius_px,
             highlight_min: p.highlight_min,
             highlight_ratio: p.highlight_ratio,
@@ -224,65 +252,87 @@ impl Pass for TiledDof {
         let downsample_bindings = DownsampleBindings {
             color: &color,
             coc: &coc,
-            color_half: &color_half,
-            coc_half: &coc_half,
+            color_half: &level1.color,
+            coc_half: &level1.coc,
             args: &args,
             sprites: &sprites,
             color_base: &color_base,
         };
         dof_downsample::record(&self.downsample, rec, &downsample_bindings, &downsample)?;
-        let half = HalfGatherPush {
-            half_size: [hw, hh],
-            tiles,
-            rings: p.rings,
-            // The half-resolution gather works in half-size pixel units.
-            aperture: aperture.half_resolution(),
-            layer_transition_px,
-            small_radius_px: 0.5 * p.small_radius_px,
-        };
-        let half_bindings = HalfGatherBindings {
-            color_half: &color_half,
-            coc_half: &coc_half,
-            bg_half: &bg_half,
-            fg_half: &fg_half,
-            fg_big_half: &fg_big_half,
-            tile_lists: &tile_lists,
-            tile_radius: &tile_radius,
-            aperture_mask: &aperture_mask,
-        };
-        dof_half_gather::record(&self.half_gather, rec, &half_bindings, &args, &half)?;
-        let composite = CompositePush {
-            size,
-            half_size: [hw, hh],
-            tiles,
-            small_radius_px: p.small_radius_px,
-            aperture,
-            layer_transition_px,
-        };
-        let composite_bindings = CompositeBindings {
-            // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
-            color: &color_base,
-            coc: &coc,
-            bg_half: &bg_half,
-            fg_half: &fg_half,
-            output: &output,
-            tile_lists: &tile_lists,
-            aperture_mask: &aperture_mask,
-            coc_half: &coc_half,
-            fg_big_half: &fg_big_half,
-            tile_radius: &tile_radius,
-        };
-        dof_composite::record(&self.composite, rec, &composite_bindings, &args, &composite)?;
-        let sprite_bindings = SpritesBindings {
-            coc: &coc,
-            output: &output,
+        for (level, pair) in (2..).zip(levels.windows(2)) {
+            let b = PyramidBindings {
+                color_fine: &pair[0].color,
+                coc_fine: &pair[0].coc,
+                color_coarse: &pair[1].color,
+                coc_coarse: &pair[1].coc,
+            };
+            dof_pyramid::record(&self.pyramid, rec, &b, level)?;
+        }
+        let bin_bindings = BinBindings {
             args: &args,
             sprites: &sprites,
-            tile_lists: &tile_lists,
-            aperture_mask: &aperture_mask,
+            tile_radius: &tile_radius,
+            bin_counts: &bin_counts,
+            bins: &bins,
         };
-        let sprites_push = SpritesPush { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
-        dof_sprites::record(&self.sprites, rec, &sprite_bindings, &sprites_push)?;
+        let bin_push = BinPush { tiles, sprite_capacity: p.sprite_capacity as i32 };
+        dof_bin::record(&self.bin, rec, &bin_bindings, &bin_push, ARGS_BIN_DISPATCH as u64 * 4)?;
+
+        for (level, l) in (1..).zip(&levels) {
+            let to_level = 1.0 / (1u32 << level) as f32;
+            let push = LevelGatherPush {
+                level_size: [l.color.width as i32, l.color.height as i32],
+                tiles,
+                level: level as i32,
+                aperture: aperture.at_level(level),
+                layer_transition_px: layer_transition_px * to_level,
+                small_radius_px: p.small_radius_px * to_level,
+            };
+            let b = LevelGatherBindings {
+                color_level: &l.color,
+                coc_level: &l.coc,
+                bg_level: &l.bg,
+                fg_level: &l.fg,
+                level_lists: &level_lists,
+                tile_radius: &tile_radius,
+                aperture_mask: &aperture_mask,
+                fg_big_level: &l.fg_big,
+                args: &args,
+                aperture_shape: &aperture_shape,
+            };
+            dof_level_gather::record(&self.level_gather, rec, &b, &push)?;
+        }
+        for (level, l) in (1..).zip(&levels) {
+            let push = CompositePush {
+                size,
+                level_size: [l.color.width as i32, l.color.height as i32],
+                tiles,
+                level,
+                small_radius_px: p.small_radius_px,
+                aperture,
+                layer_transition_px,
+                sprite_capacity: p.sprite_capacity as i32,
+            };
+            let b = CompositeBindings {
+                // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
+                color: &color_base,
+                coc: &coc,
+                bg_level: &l.bg,
+                fg_level: &l.fg,
+                output: &output,
+                tile_lists: &tile_lists,
+                aperture_mask: &aperture_mask,
+                coc_level: &l.coc,
+                fg_big_level: &l.fg_big,
+                tile_radius: &tile_radius,
+                sprites: &sprites,
+                bin_counts: &bin_counts,
+                bins: &bins,
+                aperture_shape: &aperture_shape,
+                args: &args,
+            };
+            dof_composite::record(&self.composite, rec, &b, &push)?;
+        }
         images.set_color(p.channel, output);
         Ok(())
     }

@@ -28,19 +28,7 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let input = PlanInput::new(frame, camera);
     let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
     let coc_clamp_warning = if input.facts.dof_visible() { input.facts.coc_clamp_note(camera) } else { None };
-    Plan { passes, facts: input.facts, notes: vec![motion_blur_note(frame)], coc_clamp_warning }
-}
-
-/// What the velocity pass would call for: this version reads it but has no motion-blur pass.
-fn motion_blur_note(frame: &Frame) -> PlannedPass {
-    let why = match &frame.velocity_px {
-        None => "no velocity pass".to_string(),
-        Some(v) => {
-            let max_px = v.chunks_exact(2).map(|m| (m[0] * m[0] + m[1] * m[1]).sqrt()).fold(0.0f32, f32::max);
-            format!("velocity up to {max_px:.1} px/frame is read, but this version has no motion-blur pass")
-        }
-    };
-    PlannedPass::not_built("motion_blur", why)
+    Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning }
 }
 
 impl Plan {
@@ -125,7 +113,13 @@ mod tests {
         Frame {
             display_window: (0, 0, width, height),
             centre_px: [width as f64 / 2.0, height as f64 / 2.0],
-            ..Frame::new(2, 1, vec![0.5; 8], vec![0.3, 1.0e10])
+            // One row of the frame (the clamp is at most twice the data window's diagonal).
+            ..Frame::new(
+                width,
+                1,
+                vec![0.5; 4 * width as usize],
+                [0.3].into_iter().chain(vec![1.0e10; width as usize - 1]).collect(),
+            )
         }
     }
 
@@ -170,10 +164,13 @@ mod tests {
         // limit, 1e30 m and +inf both give the CoC at infinity, v^2 / (N' P S) (Kyaw eq 5.3).
         let request = CameraRequest::default().with_lens(50.0, 2.0, 2.0);
         let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
+        // 64 px of the row (the clamp's frame cover, twice the diagonal, is 128 px).
+        let mut depth_m = vec![2.0f32; 64];
+        depth_m[..4].copy_from_slice(&[0.0, 2.0, 1.0e30, f32::INFINITY]);
         let frame = Frame {
             display_window: (0, 0, 1920, 1080),
             centre_px: [960.0, 540.0],
-            ..Frame::new(4, 1, vec![0.5; 16], vec![0.0, 2.0, 1.0e30, f32::INFINITY])
+            ..Frame::new(64, 1, vec![0.5; 256], depth_m)
         };
         let facts = &super::plan(&frame, &camera).facts;
         let pitch = 36.0 / 1920.0;
@@ -190,6 +187,28 @@ mod tests {
         assert_eq!(cocs[1], 0.0);
         assert_eq!(cocs[2], cocs[3]);
         assert!((cocs[3] as f64 - at_infinity_px).abs() < 1e-3 * at_infinity_px);
+    }
+
+    #[test]
+    fn the_clamp_is_at_most_twice_the_frame_diagonal() {
+        // A 4x3 px data window in a 100000 px wide display window (a hostile header): 1.2 mm on
+        // the film would be 3333 px, but no offset in the frame exceeds its 5 px diagonal. The
+        // CoC pass clamps the same; the warning names the frame, not --max-coc.
+        let request = CameraRequest { force: true, ..CameraRequest::default().with_lens(50.0, 1.4, 0.5) };
+        let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
+        let frame = Frame {
+            display_window: (0, 0, 100_000, 75_000),
+            centre_px: [50_000.0, 37_500.0],
+            ..Frame::new(4, 3, vec![0.5; 48], vec![0.3; 12])
+        };
+        let plan = super::plan(&frame, &camera);
+        assert_eq!(plan.facts.max_coc_px, 10.0);
+        assert!(plan.facts.clamp_is_frame_cover);
+        assert_eq!(plan.facts.coc_range_px, (-10.0, -10.0));
+        let warning = plan.coc_clamp_warning.expect("a warning");
+        assert!(warning.starts_with("the CoC is clamped to +-10.00 px (twice the frame's diagonal)"), "{warning}");
+        let push = crate::passes::coc::CocPush::for_frame(&camera, plan.facts.pixel_pitch_mm, &frame);
+        assert_eq!(push.coc_px(0.3), -10.0);
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! frame's images, reads the result back. Pipelines are created once per pass (those of the plan
 //! given to [`Renderer::new`] up front, others when a later plan first runs them).
 
-use crate::gpu::{Gpu, GpuError, GpuResult, Profile, Recorder, TwinCheck};
+use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Profile, Recorder, TwinCheck};
 use crate::model::frame::Frame;
 use crate::passes::{FrameImages, Input, RecordPass, PASS_ORDER};
 use crate::pipeline::planner::Plan;
@@ -88,17 +88,26 @@ impl Renderer {
         };
         rec.begin_pass("upload");
         let color = rec.create_image("color (input)", w, h, vk::Format::R32G32B32A32_SFLOAT)?;
-        let depth = if plan.needs(Input::Depth) {
-            let depth = rec.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?;
-            rec.upload_images(&[(&color, &frame.color), (&depth, &frame.depth_m)])?;
-            Some(depth)
-        } else {
-            rec.upload_images(&[(&color, &frame.color)])?;
-            None
+        let mut uploads: Vec<(&GpuImage, &[f32])> = vec![(&color, &frame.color)];
+        let depth = match plan.needs(Input::Depth) {
+            true => Some(rec.create_image("depth (m)", w, h, vk::Format::R32_SFLOAT)?),
+            false => None,
         };
+        if let Some(d) = &depth {
+            uploads.push((d, &frame.depth_m));
+        }
+        let velocity_rgba = if plan.needs(Input::Velocity) { frame.velocity_rgba() } else { None };
+        let velocity = match &velocity_rgba {
+            Some(_) => Some(rec.create_image("velocity (px/frame)", w, h, vk::Format::R32G32B32A32_SFLOAT)?),
+            None => None,
+        };
+        if let (Some(v), Some(data)) = (&velocity, &velocity_rgba) {
+            uploads.push((v, data));
+        }
+        rec.upload_images(&uploads)?;
         rec.end_pass();
 
-        let mut images = FrameImages::new(color, depth);
+        let mut images = FrameImages::new(color, depth).with_velocity(velocity);
         for (i, planned) in plan.passes.iter().enumerate() {
             for params in planned.run_params() {
                 self.pass(i)?.record_run(&mut rec, &mut images, params)?;

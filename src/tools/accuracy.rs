@@ -8,7 +8,8 @@ use crate::model::camera::{BokehMode, Camera};
 use crate::model::frame::Frame;
 use crate::pipeline::planner::{plan, Plan};
 use crate::pipeline::render::Renderer;
-use crate::tools::metrics::{compare_rgba, ImageError};
+use crate::tools::error_budget::{budget, classify, RegionError};
+use crate::tools::metrics::{compare_rgba, ImageError, MATCHED_CLAMP};
 
 /// One method's result.
 #[derive(Clone, Debug)]
@@ -34,14 +35,14 @@ fn methods() -> Vec<Method> {
         Method { name: "diffraction (reference)".into(), mode: BokehMode::Diffraction, adjust: Box::new(|_| ()) },
         Method { name: "geometric full gather".into(), mode: BokehMode::Reference, adjust: Box::new(|_| ()) },
     ];
-    // The tiled path's quality settings: half-resolution rings and the exact-gather radius.
-    for (rings, small_radius_px) in [(4, 4.0f32), (8, 4.0), (8, 8.0), (12, 8.0), (16, 16.0)] {
+    // The tiled path's quality setting: the CoC radius up to which it gathers exactly at full
+    // resolution (beyond it, on the pyramid).
+    for small_radius_px in [1.0f32, 2.0, 3.0, 4.0, 8.0] {
         list.push(Method {
-            name: format!("tiled, {rings} rings, exact up to {small_radius_px} px"),
+            name: format!("tiled, exact up to {small_radius_px} px"),
             mode: BokehMode::Tiled,
             adjust: Box::new(move |p: &mut Plan| {
                 for t in p.params_mut::<crate::passes::tiled_dof::TiledDof>() {
-                    t.rings = rings;
                     t.small_radius_px = small_radius_px;
                 }
             }),
@@ -103,6 +104,86 @@ pub fn run(gpu: &Gpu, frame: &Frame, camera: &Camera, mut progress: impl FnMut(&
             profile: out.profile,
         })
         .collect())
+}
+
+/// A method's error against ray-traced ground truth, with where it comes from.
+#[derive(Clone, Debug)]
+pub struct GroundTruthResult {
+    pub method: String,
+    /// GPU time of the depth-of-field passes (0 for the pinhole input).
+    pub dof_ms: f64,
+    pub error: ImageError,
+    pub budget: Vec<RegionError>,
+}
+
+/// The pinhole input and the tiled and reference depth of field of `camera` on `frame`, each
+/// against `ground_truth` (RGBA of the frame's size): the energy-matched clamped RMSE and its
+/// error budget ([`crate::tools::error_budget`]).
+pub fn against_ground_truth(
+    gpu: &Gpu,
+    frame: &Frame,
+    camera: &Camera,
+    ground_truth: &[f32],
+    mut progress: impl FnMut(&str),
+) -> GpuResult<Vec<GroundTruthResult>> {
+    let mut outputs = vec![("pinhole input".to_string(), frame.color.clone(), 0.0)];
+    let mut coc_px = None;
+    for (name, mode) in [("tiled", BokehMode::Tiled), ("reference", BokehMode::Reference)] {
+        progress(name);
+        let mut camera = camera.clone();
+        camera.bokeh = mode;
+        let p = plan(frame, &camera);
+        let renderer = Renderer::new(gpu, &p)?;
+        renderer.render(frame, &p, false)?;
+        let out = renderer.render(frame, &p, true)?;
+        coc_px = coc_px.or(out.coc_px);
+        outputs.push((name.to_string(), out.rgba, dof_ms(&out.profile)));
+    }
+    let coc_px = coc_px.unwrap_or_else(|| vec![0.0; frame.depth_m.len()]);
+    let regions = classify(frame.width, frame.height, &frame.color, &frame.depth_m, &coc_px);
+    Ok(outputs
+        .into_iter()
+        .map(|(method, rgba, dof_ms)| GroundTruthResult {
+            method,
+            dof_ms,
+            error: compare_rgba(&rgba, ground_truth),
+            budget: budget(&rgba, ground_truth, &regions),
+        })
+        .collect())
+}
+
+/// The ground-truth comparison as Markdown.
+pub fn ground_truth_markdown(device: &str, command: &str, results: &[GroundTruthResult]) -> String {
+    let mut out = format!(
+        "Device: {device}\n\nCommand: `{command}`\n\nErrors against the ray-traced ground truth: RMSE after matching the \
+         total energy, values clamped to [0, {MATCHED_CLAMP}]; the share of the squared error (and the share of the pixels) in each \
+         region of src/tools/error_budget.rs. GPU ms of the depth-of-field passes, from timestamp queries.\n\n"
+    );
+    out += "| method | GPU ms | RMSE (matched, clamped) | highlights | occlusion edges | smooth | energy |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- |\n";
+    for r in results {
+        let shares: Vec<String> = r
+            .budget
+            .iter()
+            .map(|b| {
+                format!(
+                    "{:.0}% of the error ({:.1}% of the pixels, RMSE {:.4})",
+                    100.0 * b.error_share,
+                    100.0 * b.pixel_share,
+                    b.rmse
+                )
+            })
+            .collect();
+        out += &format!(
+            "| {} | {:.1} | {:.4} | {} | {:+.3}% |\n",
+            r.method,
+            r.dof_ms,
+            r.error.rmse_matched,
+            shares.join(" | "),
+            100.0 * r.error.relative_energy_error
+        );
+    }
+    out
 }
 
 pub fn markdown(device: &str, command: &str, results: &[MethodResult]) -> String {

@@ -120,7 +120,7 @@ pub fn bare_pass_ms(gpu: &Gpu, width: u32, height: u32, runs: usize) -> GpuResul
     Ok(median(times))
 }
 
-fn median(mut values: Vec<f64>) -> f64 {
+pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(0.0)
 }

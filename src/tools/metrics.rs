@@ -15,7 +15,15 @@ pub struct ImageError {
     /// RMSE of the values clamped to [0, 1]: the error a display would show, not dominated by
     /// a few HDR highlights.
     pub rmse_display: f64,
+    /// RMSE after scaling the test image to the reference's total energy, values then clamped
+    /// to [0, MATCHED_CLAMP]: how the depth of field and the motion blur are compared with
+    /// ray-traced ground truth (a global exposure difference and the brightest highlights do
+    /// not dominate it).
+    pub rmse_matched: f64,
 }
+
+/// The clamp of [`ImageError::rmse_matched`].
+pub const MATCHED_CLAMP: f64 = 4.0;
 
 /// Compare two RGBA images of the same size. Non-finite values count as 0.
 pub fn compare_rgba(test: &[f32], reference: &[f32]) -> ImageError {
@@ -37,6 +45,15 @@ pub fn compare_rgba(test: &[f32], reference: &[f32]) -> ImageError {
     }
     let n = n.max(1) as f64;
     let mse = se / n;
+    let scale = if sum_t > 0.0 { sum_r / sum_t } else { 1.0 };
+    let mut se_matched = 0.0;
+    for (t, r) in test.chunks_exact(4).zip(reference.chunks_exact(4)) {
+        for c in 0..3 {
+            let a = (finite(t[c]) * scale).clamp(0.0, MATCHED_CLAMP);
+            let b = finite(r[c]).clamp(0.0, MATCHED_CLAMP);
+            se_matched += (a - b) * (a - b);
+        }
+    }
     ref_values.sort_by(f64::total_cmp);
     let p999 = ref_values.get(((ref_values.len() as f64) * 0.999) as usize).copied().unwrap_or(1.0);
     let peak = p999.max(1.0);
@@ -46,6 +63,7 @@ pub fn compare_rgba(test: &[f32], reference: &[f32]) -> ImageError {
         psnr_db: if mse > 0.0 { 10.0 * (peak * peak / mse).log10() } else { f64::INFINITY },
         relative_energy_error: if sum_r != 0.0 { (sum_t - sum_r) / sum_r } else { 0.0 },
         rmse_display: (se_display / n).sqrt(),
+        rmse_matched: (se_matched / n).sqrt(),
     }
 }
 
@@ -68,5 +86,20 @@ mod tests {
         let e = compare_rgba(&[0.6, 0.6, 0.6, 0.0], &[0.5, 0.5, 0.5, 1.0]);
         assert!((e.rmse - 0.1).abs() < 1e-6 && (e.psnr_db - 20.0).abs() < 1e-4);
         assert!((e.relative_energy_error - 0.2).abs() < 1e-6);
+        // Matched: 0.6 scaled by 1.5/1.8 is 0.5, no error left.
+        assert!(e.rmse_matched.abs() < 1e-6);
+    }
+
+    #[test]
+    fn matched_error_scales_to_the_reference_energy_then_clamps_at_4() {
+        // Test twice as bright as the reference everywhere: matched error 0. Then a highlight
+        // of 100 against 10: both clamp to 4 after matching, only the other pixel differs.
+        let e = compare_rgba(&[2.0, 2.0, 2.0, 1.0, 4.0, 4.0, 4.0, 1.0], &[1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 1.0]);
+        assert!(e.rmse_matched.abs() < 1e-12);
+        let e =
+            compare_rgba(&[100.0, 100.0, 100.0, 1.0, 1.0, 1.0, 1.0, 1.0], &[10.0, 10.0, 10.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        // scale = 11 / 101; pixel 2: 11/101 vs 1; pixel 1: min(1100/101, 4) = 4 vs 4.
+        let expected = ((1.0f64 - 11.0 / 101.0).powi(2) * 3.0 / 6.0).sqrt();
+        assert!((e.rmse_matched - expected).abs() < 1e-9, "{} vs {expected}", e.rmse_matched);
     }
 }

@@ -4,6 +4,8 @@
 
 pub mod accuracy;
 pub mod bench;
+pub mod bench_motion;
+pub mod error_budget;
 pub mod fuzz;
 pub mod metrics;
 pub mod synth;

@@ -74,3 +74,47 @@ pub fn energy(rgba: &[f32]) -> f64 {
 pub fn at(rgba: &[f32], w: u32, x: u32, y: u32, c: usize) -> f32 {
     rgba[(y * w + x) as usize * 4 + c]
 }
+
+/// A camera for motion blur alone (no depth of field, exposure, vignetting or film): `fps`
+/// frames per second, the shutter open `shutter_frames` of a frame, centred.
+pub fn motion_camera(fps: f64, shutter_frames: f64) -> Camera {
+    let request = CameraRequest {
+        sensor: Some("9.6x5.4".into()),
+        max_coc: realcam::model::camera::CocLimit::Px(0.0),
+        force: true,
+        fps: Some(fps),
+        shutter_angle_deg: Some(360.0 * shutter_frames),
+        ..CameraRequest::blur_only().with_lens(50.0, 2.0, 2.0)
+    };
+    Camera::new(&LensFile::default_lens(), &request).expect("valid motion camera")
+}
+
+/// A frame with a vertical bar (columns `x0..x1`, colour `bar`, depth `bar_m`) over a textured
+/// background (depth `background_m`); the bar moves with `next_px` toward the next frame and
+/// `prev_px` toward the previous one (px per frame, x right, y down), the background is still.
+#[allow(clippy::too_many_arguments)]
+pub fn moving_bar_frame(
+    w: u32,
+    h: u32,
+    (x0, x1): (u32, u32),
+    bar: [f32; 3],
+    (bar_m, background_m): (f32, f32),
+    next_px: [f32; 2],
+    prev_px: Option<[f32; 2]>,
+    background: impl Fn(u32, u32) -> [f32; 3],
+) -> Frame {
+    let (mut color, mut depth, mut next, mut prev) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let on_bar = (x0..x1).contains(&x);
+            let c = if on_bar { bar } else { background(x, y) };
+            color.extend([c[0], c[1], c[2], 1.0]);
+            depth.push(if on_bar { bar_m } else { background_m });
+            let (n, p) =
+                if on_bar { (next_px, prev_px.unwrap_or([-next_px[0], -next_px[1]])) } else { ([0.0; 2], [0.0; 2]) };
+            next.extend(n);
+            prev.extend(p);
+        }
+    }
+    Frame::new(w, h, color, depth).with_velocity(next, prev_px.map(|_| prev))
+}

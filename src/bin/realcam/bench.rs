@@ -21,6 +21,15 @@ pub struct BenchArgs {
     /// Run the reference only up to this CoC radius (its cost grows with the radius squared).
     #[arg(long = "reference-max-radius", default_value_t = 16.0)]
     reference_max_radius_px: f64,
+    /// Benchmark the motion blur instead (against the longest blur, --blur).
+    #[arg(long = "motion-blur")]
+    motion_blur: bool,
+    /// Run the motion-blur reference only up to this blur (px; its cost grows with the blur).
+    #[arg(long = "reference-max-blur", default_value_t = 8.0)]
+    reference_max_blur_px: f64,
+    /// Longest motion blurs in pixels (with --motion-blur).
+    #[arg(long = "blur", default_value = "8,32,128", value_delimiter = ',')]
+    blurs_px: Vec<f64>,
     /// Also write the Markdown table here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -32,23 +41,45 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let resolutions =
         args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
     let gpu = args.gpu.open()?;
-    let options = BenchOptions {
-        resolutions,
-        radii_px: args.radii_px.clone(),
-        runs: args.runs,
-        reference_max_radius_px: args.reference_max_radius_px,
+    let table = if args.motion_blur {
+        use realcam::tools::bench_motion::{markdown, run, MotionBenchOptions};
+        let options = MotionBenchOptions {
+            resolutions,
+            blurs_px: args.blurs_px.clone(),
+            runs: args.runs,
+            reference_max_blur_px: args.reference_max_blur_px,
+        };
+        let steps = options.resolutions.len() * options.blurs_px.len();
+        let rows = with_progress(steps, |step| run(&gpu, &options, step))?;
+        markdown(&gpu.info().to_string(), &command_line(), &rows)
+    } else {
+        let options = BenchOptions {
+            resolutions,
+            radii_px: args.radii_px.clone(),
+            runs: args.runs,
+            reference_max_radius_px: args.reference_max_radius_px,
+        };
+        let steps = options.resolutions.len() * options.radii_px.len();
+        let rows = with_progress(steps, |step| realcam::tools::bench::run(&gpu, &options, step))?;
+        markdown(&gpu.info().to_string(), &command_line(), &rows)
     };
-    let total = (options.resolutions.len() * options.radii_px.len()) as u64;
-    let bar = progress_bar(total * 2);
-    let rows = realcam::tools::bench::run(&gpu, &options, |step| {
-        bar.set_message(step.to_string());
-        bar.inc(1);
-    })?;
-    bar.finish_and_clear();
-    let table = markdown(&gpu.info().to_string(), &command_line(), &rows);
     print!("{table}");
     if let Some(out) = &args.out {
         write_text(out, &table)?;
     }
     Ok(())
+}
+
+/// Run a benchmark of `configurations` (two steps each) with a progress bar.
+fn with_progress<T>(
+    configurations: usize,
+    bench: impl FnOnce(&mut dyn FnMut(&str)) -> realcam::gpu::GpuResult<T>,
+) -> Result<T> {
+    let bar = progress_bar(configurations as u64 * 2);
+    let rows = bench(&mut |step: &str| {
+        bar.set_message(step.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    Ok(rows)
 }

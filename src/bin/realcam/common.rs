@@ -5,15 +5,16 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::gpu::{Gpu, GpuOptions};
 use realcam::io::lens_file::LensFile;
-use realcam::model::camera::CameraRequest;
+use realcam::model::camera::{CameraRequest, CocModel};
 use realcam::optics::sensor::SensorFit;
 use std::path::{Path, PathBuf};
 
 /// The lens of a command: a lens file, or a lens of the lensfun database.
 #[derive(Args)]
 pub struct LensChoice {
-    /// Lens file (TOML, see lenses/); the built-in default lens when neither this nor
-    /// --lens-lensfun is given.
+    /// Lens file (TOML, see lenses/), or a built-in lens: `ideal` (the renderer's thin lens:
+    /// any focal length and f-number, no aberration, the renderers' CoC) or `default`; the
+    /// built-in default lens when neither this nor --lens-lensfun is given.
     #[arg(long)]
     pub lens: Option<PathBuf>,
     /// A lens of the lensfun database by model name (as `realcam lens import-lensfun` converts
@@ -25,7 +26,11 @@ pub struct LensChoice {
 impl LensChoice {
     pub fn load(&self) -> Result<LensFile> {
         Ok(match (&self.lens, &self.lens_lensfun) {
-            (Some(p), _) => LensFile::load(p)?,
+            // A built-in name, unless a file of that name is there.
+            (Some(p), _) => match p.to_str().and_then(LensFile::built_in) {
+                Some(built_in) if !p.exists() => built_in,
+                _ => LensFile::load(p)?,
+            },
             (None, Some(model)) => {
                 let options = realcam::io::lensfun::ImportOptions::default();
                 realcam::io::lensfun::import_lens_file(model, &options, None)
@@ -76,6 +81,17 @@ pub struct LensArgs {
     /// Allow settings outside the lens file's range.
     #[arg(long)]
     pub force: bool,
+    /// How the CoC follows depth: `physical` (Kyaw 2013 eq 5.3: the film at the image distance,
+    /// with focus breathing) or `renderer` (a thin lens at the pinhole keeping the image scale
+    /// of the focal length, as Cycles, Arnold and RenderMan); default from the lens file.
+    #[arg(long = "coc-model", value_enum)]
+    pub coc_model: Option<CocModelArg>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum CocModelArg {
+    Physical,
+    Renderer,
 }
 
 impl LensArgs {
@@ -88,6 +104,10 @@ impl LensArgs {
             sensor: Some(self.sensor.clone()),
             sensor_fit: Some(self.sensor_fit.into()),
             force: self.force,
+            coc_model: self.coc_model.map(|m| match m {
+                CocModelArg::Physical => CocModel::Physical,
+                CocModelArg::Renderer => CocModel::Renderer,
+            }),
             ..base
         }
     }

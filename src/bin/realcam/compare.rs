@@ -21,8 +21,9 @@ pub fn run(test: &Path, reference: &Path) -> Result<()> {
     }
     let e = compare_rgba(&a.data, &b.data);
     println!(
-        "rmse {:.6}  rmse_display {:.6}  mean_abs {:.6}  psnr {:.2} dB  energy {:+.3}%",
+        "rmse {:.6}  rmse_matched {:.6}  rmse_display {:.6}  mean_abs {:.6}  psnr {:.2} dB  energy {:+.3}%",
         e.rmse,
+        e.rmse_matched,
         e.rmse_display,
         e.mean_abs,
         e.psnr_db,

@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 23] = [
+const FLAGS: [(&str, &str); 32] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -16,6 +16,7 @@ const FLAGS: [(&str, &str); 23] = [
     ("iso", "--iso"),
     ("nits_per_unit", "--nits-per-unit"),
     ("blades", "--blades"),
+    ("blade_curvature", "--blade-curvature"),
     ("spherical_aberration", "--spherical-aberration"),
     ("cats_eye", "--cats-eye"),
     ("max_coc", "--max-coc"),
@@ -32,6 +33,14 @@ const FLAGS: [(&str, &str); 23] = [
     ("trace", "--trace"),
     ("max_pixels", "--max-pixels"),
     ("blade_rotation_deg", "--blade-rotation"),
+    ("fps", "--fps"),
+    ("shutter_angle_deg", "--shutter-angle"),
+    ("shutter_ramp", "--shutter-curve"),
+    ("rolling_shutter_s", "--rolling-shutter"),
+    ("max_blur_px", "--max-blur"),
+    ("velocity_scale", "--velocity-scale"),
+    ("velocity_interval_frames", "--velocity-interval"),
+    ("velocity_format", "--velocity-format"),
 ];
 
 /// The flag of a library field (the field's own name if it has none).

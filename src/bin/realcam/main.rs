@@ -10,6 +10,7 @@ mod devices;
 mod dof;
 mod flags;
 mod lens;
+mod motion_args;
 mod render;
 mod synth;
 

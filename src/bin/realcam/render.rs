@@ -2,6 +2,7 @@
 
 use crate::common::{GpuArgs, LensArgs};
 use crate::flags::NameFlags;
+use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::io::output::Outputs;
@@ -101,6 +102,14 @@ pub struct RenderArgs {
     /// Aperture rotation in degrees; default from the lens file.
     #[arg(long = "blade-rotation")]
     blade_rotation_deg: Option<f64>,
+    /// Blade curvature, 0 (straight blades: a polygon) .. 1 (round); default from the lens file.
+    #[arg(long = "blade-curvature")]
+    blade_curvature: Option<f64>,
+    /// Use the depth pass as stored at anti-aliased edges. By default a pixel at an edge takes
+    /// the depth of the layer that brings most of its light (renderers filter the colour pass
+    /// but keep one depth sample per pixel).
+    #[arg(long = "keep-edge-depth")]
+    keep_edge_depth: bool,
     /// Spherical aberration in the bokeh: an amount in [-1, 1] (> 0 under-corrected: soft
     /// background, ringed foreground; < 0 over-corrected) or `uniform`; default from the lens file.
     #[arg(long = "spherical-aberration")]
@@ -180,6 +189,8 @@ pub struct RenderArgs {
     #[arg(long)]
     trace: Option<PathBuf>,
     #[command(flatten)]
+    motion: MotionArgs,
+    #[command(flatten)]
     gpu: GpuArgs,
 }
 
@@ -196,12 +207,14 @@ impl RenderArgs {
             None => None,
         };
         let max_coc = parse_coc_limit(&self.max_coc).with_context(|| format!("--max-coc {:?}", self.max_coc))?;
-        let request = self.lens.request(CameraRequest {
+        let request = self.lens.request(self.motion.request(CameraRequest {
             shutter_s,
             iso: self.iso,
             nits_per_unit: self.nits_per_unit,
             blades: self.blades,
             blade_rotation_deg: self.blade_rotation_deg,
+            blade_curvature: self.blade_curvature,
+            resolve_depth_edges: !self.keep_edge_depth,
             spherical_aberration,
             cats_eye: self.cats_eye,
             exposure: !self.no_exposure,
@@ -212,7 +225,7 @@ impl RenderArgs {
             grain: self.grain,
             seed: self.seed,
             ..CameraRequest::default()
-        });
+        })?);
         let mut camera = Camera::new(&lens_file, &request).name_flags()?;
         if let Some(path) = &self.aperture_image {
             camera.aperture_mask =
@@ -245,7 +258,7 @@ impl RenderArgs {
 
     /// Where the passes are, as these flags say.
     fn sources(&self) -> PassSources {
-        PassSources {
+        self.motion.sources(PassSources {
             color_path: self.color.clone(),
             depth_path: self.depth.clone(),
             velocity_path: self.velocity.clone(),
@@ -256,7 +269,8 @@ impl RenderArgs {
             depth_unit_m: self.depth_unit_m,
             require_velocity: self.velocity.is_some(),
             budget: self.budget(),
-        }
+            ..PassSources::default()
+        })
     }
 }
 
@@ -272,7 +286,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("{}", plan.explain());
     }
     if let Some(warning) = &plan.coc_clamp_warning {
-        eprintln!("warning: {warning}; raise the clamp with --max-coc");
+        let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
+        eprintln!("warning: {warning}{hint}");
     }
 
     let gpu = args.gpu.open()?;

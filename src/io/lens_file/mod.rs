@@ -81,6 +81,20 @@ pub struct LensFile {
     pub f_number_max: f64,
     /// Closest focus distance, metres from the entrance pupil.
     pub focus_min_m: f64,
+    /// An ideal thin lens (the renderer's camera): any focal length, f-number and focus are
+    /// allowed, and unless said otherwise it uses the renderers' CoC (`coc_model = "renderer"`)
+    /// and has no natural vignetting.
+    #[serde(default)]
+    pub ideal: bool,
+    /// How the circle of confusion follows depth: "physical" (Kyaw 2013 eq 5.3, the film at the
+    /// image distance, with focus breathing) or "renderer" (a thin lens at the pinhole with the
+    /// image scale of the focal length, as Cycles, Arnold and RenderMan draw it). Default:
+    /// physical, or renderer for an ideal lens.
+    #[serde(default)]
+    pub coc_model: Option<crate::model::camera::CocModel>,
+    /// Whether the lens has natural (cos^4) vignetting; default: yes, except for an ideal lens.
+    #[serde(default)]
+    pub natural_vignetting: Option<bool>,
     #[serde(default = "one")]
     pub transmittance: f64,
     #[serde(default = "one")]
@@ -275,6 +289,8 @@ fn one() -> f64 {
 
 /// The lens used when no --lens is given (lenses/default.toml, embedded).
 pub const DEFAULT_LENS_TOML: &str = include_str!("../../../lenses/default.toml");
+/// The ideal thin lens, `--lens ideal`: the renderers' camera (lenses/ideal.toml).
+pub const IDEAL_LENS_TOML: &str = include_str!("../../../lenses/ideal.toml");
 
 impl LensFile {
     /// The prescription the file carries (its `[[surface]]` tables), checked as
@@ -307,6 +323,16 @@ impl LensFile {
         let text =
             std::fs::read_to_string(path).map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
         Self::parse(&text, path)
+    }
+
+    /// A lens built into realcam by name: `default` or `ideal`.
+    pub fn built_in(name: &str) -> Option<LensFile> {
+        let (text, path) = match name {
+            "default" => (DEFAULT_LENS_TOML, "lenses/default.toml"),
+            "ideal" => (IDEAL_LENS_TOML, "lenses/ideal.toml"),
+            _ => return None,
+        };
+        Self::parse(text, Path::new(path)).ok()
     }
 
     pub fn default_lens() -> LensFile {
@@ -520,6 +546,15 @@ impl LensFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ideal_lens_is_any_thin_lens_without_aberrations() {
+        let ideal = LensFile::built_in("ideal").unwrap();
+        assert!(ideal.ideal && ideal.tables.is_none() && ideal.spherical_aberration == 0.0);
+        assert_eq!((ideal.aperture.blades, ideal.aperture.curvature), (0, 0.0));
+        assert_eq!(LensFile::built_in("default").unwrap(), LensFile::default_lens());
+        assert!(LensFile::built_in("tessar").is_none());
+    }
 
     #[test]
     fn default_lens_parses() {
