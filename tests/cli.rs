@@ -1250,6 +1250,15 @@ fn messages_say_each_cause_once_and_numbers_shortly() {
     let folder = dir.arg("folder.exr");
     let err = render(&dir, &s(&["--color", &folder, "-o", &dir.arg("out.exr")])).failure();
     assert_contains(&err, &format!("error: color: cannot read \"{folder}\": it is a directory\n"));
+    // Missing files: the system's cause once.
+    for extra in [["--lens", "missing.toml"], ["--aperture-image", "missing.png"], ["--film-file", "missing.toml"]] {
+        let mut args = base.clone();
+        args.extend(s(&extra));
+        let err = render(&dir, &args).failure();
+        assert_eq!(err.matches("(os error 2)").count(), 1, "{err}");
+    }
+    let err = realcam(&dir, s(&["lens", "analyze", "missing.toml"])).failure();
+    assert_contains(&err, "error: lens file missing.toml: cannot read it: No such file or directory (os error 2)\n");
     // A truncated EXR: the decoder's message once.
     let color = std::fs::read(dir.join("scene_color.exr")).unwrap();
     std::fs::write(dir.join("cut.exr"), &color[..color.len() / 2]).unwrap();
@@ -1313,6 +1322,9 @@ fn view_layers_are_chosen_whole_and_said() {
             planes.push((format!("{layer}.Combined.{c}"), vec![if c == "A" { 1.0 } else { colour }; n]));
         }
         planes.push((format!("{layer}.Depth.Z"), vec![depth; n]));
+        for c in ["X", "Y", "Z", "W"] {
+            planes.push((format!("{layer}.Vector.{c}"), vec![0.0; n]));
+        }
     }
     let chans: Vec<(&str, &[f32])> = planes.iter().map(|(name, v)| (name.as_str(), v.as_slice())).collect();
     write_exr_channels(&dir.join("layers.exr"), w, h, &chans, &float_opts()).unwrap();
@@ -1333,6 +1345,8 @@ fn view_layers_are_chosen_whole_and_said() {
     let err = run(&["--layer", "Beta"]);
     assert_contains(&err, "view layer: Beta (asked for;");
     assert_contains(&err, "channel Beta.Depth.Z");
+    assert_contains(&err, "channels Beta.Vector.Z, Beta.Vector.W, Beta.Vector.X, Beta.Vector.Y");
+    assert!(!err.contains("Alpha.Vector"), "{err}");
     // Focused at 5 m, Beta's plane is sharp: no depth of field runs.
     assert_contains(&err, "[skip] coc");
     let mut args = base.clone();
