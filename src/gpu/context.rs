@@ -376,6 +376,11 @@ impl Gpu {
         Ok(())
     }
 
+    /// The largest width or height of an image on this device (maxImageDimension2D).
+    pub fn max_image_dimension_px(&self) -> u32 {
+        self.shared.max_image_dimension_px
+    }
+
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
     }

@@ -56,6 +56,9 @@ pub enum GpuError {
     /// A frame this device cannot hold.
     #[error("a frame of {width}x{height} px does not fit the device {device:?}: {}", too_large(*.width, *.height, *.max_px, *.bytes, *.heap))]
     TooLarge { device: String, width: u32, height: u32, max_px: u32, bytes: u64, heap: u64 },
+    /// An image beyond the device's largest (maxImageDimension2D), refused before Vulkan sees it.
+    #[error("the image {name:?} of {width}x{height} px does not fit the device {device:?}: its images may be at most {max_px} px on a side")]
+    ImageTooLarge { name: String, device: String, width: u32, height: u32, max_px: u32 },
     /// A recording asked for something no earlier step provided (a bug, not bad input).
     #[error("internal error: {0}")]
     Internal(String),
