@@ -47,6 +47,19 @@ pub fn write_after_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
         .subresource_range(crate::gpu::color_range())
 }
 
+/// A buffer zeroed (or set) by `Recorder::fill_buffer` -> compute reads and writes (atomic
+/// counters). The fill is a clear and, to the synchronization validation, a copy: both stages.
+pub fn buffer_after_fill(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
+    vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .buffer(buffer.buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)
+}
+
 /// A buffer an earlier compute pass wrote and this pass reads or updates.
 pub fn buffer_after_compute_write(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
     vk::BufferMemoryBarrier2::default()
