@@ -419,7 +419,7 @@ fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
                     let mut camera = dof_camera(50.0, f_number, 2.0, 0);
                     camera.bokeh = mode;
                     camera.aperture.spherical_aberration = amount;
-                    camera.max_coc_px = 24.0;
+                    camera.max_coc = realcam::model::camera::CocLimit::Px(24.0);
                     let frame = testdata_frame(scene, &camera);
                     let (rgba, _, _) = render(&gpu, &frame, &camera);
                     let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
@@ -429,7 +429,7 @@ fn spherical_aberration_shapes_the_disk_like_the_ray_model() {
                     let ring = annulus_mean(&rgba, frame.width, frame.height, radius, 0.6, 0.85);
                     let measured = ring / core;
                     // The model's ratio over the same annuli (area-weighted means).
-                    let s = spherical::strength(amount, coc_px, 24.0);
+                    let s = spherical::strength(amount, coc_px, spherical::FULL_STRENGTH_COC_MM / pitch_mm);
                     let expected = model_ring_to_core(s);
                     // Under-corrected: bright core behind (ratio < 1), bright ring in front (> 1);
                     // over-corrected swaps them.

@@ -6,13 +6,14 @@
 pub enum OpticsError {
     #[error("{name} must be a finite number, got {value}")]
     NotFinite { name: &'static str, value: f64 },
-    #[error("focal length must be positive, got {focal_length_mm} mm")]
+    #[error("focal length must be positive, got {} mm", super::Num(*.focal_length_mm))]
     NonPositiveFocalLength { focal_length_mm: f64 },
-    #[error("f-number must be positive, got f/{f_number}")]
+    #[error("f-number must be positive, got f/{}", super::Num(*.f_number))]
     NonPositiveFNumber { f_number: f64 },
     #[error(
-        "focus distance {focus_distance_mm} mm is not beyond the focal length {focal_length_mm} mm; \
-         a lens can only focus on objects farther away than its focal length"
+        "focus distance {} mm is not beyond the focal length {} mm; \
+         a lens can only focus on objects farther away than its focal length",
+        super::Num(*.focus_distance_mm), super::Num(*.focal_length_mm)
     )]
     FocusInsideFocalLength { focus_distance_mm: f64, focal_length_mm: f64 },
     #[error("pupil magnification (exit / entrance pupil diameter) must be positive, got {pupil_magnification}")]

@@ -174,7 +174,7 @@ impl Pass for BokehGather {
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();
         let mut push =
-            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, f.sa_full_strength_coc_px, input.frame.centre_px);
         let (aperture, data) = ApertureData::new(
             push.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),

@@ -53,7 +53,7 @@ impl CocPush {
         let push = CocPush::new(
             &camera.lens,
             pixel_pitch_mm,
-            camera.max_coc_px,
+            super::scene::coc_clamp_px(camera, pixel_pitch_mm, frame),
             frame.width,
             frame.height,
             frame.centre_px,
@@ -292,6 +292,10 @@ impl Pass for Coc {
             camera.lens.f_number,
             camera.lens.focus_distance_mm / 1000.0
         );
+        let why = match f.coc_clamp_note(camera) {
+            Some(note) => format!("{why}; {note}"),
+            None => why,
+        };
         if !f.dof_visible() {
             return Decision::skip(format!(
                 "{why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible"
