@@ -8,7 +8,9 @@
 // neighbourhood spans two depths whose CoCs differ by more than a pixel, the pixel's colour is
 // read as a mix of the two layers' colours (least squares for the near layer's share alpha),
 // and it takes the depth of the layer that brings more of its light: alpha L_near against
-// (1 - alpha) L_far.
+// (1 - alpha) L_far. A near pixel whose alpha lies within the range of the near layer's pixels
+// (a textured surface at a hard edge) keeps its depth. The far layer gets no such test: at an
+// anti-aliased fringe the far neighbours are fringe pixels too, and would explain each other.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -62,9 +64,11 @@ float resolved_inverse_depth(ivec2 p) {
     float w_mid = 0.5 * (w_near + w_far);
     vec3 near_sum = vec3(0.0), far_sum = vec3(0.0);
     float near_n = 0.0, far_n = 0.0, near_w = 0.0, far_w = 0.0;
+    vec3 c9[9];
     for (int i = 0; i < 9; ++i) {
         if (i == 4) continue;
         vec3 c = finite_or_zero(imageLoad(color_in, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1))).rgb;
+        c9[i] = c;
         if (w[i] > w_mid) {
             near_sum += c;
             near_n += 1.0;
@@ -81,10 +85,22 @@ float resolved_inverse_depth(ivec2 p) {
     float dd = dot(d, d);
     if (dd <= 1.0e-12) return w_p;
     vec3 c_p = finite_or_zero(imageLoad(color_in, p)).rgb;
-    float alpha = clamp(dot(c_p - c_far, d) / dd, 0.0, 1.0);
+    // Read along the line from the far layer's mean colour to the near one's (alpha), the own
+    // layer's pixels span a range: a near pixel inside it is explained by its own surface.
+    bool own_near = w_p > w_mid;
+    float lo = 1.0e30, hi = -1.0e30;
+    for (int i = 0; i < 9; ++i) {
+        if (i == 4 || (w[i] > w_mid) != own_near) continue;
+        float a = dot(c9[i] - c_far, d) / dd;
+        lo = min(lo, a);
+        hi = max(hi, a);
+    }
+    float alpha_p = dot(c_p - c_far, d) / dd;
+    if (own_near && alpha_p >= lo && alpha_p <= hi) return w_p;
+    float alpha = clamp(alpha_p, 0.0, 1.0);
     bool near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
     // The pixel keeps its own depth if it lies in the chosen layer.
-    if (near == (w_p > w_mid)) return w_p;
+    if (near == own_near) return w_p;
     return near ? near_w / near_n : far_w / far_n;
 }
 

@@ -155,15 +155,15 @@ fn write_depth(path: &Path, w: u32, h: u32, z: &[f32]) {
 /// A small valid scene (`scene_color.exr`, `scene_depth.exr`) and the render arguments that
 /// read it; the camera settings under test are appended by the caller.
 fn small_scene(dir: &TestDir) -> Vec<String> {
-    dir.scene("scene", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]));
-    vec![
-        "--color".into(),
-        dir.arg("scene_color.exr"),
-        "--depth".into(),
-        dir.arg("scene_depth.exr"),
-        "-o".into(),
-        dir.arg("out.exr"),
-    ]
+    scene_args(dir, "scene", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]))
+}
+
+/// Writes `scene` as `<name>_color.exr` and `<name>_depth.exr`; the arguments that read it and
+/// write `out.exr`.
+fn scene_args(dir: &TestDir, name: &str, scene: &SynthScene) -> Vec<String> {
+    dir.scene(name, scene);
+    let (color, depth) = (format!("{name}_color.exr"), format!("{name}_depth.exr"));
+    vec!["--color".into(), dir.arg(&color), "--depth".into(), dir.arg(&depth), "-o".into(), dir.arg("out.exr")]
 }
 
 /// The text attributes of the first header of an EXR file.
@@ -463,21 +463,213 @@ fn failed_render_does_not_clobber_the_png() {
     assert_failed_render_does_not_clobber("no_clobber_png", true);
 }
 
-/// A write that fails after the render (the PNG target is a directory) reports the path and
-/// leaves no temporary file; the existing directory is untouched.
+/// A PNG target that is a folder is refused before any work; the folder and an existing EXR
+/// are untouched and no temporary file is left.
 #[test]
-fn failed_png_write_leaves_no_temporary_file() {
+fn png_target_that_is_a_folder_is_refused_before_rendering() {
     let dir = TestDir::new("png_write_fails");
     let mut args = small_scene(&dir);
     std::fs::create_dir(dir.join("out.png")).unwrap();
     std::fs::write(dir.join("out.png").join("keep.txt"), b"keep").unwrap();
+    std::fs::write(dir.join("out.exr"), b"old").unwrap();
     args.extend(s(&["--png", &dir.arg("out.png")]));
     let err = render(&dir, &args).failure();
-    assert_contains(&err, &format!("cannot write \"{}\"", dir.arg("out.png")));
+    assert_contains(
+        &err,
+        &format!("error: png \"{}\": it is a folder; realcam writes only new files", dir.arg("out.png")),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened:\n{err}");
     assert_eq!(std::fs::read(dir.join("out.png").join("keep.txt")).unwrap(), b"keep");
-    // The EXR is written before the PNG; what matters is that nothing half-written is left.
-    let listing = dir.listing();
-    assert!(listing.iter().all(|n| !n.contains("tmp")), "temporary files left behind: {listing:?}");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), b"old");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr", "out.png"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8b: never lose a file (outputs are checked first, written together, never over an input)
+// ---------------------------------------------------------------------------------------------
+
+/// `-o` at a device, a FIFO, a symlink or a folder is refused before any work, and the thing
+/// at the path is left as it was.
+#[test]
+fn outputs_that_are_not_regular_files_are_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = TestDir::new("not_regular");
+    let base = small_scene(&dir);
+    let with_output = |output: &str| {
+        let mut args = base.clone();
+        let at = args.iter().position(|a| a == "-o").unwrap();
+        args[at + 1] = output.to_string();
+        args
+    };
+    std::fs::write(dir.join("kept.exr"), b"kept").unwrap();
+    std::os::unix::fs::symlink(dir.join("kept.exr"), dir.join("link.exr")).unwrap();
+    let fifo = Command::new("mkfifo").arg(dir.join("fifo.exr")).status().unwrap();
+    assert!(fifo.success());
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    for (name, kind) in [
+        ("link.exr", "a symbolic link"),
+        ("fifo.exr", "a FIFO"),
+        ("folder.exr", "a folder"),
+        ("/dev/null", "a character device"),
+    ] {
+        let path = if name.starts_with('/') { name.to_string() } else { dir.arg(name) };
+        let err = render(&dir, &with_output(&path)).failure();
+        assert_contains(
+            &err,
+            &format!("error: output \"{path}\": it is {kind}; realcam writes only new files or replaces regular ones (--output)"),
+        );
+        assert!(!err.contains("device:"), "the GPU was opened:\n{err}");
+    }
+    assert!(std::fs::symlink_metadata(dir.join("link.exr")).unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read(dir.join("kept.exr")).unwrap(), b"kept");
+    assert!(std::fs::symlink_metadata(dir.join("fifo.exr")).unwrap().file_type().is_fifo());
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "kept.exr", "link.exr", "fifo.exr", "folder.exr"]);
+}
+
+/// An output that resolves to an input (the same path, another spelling, a symlink or a hard
+/// link to it) or to another output is refused; the inputs are left byte for byte.
+#[test]
+fn outputs_that_are_inputs_are_refused() {
+    let dir = TestDir::new("output_is_input");
+    let base = small_scene(&dir);
+    let color = std::fs::read(dir.join("scene_color.exr")).unwrap();
+    let depth = std::fs::read(dir.join("scene_depth.exr")).unwrap();
+    std::os::unix::fs::symlink(dir.join("scene_color.exr"), dir.join("color_link.exr")).unwrap();
+    std::fs::hard_link(dir.join("scene_depth.exr"), dir.join("depth_hard.exr")).unwrap();
+    let run = |output: &str, extra: &[&str]| {
+        let mut args = base.clone();
+        let at = args.iter().position(|a| a == "-o").unwrap();
+        args[at + 1] = output.to_string();
+        args.extend(s(extra));
+        render(&dir, &args).failure()
+    };
+    let color_arg = dir.arg("scene_color.exr");
+    let depth_arg = dir.arg("scene_depth.exr");
+    let err = run(&color_arg, &[]);
+    assert_contains(
+        &err,
+        &format!("error: output \"{color_arg}\": it is the input color pass \"{color_arg}\"; realcam never writes over its inputs (--output)"),
+    );
+    let other_spelling = format!("{}/./scene_depth.exr", dir.path.display());
+    assert_contains(&run(&other_spelling, &[]), &format!("it is the input depth pass \"{depth_arg}\""));
+    // Through the current folder, relative.
+    assert_contains(&run("scene_color.exr", &[]), "it is the input color pass");
+    // A hard link to the depth pass, and --color given through a symlink.
+    assert_contains(&run(&dir.arg("depth_hard.exr"), &[]), "it is the input depth pass");
+    let mut args = base.clone();
+    let at = args.iter().position(|a| a == "--color").unwrap();
+    args[at + 1] = dir.arg("color_link.exr");
+    let at = args.iter().position(|a| a == "-o").unwrap();
+    args[at + 1] = color_arg.clone();
+    assert_contains(&render(&dir, &args).failure(), "it is the input color pass");
+    // --png and -o the same file.
+    let out = dir.arg("out.exr");
+    let err = run(&out, &["--png", &out]);
+    assert_contains(&err, &format!("error: png \"{out}\": the output \"{out}\" is the same file (--png)"));
+    assert_eq!(std::fs::read(dir.join("scene_color.exr")).unwrap(), color);
+    assert_eq!(std::fs::read(dir.join("scene_depth.exr")).unwrap(), depth);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "color_link.exr", "depth_hard.exr"]);
+}
+
+/// Every output of a run is renamed into place only when all were written: a write that
+/// fails after the render (a lens name an EXR attribute cannot hold) leaves the existing EXR,
+/// PNG and trace as they were, and a missing PNG folder fails before the render.
+#[test]
+fn outputs_are_replaced_all_together_or_not_at_all() {
+    let dir = TestDir::new("all_or_nothing");
+    let mut args = small_scene(&dir);
+    let old: [(&str, &[u8]); 3] = [("out.exr", b"old exr"), ("out.png", b"old png"), ("trace.json", b"{}")];
+    for (name, bytes) in old {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let lens = dir.arg("lens.toml");
+    std::fs::write(&lens, VALID_LENS.replace("test lens", "\u{30ec}\u{30f3}\u{30ba}") + "[aperture]\nblades = 9\n")
+        .unwrap();
+    let mut failing = args.clone();
+    failing.extend(s(&["--png", &dir.arg("out.png"), "--trace", &dir.arg("trace.json"), "--lens", &lens]));
+    let err = render(&dir, &failing).failure();
+    assert_contains(&err, "attribute value");
+    assert_contains(&err, "device:");
+    for (name, bytes) in old {
+        assert_eq!(std::fs::read(dir.join(name)).unwrap(), bytes, "{name} was replaced");
+    }
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr", "out.png", "trace.json", "lens.toml"]);
+
+    args.extend(s(&["--png", "/missing-dir/p.png"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: png \"/missing-dir/p.png\": the folder \"/missing-dir\" does not exist (--png)");
+    assert!(!err.contains("device:"), "the GPU was opened before the output folder was checked:\n{err}");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), b"old exr");
+}
+
+/// The output folder is checked before anything is read: a missing or read-only folder is
+/// the first error, even before a missing input.
+#[test]
+fn the_output_folder_is_checked_before_any_work() {
+    let dir = TestDir::new("output_folder");
+    let out = dir.arg("no-such-folder/out.exr");
+    let err = render(&dir, &s(&["--color", &dir.arg("missing.exr"), "-o", &out])).failure();
+    assert_contains(
+        &err,
+        &format!("error: output \"{out}\": the folder \"{}\" does not exist (--output)", dir.arg("no-such-folder")),
+    );
+    assert_listing(&dir, &[]);
+}
+
+/// The `.NAME.realcam-HOST-PID-N.tmp` files in `dir`.
+fn temporaries(dir: &TestDir) -> Vec<String> {
+    dir.listing().into_iter().filter(|n| n.contains(".realcam-") && n.ends_with(".tmp")).collect()
+}
+
+/// Starts a slow render (the reference bokeh on the demo scene, wide open) into `dir` and
+/// waits until its temporary output exists.
+fn start_slow_render(dir: &TestDir) -> std::process::Child {
+    let testdata = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata");
+    let child = Command::new(env!("CARGO_BIN_EXE_realcam"))
+        .args(["render", "--color"])
+        .arg(testdata.join("demo_color.exr"))
+        .arg("--depth")
+        .arg(testdata.join("demo_depth.exr"))
+        .args(["--fstop", "1.4", "--focus", "0.6", "--bokeh", "reference", "-o"])
+        .arg(dir.join("out.exr"))
+        .current_dir(&dir.path)
+        .env("REALCAM_CACHE_DIR", &dir.cache)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("running the realcam binary");
+    let start = std::time::Instant::now();
+    while temporaries(dir).is_empty() {
+        assert!(start.elapsed().as_secs() < 60, "no temporary output appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child
+}
+
+/// SIGINT and SIGTERM during a run remove its temporary output, and the process still ends by
+/// that signal; a SIGKILLed run's temporary is removed by the next run into the same folder.
+#[test]
+fn interrupted_runs_leave_no_temporary_file() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = TestDir::new("signals");
+    for (signal, number) in [("INT", 2), ("TERM", 15)] {
+        let mut child = start_slow_render(&dir);
+        let kill = Command::new("kill").args([format!("-{signal}"), child.id().to_string()]).status().unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.signal(), Some(number), "SIG{signal}: {status:?}");
+        assert_eq!(temporaries(&dir), Vec::<String>::new(), "SIG{signal} left a temporary file");
+        assert!(!dir.join("out.exr").exists());
+    }
+    let mut child = start_slow_render(&dir);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left = temporaries(&dir);
+    assert_eq!(left.len(), 1, "{left:?}");
+    // The next run into this folder (here one that fails on its input) removes it.
+    let err = render(&dir, &s(&["--color", &dir.arg("missing.exr"), "-o", &dir.arg("other.exr")])).failure();
+    assert_contains(&err, "does not exist");
+    assert_listing(&dir, &[]);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -814,6 +1006,389 @@ fn every_film_file_in_films_parses_and_the_presets_match_the_built_ins() {
     }
     names.sort();
     assert_eq!(names, ["contrast", "neutral", "reversal-example", "soft"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile inputs: declared sizes checked against the memory before anything is allocated
+// ---------------------------------------------------------------------------------------------
+
+/// A single-part tiled EXR whose header declares a `w`x`h` image of one tile (channels B, G,
+/// R, Z as half) followed by one empty chunk: 395 bytes, whatever it declares.
+fn tiled_exr_header(w: i32, h: i32) -> Vec<u8> {
+    fn attr(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
+        for text in [name, kind] {
+            out.extend(text.as_bytes());
+            out.push(0);
+        }
+        out.extend((value.len() as i32).to_le_bytes());
+        out.extend(value);
+    }
+    let ints = |v: &[i32]| v.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>();
+    let mut channels = Vec::new();
+    for name in ["B", "G", "R", "Z"] {
+        channels.extend(name.as_bytes());
+        channels.extend([0, 1, 0, 0, 0, 0, 0, 0, 0]); // \0, type HALF, pLinear, reserved
+        channels.extend(ints(&[1, 1]));
+    }
+    channels.push(0);
+    let window = ints(&[0, 0, w - 1, h - 1]);
+    let mut header = Vec::new();
+    attr(&mut header, "channels", "chlist", &channels);
+    attr(&mut header, "compression", "compression", &[0]);
+    attr(&mut header, "dataWindow", "box2i", &window);
+    attr(&mut header, "displayWindow", "box2i", &window);
+    attr(&mut header, "lineOrder", "lineOrder", &[0]);
+    attr(&mut header, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+    attr(&mut header, "screenWindowCenter", "v2f", &[0; 8]);
+    attr(&mut header, "screenWindowWidth", "float", &1f32.to_le_bytes());
+    let mut tiles = ints(&[w, h]);
+    tiles.push(0); // one level
+    attr(&mut header, "tiles", "tiledesc", &tiles);
+    header.push(0);
+    let mut file = ints(&[20000630, 2 | 0x200]); // magic, version 2 with the tiled flag
+    let chunk_at = (file.len() + header.len() + 8) as u64;
+    file.extend(header);
+    file.extend(chunk_at.to_le_bytes());
+    file.extend(ints(&[0, 0, 0, 0, 8]));
+    file.extend([0; 8]);
+    file
+}
+
+#[test]
+fn a_header_declaring_a_huge_image_is_refused_before_allocating() {
+    let dir = TestDir::new("huge_header");
+    std::fs::write(dir.join("huge.exr"), tiled_exr_header(100_000, 100_000)).unwrap();
+    assert_eq!(std::fs::metadata(dir.join("huge.exr")).unwrap().len(), 395);
+    let err = render(&dir, &s(&["--color", &dir.arg("huge.exr"), "-o", &dir.arg("out.exr")])).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: color: \"{}\" declares a 100000x100000 px image: reading it takes 400.0 GB, more than the ",
+            dir.arg("huge.exr")
+        ),
+    );
+    assert_contains(&err, "of memory available (free memory, address-space limit)");
+    // With --max-pixels, that limit.
+    let err =
+        render(&dir, &s(&["--color", &dir.arg("huge.exr"), "--max-pixels", "8294400", "-o", &dir.arg("out.exr")]))
+            .failure();
+    assert_contains(
+        &err,
+        "declares a 100000x100000 px image (10000000000 pixels), more than the limit of 8294400 pixels (--max-pixels)",
+    );
+    assert_listing(&dir, &["huge.exr"]);
+}
+
+/// Under a 4 GB address-space limit a 20000x20000 header is refused with the limit, not an
+/// abort; a small frame still renders under the same limit.
+#[test]
+fn a_memory_limit_refuses_what_does_not_fit_and_renders_what_does() {
+    let dir = TestDir::new("ulimit");
+    std::fs::write(dir.join("big.exr"), tiled_exr_header(20_000, 20_000)).unwrap();
+    let bin = env!("CARGO_BIN_EXE_realcam");
+    let limited = |args: &str| {
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(format!("ulimit -v 4194304 && exec {bin} render {args}"))
+            .current_dir(&dir.path)
+            .env("REALCAM_CACHE_DIR", &dir.cache)
+            .output()
+            .unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (code, err) = limited(&format!("--color {} -o {}", dir.arg("big.exr"), dir.arg("out.exr")));
+    assert_eq!(code, Some(1), "{err}");
+    assert_contains(&err, "declares a 20000x20000 px image: reading it takes 16.0 GB, more than the ");
+    dir.scene("p", &SynthScene::point_on_plane(16, 12, 3.0, [5.0; 3]));
+    let (code, err) = limited(&format!(
+        "--color {} --depth {} -o {}",
+        dir.arg("p_color.exr"),
+        dir.arg("p_depth.exr"),
+        dir.arg("out.exr")
+    ));
+    assert_eq!(code, Some(0), "{err}");
+}
+
+/// A PNG whose header declares `w`x`h` px (8-bit grey), with an empty IDAT chunk.
+fn png_header(w: u32, h: u32) -> Vec<u8> {
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+            }
+        }
+        !crc
+    }
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(w.to_be_bytes());
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 0, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    png.extend([0, 0, 0, 0]);
+    png.extend(b"IDAT");
+    png.extend(crc32(b"IDAT").to_be_bytes());
+    png.extend([0, 0, 0, 0]);
+    png.extend(b"IEND");
+    png.extend(crc32(b"IEND").to_be_bytes());
+    png
+}
+
+#[test]
+fn a_huge_aperture_image_is_refused_with_its_size_and_the_limit() {
+    let dir = TestDir::new("huge_aperture");
+    let mut args = small_scene(&dir);
+    std::fs::write(dir.join("iris.png"), png_header(100_000, 100_000)).unwrap();
+    args.extend(s(&["--aperture-image", &dir.arg("iris.png"), "--max-pixels", "16777216"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: aperture image: \"{}\" declares a 100000x100000 px image (10000000000 pixels), more than the limit of 16777216 pixels (--max-pixels)",
+            dir.arg("iris.png")
+        ),
+    );
+    let at = args.iter().position(|a| a == "--max-pixels").unwrap();
+    args.truncate(at);
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "declares a 100000x100000 px image: reading it takes 200.0 GB, more than the ");
+}
+
+/// A frame wider than the device's largest image is an error naming the device's limit
+/// (lavapipe: 16384 px), before any GPU image is made.
+#[test]
+fn a_frame_larger_than_the_device_takes_is_a_clear_error() {
+    let dir = TestDir::new("wide_frame");
+    let w = 16_400u32;
+    write_color_only(&dir.join("c.exr"), w, 1);
+    write_depth(&dir.join("d.exr"), w, 1, &vec![2.0; w as usize]);
+    let err =
+        render(&dir, &s(&["--color", &dir.arg("c.exr"), "--depth", &dir.arg("d.exr"), "-o", &dir.arg("out.exr")]))
+            .failure();
+    assert_contains(&err, "error: a frame of 16400x1 px does not fit the device");
+    assert_contains(&err, "its images may be at most");
+    assert_listing(&dir, &["c.exr", "d.exr"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad values and messages
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn a_rotation_that_is_not_finite_is_refused() {
+    let dir = TestDir::new("rotation_nan");
+    let base = small_scene(&dir);
+    for (value, shown) in [("nan", "NaN"), ("inf", "inf"), ("-inf", "-inf")] {
+        let mut args = base.clone();
+        args.push(format!("--blade-rotation={value}"));
+        let err = render(&dir, &args).failure();
+        assert_contains(
+            &err,
+            &format!("error: aperture rotation must be a finite angle in degrees, got {shown} (--blade-rotation)"),
+        );
+    }
+    let lens = dir.arg("lens.toml");
+    std::fs::write(&lens, format!("{VALID_LENS}[aperture]\nblades = 6\nrotation_deg = nan\n")).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: lens file {lens}: aperture.rotation_deg = NaN must be a finite angle in degrees"),
+    );
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "lens.toml"]);
+}
+
+#[test]
+fn lens_file_values_are_checked_with_their_units() {
+    let dir = TestDir::new("lens_values");
+    let base = small_scene(&dir);
+    let lens = dir.arg("lens.toml");
+    let head = format!("{VALID_LENS}[aperture]\nblades = 9\n[tables]\nimage_height_mm = [0, 10, 21.6]\n");
+    for (table, message) in [
+        (
+            "relative_illumination = [1, 0.8, -0.5]",
+            "tables.relative_illumination value -0.5 is out of range (in (0, 2])",
+        ),
+        ("relative_illumination = [1, 3, 1]", "tables.relative_illumination value 3 is out of range (in (0, 2])"),
+        ("coma_mm = [0, 0.01, 49]", "tables.coma_mm value 49 is out of range (-5..5 mm, a tenth of the focal length)"),
+        (
+            "tangential_blur_mm = [0, 0.01, 49]",
+            "tables.tangential_blur_mm value 49 is out of range (from 0 to 5 mm, a tenth of the focal length)",
+        ),
+    ] {
+        std::fs::write(&lens, format!("{head}{table}\n")).unwrap();
+        let mut args = base.clone();
+        args.extend(s(&["--lens", &lens]));
+        assert_contains(&render(&dir, &args).failure(), &format!("error: lens file {lens}, line 11: {message}"));
+    }
+    // A prescription with impossible glass: lens analyze refuses it instead of printing NaN.
+    let prescription = dir.arg("p.toml");
+    let surfaces =
+        "name = \"p\"\n[[surface]]\nradius_mm = 50\nthickness_mm = 5\nn_d = 1.5\nsemi_diameter_mm = 10\nstop = true\n\
+                    [[surface]]\nradius_mm = -50\nthickness_mm = 48\nsemi_diameter_mm = 10\n";
+    for (from, to, message) in [
+        ("n_d = 1.5", "n_d = 1e12", "surface 0: n_d = 1e12 must be at most 3 (no optical material has more)"),
+        ("thickness_mm = 5", "thickness_mm = -5", "surface 0: thickness_mm = -5 must not be negative"),
+    ] {
+        std::fs::write(&prescription, surfaces.replace(from, to)).unwrap();
+        let err = realcam(&dir, s(&["lens", "analyze", &prescription])).failure();
+        assert_contains(&err, &format!("error: {prescription}:2: {message}"));
+    }
+    std::fs::write(&prescription, surfaces).unwrap();
+    let run = realcam(&dir, s(&["lens", "analyze", &prescription])).success();
+    assert!(!run.stdout.contains("NaN") && !run.stdout.contains("EFL 0.0000"), "{}", run.stdout);
+}
+
+#[test]
+fn messages_say_each_cause_once_and_numbers_shortly() {
+    let dir = TestDir::new("messages");
+    let base = small_scene(&dir);
+    // A folder as the colour pass.
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    let folder = dir.arg("folder.exr");
+    let err = render(&dir, &s(&["--color", &folder, "-o", &dir.arg("out.exr")])).failure();
+    assert_contains(&err, &format!("error: color: cannot read \"{folder}\": it is a directory\n"));
+    // Missing files: the system's cause once.
+    for extra in [["--lens", "missing.toml"], ["--aperture-image", "missing.png"], ["--film-file", "missing.toml"]] {
+        let mut args = base.clone();
+        args.extend(s(&extra));
+        let err = render(&dir, &args).failure();
+        assert_eq!(err.matches("(os error 2)").count(), 1, "{err}");
+    }
+    let err = realcam(&dir, s(&["lens", "analyze", "missing.toml"])).failure();
+    assert_contains(&err, "error: lens file missing.toml: cannot read it: No such file or directory (os error 2)\n");
+    // A truncated EXR: the decoder's message once.
+    let color = std::fs::read(dir.join("scene_color.exr")).unwrap();
+    std::fs::write(dir.join("cut.exr"), &color[..color.len() / 2]).unwrap();
+    let err = render(&dir, &s(&["--color", &dir.arg("cut.exr"), "-o", &dir.arg("out.exr")])).failure();
+    let line = err.lines().find(|l| l.starts_with("error: ")).unwrap();
+    let cause = line.rsplit(": ").next().unwrap();
+    assert_eq!(line.matches(cause).count(), 1, "{line}");
+    // A NUL in a lens-file comment.
+    let lens = dir.arg("nul.toml");
+    std::fs::write(&lens, format!("{VALID_LENS}# a comment with a \0\n[aperture]\nblades = 9\n")).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: lens file {lens}, line 7: control character U+0000 is not allowed in a TOML file, not even in a comment"),
+    );
+    // f/0 is no setting --force could allow.
+    for force in [false, true] {
+        let mut args = base.clone();
+        args.extend(s(&["--fstop", "0"]));
+        if force {
+            args.push("--force".into());
+        }
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, "error: f-number must be positive, got f/0\n");
+        assert!(!err.contains("--force"), "{err}");
+    }
+    // A limit of 1e308 in a lens file is written 1e308.
+    std::fs::write(&lens, VALID_LENS.replace("f_number_max = 16", "f_number_max = 1e308") + "[aperture]\nblades = 9\n")
+        .unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--lens", &lens, "--fstop", "1"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: f/1 is outside what the lens \"test lens\" allows (f/1.4 to f/1e308); pass --force");
+}
+
+/// Two identical runs write identical bytes (the EXR header's attributes in name order).
+#[test]
+fn identical_runs_write_identical_bytes() {
+    let dir = TestDir::new("deterministic");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "1"]));
+    render(&dir, &args).success();
+    let first = std::fs::read(dir.join("out.exr")).unwrap();
+    render(&dir, &args).success();
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), first, "two identical runs wrote different bytes");
+    assert!(exr_text_attributes(&dir.join("out.exr")).len() >= 10);
+}
+
+/// Several view layers in one EXR: the passes come from one layer as a whole (the first, with
+/// a warning; the colour override's; or --layer's), and --explain says which.
+#[test]
+fn view_layers_are_chosen_whole_and_said() {
+    let dir = TestDir::new("layers");
+    let (w, h) = (8u32, 6u32);
+    let n = (w * h) as usize;
+    let mut planes: Vec<(String, Vec<f32>)> = Vec::new();
+    for (layer, colour, depth) in [("Alpha", 0.25f32, 1.0f32), ("Beta", 0.75, 5.0)] {
+        for c in ["R", "G", "B", "A"] {
+            planes.push((format!("{layer}.Combined.{c}"), vec![if c == "A" { 1.0 } else { colour }; n]));
+        }
+        planes.push((format!("{layer}.Depth.Z"), vec![depth; n]));
+        for c in ["X", "Y", "Z", "W"] {
+            planes.push((format!("{layer}.Vector.{c}"), vec![0.0; n]));
+        }
+    }
+    let chans: Vec<(&str, &[f32])> = planes.iter().map(|(name, v)| (name.as_str(), v.as_slice())).collect();
+    write_exr_channels(&dir.join("layers.exr"), w, h, &chans, &float_opts()).unwrap();
+    let base = s(&["--color", &dir.arg("layers.exr"), "-o", &dir.arg("out.exr"), "--explain", "--focus", "5"]);
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args).success().stderr
+    };
+    let err = run(&[]);
+    assert_contains(&err, "has 2 view layers (Alpha, Beta); every pass is taken from Alpha");
+    assert_contains(&err, "view layer: Alpha (the first; choose another with a layer option;");
+    assert_contains(&err, "channel Alpha.Depth.Z");
+    let err = run(&["--color-channels", "Beta.Combined"]);
+    assert_contains(&err, "view layer: Beta (the colour override's;");
+    assert_contains(&err, "channel Beta.Depth.Z");
+    assert!(!err.contains("Alpha.Depth.Z") && !err.contains("every pass is taken from"), "{err}");
+    let err = run(&["--layer", "Beta"]);
+    assert_contains(&err, "view layer: Beta (asked for;");
+    assert_contains(&err, "channel Beta.Depth.Z");
+    assert_contains(&err, "channels Beta.Vector.Z, Beta.Vector.W, Beta.Vector.X, Beta.Vector.Y");
+    assert!(!err.contains("Alpha.Vector"), "{err}");
+    // Focused at 5 m, Beta's plane is sharp: no depth of field runs.
+    assert_contains(&err, "[skip] coc");
+    let mut args = base.clone();
+    args.extend(s(&["--layer", "Alpha", "--color-channels", "Beta.Combined"]));
+    assert_contains(&render(&dir, &args).failure(), "passes of two layers are never mixed");
+}
+
+/// --max-coc takes a diameter on the film (the default 1.2 mm) or in pixels; a clamp that
+/// changes the picture is said, in --explain and as a warning.
+#[test]
+fn a_clamp_that_changes_the_picture_is_said() {
+    let dir = TestDir::new("max_coc");
+    let mut base = scene_args(&dir, "p", &SynthScene::point_on_plane(64, 48, 0.6, [5.0; 3]));
+    base.extend(s(&["--fstop", "1.4", "--focus", "5", "--explain"]));
+    let run = |extra: &[&str]| {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        render(&dir, &args)
+    };
+    // Full frame on 64 px: 0.5625 mm pixels, so 1.2 mm is 2.13 px; the plane at 0.6 m is 4.6 px
+    // out of focus (f/1.4, 50 mm, focused at 5 m).
+    let err = run(&[]).success().stderr;
+    assert_contains(&err, "warning: the CoC is clamped to +-2.13 px (1.2 mm on the film): the lens gives -4.");
+    assert_contains(&err, "so the clamp changes the picture; raise the clamp with --max-coc");
+    assert_contains(&err, "[run ] coc           CoC from -2.13 px");
+    for wide in ["3mm", "8", "8px"] {
+        let err = run(&["--max-coc", wide]).success().stderr;
+        assert!(!err.contains("clamp"), "--max-coc {wide}:\n{err}");
+    }
+    let err = run(&["--max-coc", "1.2cm"]).failure();
+    assert_contains(
+        &err,
+        "error: --max-coc \"1.2cm\": \"1.2cm\" is not a diameter in px (64, 64px) or on the film in mm (1.2mm)",
+    );
+    let err = run(&["--max-coc=-1mm"]).failure();
+    assert_contains(
+        &err,
+        "error: maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)",
+    );
 }
 
 #[test]

@@ -99,6 +99,7 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     // The tiled path (copy, small and large tiles, sprites) once per channel for longitudinal
     // colour, then every aberration of the image.
     let mut camera = dof_camera(50.0, 1.4, 2.0, 6);
+    camera.max_coc = realcam::model::camera::CocLimit::Px(64.0);
     camera.aperture.spherical_aberration = -0.4;
     camera.longitudinal_color_mm = Some([0.3, -0.3]);
     let table = |values: Vec<f64>| HeightTable { image_height_mm: vec![0.0, 2.0, 6.0], values };
@@ -134,7 +135,7 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     // The diffraction focus processor.
     let mut camera = dof_camera(50.0, 2.0, 2.0, 0);
     camera.bokeh = BokehMode::Diffraction;
-    camera.max_coc_px = 12.0;
+    camera.max_coc = realcam::model::camera::CocLimit::Px(12.0);
     cases.push(("diffraction", busy_frame(24, 16), camera));
     // Lens flare: the Tessar's ghosts, a 5-bladed starburst and the halo, from two lights in
     // the frame (one of 3x3 px spanning two tiles) and one given just outside it.

@@ -75,6 +75,10 @@ pub(crate) struct Shared {
     pub info: DeviceInfo,
     pub timestamp_period_ns: f64,
     pub timestamps: bool,
+    /// The largest width or height of a 2D image (maxImageDimension2D).
+    pub max_image_dimension_px: u32,
+    /// The size of the largest device-local memory heap.
+    pub device_local_bytes: u64,
 }
 
 /// The opened GPU. Cheap to clone.
@@ -267,6 +271,13 @@ impl Gpu {
         let timestamps =
             families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
 
+        let memory = instance.get_physical_device_memory_properties(physical_device);
+        let device_local_bytes = memory.memory_heaps[..(memory.memory_heap_count as usize).min(vk::MAX_MEMORY_HEAPS)]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0);
         log::info!("GPU: {info}");
         let shared = Shared {
             _entry: entry,
@@ -286,6 +297,8 @@ impl Gpu {
             info,
             timestamp_period_ns: props.limits.timestamp_period as f64,
             timestamps,
+            max_image_dimension_px: props.limits.max_image_dimension2_d,
+            device_local_bytes,
         };
         let gpu = Gpu { shared: Arc::new(shared) };
         gpu.set_name(gpu.shared.queue, "realcam compute queue");
@@ -349,6 +362,23 @@ impl Gpu {
             instance.destroy_instance(None);
             out
         }
+    }
+
+    /// Errors unless `bytes` of images of `width` x `height` px fit this device: each side at
+    /// most maxImageDimension2D, the total at most its largest device-local heap.
+    pub fn check_fits(&self, width: u32, height: u32, bytes: u64) -> GpuResult<()> {
+        let s = &self.shared;
+        let max_px = s.max_image_dimension_px;
+        let heap = s.device_local_bytes;
+        if width > max_px || height > max_px || (heap > 0 && bytes > heap) {
+            return Err(GpuError::TooLarge { device: s.info.name.clone(), width, height, max_px, bytes, heap });
+        }
+        Ok(())
+    }
+
+    /// The largest width or height of an image on this device (maxImageDimension2D).
+    pub fn max_image_dimension_px(&self) -> u32 {
+        self.shared.max_image_dimension_px
     }
 
     pub fn info(&self) -> &DeviceInfo {

@@ -368,12 +368,13 @@ mod tests {
             "{kind}"
         );
         // A binding the pass forgot, one it invented, a push-constant struct of the wrong size.
-        assert!(error(&[image("depth_m"), image("coc_px")], 60).contains("the shader has binding 2 (FieldCurvature"));
+        assert!(error(&[image("depth_m"), image("coc_px"), buffer("FieldCurvature")], 60)
+            .contains("the shader has binding 3 (color_in"));
         let all = [image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("color_in")];
         let extra = error(&[&all[..], &[image("x")]].concat(), 60);
         assert!(extra.contains("declares binding 4 (x"), "{extra}");
-        let push = error(&all, 52);
-        assert_eq!(push, "shader coc: the push constants are 52 bytes in the pass but 60 bytes in the shader");
+        let push = error(&all, 56);
+        assert_eq!(push, "shader coc: the push constants are 56 bytes in the pass but 60 bytes in the shader");
     }
 
     #[test]

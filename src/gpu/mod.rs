@@ -53,12 +53,31 @@ pub enum GpuError {
     /// A dispatch bound resources that do not fit the shader's declared bindings.
     #[error("dispatch of shader {shader}: {message}")]
     Binding { shader: &'static str, message: String },
+    /// A frame this device cannot hold.
+    #[error("a frame of {width}x{height} px does not fit the device {device:?}: {}", too_large(*.width, *.height, *.max_px, *.bytes, *.heap))]
+    TooLarge { device: String, width: u32, height: u32, max_px: u32, bytes: u64, heap: u64 },
+    /// An image beyond the device's largest (maxImageDimension2D), refused before Vulkan sees it.
+    #[error("the image {name:?} of {width}x{height} px does not fit the device {device:?}: its images may be at most {max_px} px on a side")]
+    ImageTooLarge { name: String, device: String, width: u32, height: u32, max_px: u32 },
     /// A recording asked for something no earlier step provided (a bug, not bad input).
     #[error("internal error: {0}")]
     Internal(String),
 }
 
 pub type GpuResult<T> = Result<T, GpuError>;
+
+/// Why a frame does not fit: the side beyond the device's image size, or the memory.
+fn too_large(width: u32, height: u32, max_px: u32, bytes: u64, heap: u64) -> String {
+    if width.max(height) > max_px {
+        format!("its images may be at most {max_px} px on a side")
+    } else {
+        format!(
+            "it needs about {:.1} GB of GPU memory and the device has {:.1} GB",
+            bytes as f64 / 1e9,
+            heap as f64 / 1e9
+        )
+    }
+}
 
 /// Attach the name of the failing call to a raw Vulkan result.
 pub(crate) trait VkContext<T> {

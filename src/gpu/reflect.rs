@@ -311,7 +311,7 @@ mod tests {
     #[test]
     fn reads_the_bindings_and_push_constants_of_the_compiled_shaders() {
         // glsl/coc.comp: depth (image), coc_px (image), the field-curvature buffer, the colour
-        // (image); push block of 15 four-byte fields.
+        // (for the edge resolve); push block of 15 four-byte fields.
         let coc = shader("coc");
         let names: Vec<(u32, BindingKind, &str)> =
             coc.bindings.iter().map(|b| (b.binding, b.kind, b.name.as_str())).collect();

@@ -30,7 +30,14 @@ pub struct GpuBuffer {
 
 impl Gpu {
     /// A storage image that can also be the source and target of copies.
+    /// An image wider or taller than the device allows is an error naming it (creating it
+    /// would be invalid usage).
     pub fn create_image(&self, name: &str, width: u32, height: u32, format: vk::Format) -> GpuResult<GpuImage> {
+        let max_px = self.max_image_dimension_px();
+        if width > max_px || height > max_px {
+            let device = self.info().name.clone();
+            return Err(GpuError::ImageTooLarge { name: name.into(), device, width, height, max_px });
+        }
         let device = self.device();
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)

@@ -32,7 +32,7 @@
 //! previous-frame vectors when the first contains `.Vector.`, else as px toward the next frame, y UP
 //! (x, -y). The conventions used are written to [`ScenePasses::channel_report`].
 
-use super::{Image, IoError, PassSources, ScenePasses, VelocityFormat};
+use super::{Image, IoError, MemoryBudget, PassSources, ScenePasses, VelocityFormat};
 use exr::image::FlatSamples;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -76,8 +76,16 @@ struct ExrFile {
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
+/// How many times the exr crate panicked on a file and the panic became an error (the fuzzing
+/// harness counts them: each is a decoder bug to report).
+pub static DECODER_PANICS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Bytes per pixel that [`load_passes`] allocates beyond the decoded samples: the interleaved
+/// colour (4 f32), depth (1) and velocity (2), and one channel converted to f32 at a time.
+const LOADED_BYTES_PER_PX: u64 = 4 * (4 + 1 + 2 + 1);
+
 impl ExrFile {
-    fn open(path: &Path, what: &str) -> Result<ExrFile, IoError> {
+    fn open(path: &Path, what: &str, budget: &MemoryBudget) -> Result<ExrFile, IoError> {
         let read_err = |source: std::io::Error| {
             if source.kind() == std::io::ErrorKind::NotFound {
                 IoError::NotFound { what: what.into(), path: path.into() }
@@ -94,11 +102,39 @@ impl ExrFile {
             return Err(IoError::NotExr { what: what.into(), path: path.into() });
         }
         drop(file);
-        let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|source| IoError::Exr {
-            what: what.into(),
-            path: path.into(),
-            source,
-        })?;
+        let exr_err = |source| IoError::Exr { what: what.into(), path: path.into(), source };
+        // The headers alone first: the declared sizes against the budget before any pixel
+        // storage is allocated.
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err)?;
+        let mut decoded_bytes = 0u64;
+        let mut largest = (0u64, 0u64);
+        for header in &meta.headers {
+            let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+            let sample_bytes: u64 = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u64).sum();
+            decoded_bytes = decoded_bytes.saturating_add(w.saturating_mul(h).saturating_mul(sample_bytes));
+            budget.check(what, path, w, h, 0)?;
+            if w.saturating_mul(h) > largest.0.saturating_mul(largest.1) {
+                largest = (w, h);
+            }
+        }
+        let loaded = largest.0.saturating_mul(largest.1).saturating_mul(LOADED_BYTES_PER_PX);
+        budget.check(what, path, largest.0, largest.1, decoded_bytes.saturating_add(loaded))?;
+        drop(meta);
+        // The decoder is not ours: should it panic on a malformed file, that is an error about
+        // the file, not the end of the run.
+        let decoded = std::panic::catch_unwind(|| exr::prelude::read_all_flat_layers_from_file(path));
+        let image = match decoded {
+            Ok(result) => result.map_err(exr_err)?,
+            Err(panic) => {
+                DECODER_PANICS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let message = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                return Err(exr_err(exr::error::Error::Invalid(format!("the decoder stopped: {message}").into())));
+            }
+        };
         let dw = image.attributes.display_window;
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();
@@ -209,7 +245,72 @@ fn rgba_with_prefix<'a>(f: &'a ExrFile, p: &str) -> Option<Vec<&'a Chan>> {
     Some(v)
 }
 
-fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+/// The Blender view layers of a file (`L` of `L.Combined.R`, `L.Depth.Z`, `L.Vector.X`), in
+/// the file's order.
+fn view_layers(f: &ExrFile) -> Vec<&str> {
+    let mut layers: Vec<&str> = Vec::new();
+    for c in &f.chans {
+        let layer = [".Combined.R", ".Depth.Z", ".Vector.X"].iter().find_map(|suffix| c.name.strip_suffix(suffix));
+        if let Some(l) = layer.filter(|l| !layers.contains(l)) {
+            layers.push(l);
+        }
+    }
+    layers
+}
+
+/// The view layer every pass is taken from, and the line of the report that says why: the
+/// one asked for, else the one the colour override names, else the first of several.
+fn choose_layer(f: &ExrFile, src: &PassSources) -> Result<(Option<String>, Option<String>), IoError> {
+    let layers = view_layers(f);
+    let list = layers.join(", ");
+    let override_layer = src
+        .color_channels
+        .as_deref()
+        .filter(|o| !o.contains(','))
+        .and_then(|o| layers.iter().find(|l| o.starts_with(&format!("{l}."))).copied());
+    let chosen = match (src.layer.as_deref(), override_layer) {
+        (Some(asked), Some(other)) if asked != other => {
+            return Err(IoError::Layer {
+                path: f.path.clone(),
+                reason: format!(
+                    "the layer {asked} was asked for but the colour override \"{}\" is of layer {other}; passes of two layers are never mixed",
+                    src.color_channels.as_deref().unwrap_or_default()
+                ),
+            })
+        }
+        (Some(asked), _) if !layers.contains(&asked) => {
+            let found = if layers.is_empty() { "none".to_string() } else { list.clone() };
+            return Err(IoError::Layer { path: f.path.clone(), reason: format!("no view layer {asked} (layers: {found})") });
+        }
+        (Some(asked), _) => Some((asked, "asked for")),
+        (None, Some(other)) => Some((other, "the colour override's")),
+        (None, None) if layers.len() > 1 => Some((layers[0], "the first; choose another with a layer option")),
+        (None, None) => layers.first().map(|&l| (l, "the only one")),
+    };
+    Ok(match chosen {
+        None => (None, None),
+        Some((layer, why)) => {
+            let line = format!("view layer: {layer} ({why}; layers in \"{}\": {list})", f.path.display());
+            if layers.len() > 1 && src.layer.is_none() && override_layer.is_none() {
+                log::warn!(
+                    "{} has {} view layers ({list}); every pass is taken from {layer}",
+                    f.path.display(),
+                    layers.len()
+                );
+            }
+            (Some(layer.to_string()), Some(line))
+        }
+    })
+}
+
+/// Whether a channel of `f` is of view layer `layer`: a filter over its channels, true for
+/// all when no layer is chosen or `f` has none.
+fn in_layer<'a>(f: &ExrFile, layer: Option<&'a str>) -> impl Fn(&&Chan) -> bool + 'a {
+    let prefix = layer.filter(|_| !view_layers(f).is_empty()).map(|l| format!("{l}."));
+    move |c: &&Chan| prefix.as_ref().is_none_or(|p| c.name.starts_with(p.as_str()))
+}
+
+fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Found<'a>, IoError> {
     const WHAT: &str = "color";
     if let Some(o) = ovr {
         let rule = format!("override \"{o}\"");
@@ -230,7 +331,7 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
         chans.extend(f.find(&format!("{o}.A")));
         return Ok(Found { chans, rule });
     }
-    for c in &f.chans {
+    for c in f.chans.iter().filter(in_layer(f, layer)) {
         if let Some(layer) = c.name.strip_suffix(".Combined.R") {
             if let Some(chans) = rgba_with_prefix(f, &format!("{layer}.Combined")) {
                 let rule = format!("Blender multilayer {layer}.Combined");
@@ -263,14 +364,14 @@ fn find_color<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoErro
     }
 }
 
-fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<Found<'a>, IoError> {
+fn find_depth<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<Found<'a>, IoError> {
     if let Some(o) = ovr {
         let chans = f.require("depth", o, &[o])?;
         let rule = format!("override \"{o}\"");
         return Ok(Found { chans, rule });
     }
     let found = |c: &'a Chan, rule: &str| Ok(Found { chans: vec![c], rule: rule.into() });
-    if let Some(c) = f.chans.iter().find(|c| c.name.ends_with(".Depth.Z")) {
+    if let Some(c) = f.chans.iter().filter(in_layer(f, layer)).find(|c| c.name.ends_with(".Depth.Z")) {
         return found(c, "Blender <layer>.Depth.Z");
     }
     for n in ["Z", "depth.Z", "depth.R", "depth"] {
@@ -338,10 +439,10 @@ fn forward<'a>(x: &'a Chan, y: &'a Chan) -> Option<Vector<'a>> {
 }
 
 /// Every velocity format whose channel names the file has, in the order tried.
-fn velocity_candidates(f: &ExrFile) -> Vec<Velocity<'_>> {
+fn velocity_candidates<'a>(f: &'a ExrFile, layer: Option<&str>) -> Vec<Velocity<'a>> {
     let mut found = Vec::new();
     let blender = |next, prev, rule: &str| Velocity { next, prev, format: VelocityFormat::Blender, rule: rule.into() };
-    for c in &f.chans {
+    for c in f.chans.iter().filter(in_layer(f, layer)) {
         if let Some(layer) = c.name.strip_suffix(".Vector.X") {
             let n = |s: &str| f.find(&format!("{layer}.Vector.{s}"));
             match (n("Y"), n("Z"), n("W")) {
@@ -385,6 +486,7 @@ fn find_velocity<'a>(
     f: &'a ExrFile,
     ovr: Option<&str>,
     format: VelocityFormat,
+    layer: Option<&str>,
 ) -> Result<Option<Velocity<'a>>, IoError> {
     if let Some(o) = ovr {
         let names = split_list(o);
@@ -431,7 +533,7 @@ fn find_velocity<'a>(
             }
         }));
     }
-    let mut candidates = velocity_candidates(f);
+    let mut candidates = velocity_candidates(f, layer);
     match format {
         VelocityFormat::Auto => {
             let mut formats: Vec<&str> = candidates.iter().map(|v| v.format.name()).collect();
@@ -521,8 +623,8 @@ fn names(chans: &[&Chan]) -> String {
     chans.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ")
 }
 
-fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
-    let found = find_color(f, ovr)?;
+fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>, layer: Option<&str>) -> Result<(Image, Found<'a>), IoError> {
+    let found = find_color(f, ovr, layer)?;
     for c in &found.chans[1..] {
         same_size("color", f, found.chans[0], "color", f, c)?;
     }
@@ -532,21 +634,31 @@ fn color_image<'a>(f: &'a ExrFile, ovr: Option<&str>) -> Result<(Image, Found<'a
 /// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
 /// discovery as [`load_passes`]. Values are returned as stored (NaN/Inf kept).
 pub fn read_exr_rgba(path: &Path) -> Result<Image, IoError> {
-    let f = ExrFile::open(path, "color")?;
-    Ok(color_image(&f, None)?.0)
+    read_exr_rgba_within(path, &MemoryBudget::system())
+}
+
+/// [`read_exr_rgba`] within `budget`.
+pub fn read_exr_rgba_within(path: &Path, budget: &MemoryBudget) -> Result<Image, IoError> {
+    let f = ExrFile::open(path, "color", budget)?;
+    Ok(color_image(&f, None, None)?.0)
 }
 
 /// Reads one channel, by exact (qualified) name, as a 1-channel image, values as stored.
 pub fn read_exr_channel(path: &Path, channel: &str) -> Result<Image, IoError> {
-    let f = ExrFile::open(path, "channel")?;
+    let f = ExrFile::open(path, "channel", &MemoryBudget::system())?;
     let c = f.require("channel", channel, &[channel])?;
     Ok(interleave(&c, 1, 0.0))
 }
 
 /// Opens `path` unless it is `None` or `same`: then the caller reuses its open file.
-fn open_other(path: &Option<PathBuf>, same: &Path, what: &str) -> Result<Option<ExrFile>, IoError> {
+fn open_other(
+    path: &Option<PathBuf>,
+    same: &Path,
+    what: &str,
+    budget: &MemoryBudget,
+) -> Result<Option<ExrFile>, IoError> {
     match path {
-        Some(p) if p != same => ExrFile::open(p, what).map(Some),
+        Some(p) if p != same => ExrFile::open(p, what, budget).map(Some),
         _ => Ok(None),
     }
 }
@@ -562,15 +674,20 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
             allowed: "a positive number of metres per depth unit",
         });
     }
-    let cf = ExrFile::open(&src.color_path, "color")?;
-    let df_own = open_other(&src.depth_path, &src.color_path, "depth")?;
-    let vf_own = open_other(&src.velocity_path, &src.color_path, "velocity")?;
+    let cf = ExrFile::open(&src.color_path, "color", &src.budget)?;
+    let df_own = open_other(&src.depth_path, &src.color_path, "depth", &src.budget)?;
+    let vf_own = open_other(&src.velocity_path, &src.color_path, "velocity", &src.budget)?;
     let df = df_own.as_ref().unwrap_or(&cf);
     let vf = vf_own.as_ref().unwrap_or(&cf);
     let mut report = Vec::new();
 
+    // The view layer, chosen once for every pass.
+    let (layer, layer_line) = choose_layer(&cf, src)?;
+    let layer = layer.as_deref();
+    report.extend(layer_line);
+
     // Color.
-    let (mut color, cfound) = color_image(&cf, src.color_channels.as_deref())?;
+    let (mut color, cfound) = color_image(&cf, src.color_channels.as_deref(), layer)?;
     let c0 = cfound.chans[0];
     let mut color_nan_count = 0u64;
     for v in color.data.iter_mut().filter(|v| !v.is_finite()) {
@@ -591,7 +708,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
     ));
 
     // Depth.
-    let dfound = find_depth(df, src.depth_channel.as_deref())?;
+    let dfound = find_depth(df, src.depth_channel.as_deref(), layer)?;
     let dc = dfound.chans[0];
     same_size("color", &cf, c0, "depth", df, dc)?;
     let mut depth_m = interleave(&dfound.chans, 1, 0.0);
@@ -636,6 +753,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         vf,
         src.velocity_channels.as_deref(),
         src.velocity_format,
+        layer,
     )? {
         Some(v) => {
             let first = v.next.as_ref().or(v.prev.as_ref()).map(|c| c.x).unwrap_or(c0);
@@ -800,6 +918,64 @@ mod tests {
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
         assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("next (-Z, +W)"), "{r}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn view_layers_are_taken_whole_and_said() {
+        let dir = test_dir("read-layers");
+        let path = dir.join("layers.exr");
+        let mut chans = Vec::new();
+        for (layer, colour, depth) in [("Alpha", 0.25, 1.0), ("Beta", 0.75, 5.0)] {
+            for c in ["R", "G", "B"] {
+                chans.push((format!("{layer}.Combined.{c}"), colour));
+            }
+            chans.push((format!("{layer}.Depth.Z"), depth));
+        }
+        let chans: Vec<(&str, f32)> = chans.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+        write(&path, &chans, true);
+        let load = |src: PassSources| load_passes(&src);
+        // None asked: the first, said.
+        let p = load(sources(&path)).unwrap();
+        assert_const(&p.color, &[0.25, 0.25, 0.25, 1.0]);
+        assert_const(&p.depth_m, &[1.0]);
+        let expected = format!(
+            "view layer: Alpha (the first; choose another with a layer option; layers in \"{}\": Alpha, Beta)",
+            path.display()
+        );
+        assert!(p.channel_report.starts_with(&expected), "{}", p.channel_report);
+        // The colour override's layer gives the depth too.
+        let p = load(PassSources { color_channels: Some("Beta.Combined".into()), ..sources(&path) }).unwrap();
+        assert_const(&p.color, &[0.75, 0.75, 0.75, 1.0]);
+        assert_const(&p.depth_m, &[5.0]);
+        assert!(
+            p.channel_report.contains("depth: ") && p.channel_report.contains("Beta.Depth.Z"),
+            "{}",
+            p.channel_report
+        );
+        // Asked for.
+        let p = load(PassSources { layer: Some("Beta".into()), ..sources(&path) }).unwrap();
+        assert_const(&p.depth_m, &[5.0]);
+        assert!(p.channel_report.starts_with("view layer: Beta (asked for;"), "{}", p.channel_report);
+        // Never mixed, never a layer that is not there.
+        let err = load(PassSources {
+            layer: Some("Alpha".into()),
+            color_channels: Some("Beta.Combined".into()),
+            ..sources(&path)
+        })
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "layer: \"{}\": the layer Alpha was asked for but the colour override \"Beta.Combined\" is of layer Beta; passes of two layers are never mixed",
+                path.display()
+            )
+        );
+        let err = load(PassSources { layer: Some("Gamma".into()), ..sources(&path) }).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("layer: \"{}\": no view layer Gamma (layers: Alpha, Beta)", path.display())
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -1,6 +1,6 @@
 //! Writing OpenEXR files (one part, ZIP compression, half or float32 samples).
 
-use super::{write_file_atomically, Image, IoError};
+use super::{Image, IoError};
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
@@ -26,6 +26,11 @@ pub struct ExrWriteOptions {
 
 /// Writes a 4-channel image as channels R, G, B, A.
 pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Result<(), IoError> {
+    super::output::write_file("output", path, &encode_exr_rgba(path, image, opts)?)
+}
+
+/// [`write_exr_rgba`]'s bytes (`path` for messages): the same for the same image and options.
+pub fn encode_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Result<Vec<u8>, IoError> {
     if image.channels != 4 {
         return Err(IoError::WrongChannelCount { path: path.into(), expected: "4 (RGBA)".into(), got: image.channels });
     }
@@ -40,7 +45,7 @@ pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Res
     let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
     let channels: Vec<(&str, &[f32])> =
         ["R", "G", "B", "A"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
-    write_exr_channels(path, image.width, image.height, &channels, opts)
+    encode_exr_channels(path, image.width, image.height, &channels, opts)
 }
 
 /// An EXR text; names (`allow_empty` false) must not be empty.
@@ -59,6 +64,48 @@ pub fn write_exr_channels(
     channels: &[(&str, &[f32])],
     opts: &ExrWriteOptions,
 ) -> Result<(), IoError> {
+    super::output::write_file("output", path, &encode_exr_channels(path, width, height, channels, opts)?)
+}
+
+/// Puts the attributes of a single-part EXR header in the order of their names. The exr crate
+/// writes them in the order of a hash map, which differs from run to run; EXR leaves the order
+/// free, and a permutation keeps the header's length, so the offset table stays valid. Two
+/// runs with the same inputs then write the same bytes. Anything else is left as it is.
+fn sort_header_attributes(bytes: &mut [u8]) {
+    const MULTIPART: u8 = 0x10; // bit 12 of the version field: byte 5, bit 4
+    if bytes.len() < 8 || bytes[5] & MULTIPART != 0 {
+        return;
+    }
+    let mut attributes: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
+    let mut pos = 8;
+    let nul = |from: usize| bytes.get(from..).and_then(|b| b.iter().position(|&c| c == 0)).map(|i| from + i);
+    while bytes.get(pos).is_some_and(|&b| b != 0) {
+        let Some(name_end) = nul(pos) else { return };
+        let Some(type_end) = nul(name_end + 1) else { return };
+        let Some(size) = bytes.get(type_end + 1..type_end + 5) else { return };
+        let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
+        let Some(end) = usize::try_from(size).ok().and_then(|s| (type_end + 5).checked_add(s)) else { return };
+        let Some(attribute) = bytes.get(pos..end) else { return };
+        attributes.push((bytes[pos..name_end].to_vec(), attribute.to_vec()));
+        pos = end;
+    }
+    attributes.sort();
+    let mut at = 8;
+    for (_, attribute) in attributes {
+        bytes[at..at + attribute.len()].copy_from_slice(&attribute);
+        at += attribute.len();
+    }
+}
+
+/// [`write_exr_channels`]'s bytes (`path` for messages): the same for the same channels and
+/// options.
+pub fn encode_exr_channels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: &[(&str, &[f32])],
+    opts: &ExrWriteOptions,
+) -> Result<Vec<u8>, IoError> {
     let invalid = |reason: String| IoError::InvalidImage { path: path.into(), reason };
     if width == 0 || height == 0 || channels.is_empty() {
         return Err(invalid(format!("nothing to write ({width}x{height} px, {} channel(s))", channels.len())));
@@ -121,7 +168,9 @@ pub fn write_exr_channels(
     let image = exr::image::Image::new(ImageAttributes::new(display), layer);
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write().to_buffered(&mut bytes).map_err(|source| IoError::ExrEncode { path: path.into(), source })?;
-    write_file_atomically(path, bytes.get_ref())
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes);
+    Ok(bytes)
 }
 
 #[cfg(test)]
@@ -172,6 +221,45 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// The header's attributes in file order.
+    fn attribute_names(bytes: &[u8]) -> Vec<String> {
+        let mut names = Vec::new();
+        let mut pos = 8;
+        while bytes[pos] != 0 {
+            let name_end = pos + bytes[pos..].iter().position(|&c| c == 0).unwrap();
+            let type_end = name_end + 1 + bytes[name_end + 1..].iter().position(|&c| c == 0).unwrap();
+            let size = i32::from_le_bytes(bytes[type_end + 1..type_end + 5].try_into().unwrap()) as usize;
+            names.push(String::from_utf8_lossy(&bytes[pos..name_end]).into_owned());
+            pos = type_end + 5 + size;
+        }
+        names
+    }
+
+    #[test]
+    fn the_same_image_gives_the_same_bytes() {
+        let dir = test_dir("write-deterministic");
+        let attributes: Vec<(String, String)> = (0..12).map(|i| (format!("realcam/k{i}"), format!("{i}"))).collect();
+        let opts = ExrWriteOptions { attributes, float32: true, ..Default::default() };
+        let path = dir.join("d.exr");
+        // Each encoding hashes its attributes with a new random state: without the sorting
+        // the order differs between any two of them (12! orders).
+        let first = encode_exr_rgba(&path, &ramp(5, 3), &opts).unwrap();
+        for _ in 0..4 {
+            assert_eq!(encode_exr_rgba(&path, &ramp(5, 3), &opts).unwrap(), first);
+        }
+        let names = attribute_names(&first);
+        let mut sorted = names.clone();
+        sorted.sort();
+        assert_eq!(names, sorted);
+        assert!(names.contains(&"realcam/k11".to_string()) && names.contains(&"dataWindow".to_string()), "{names:?}");
+        // Still a valid file with every attribute.
+        std::fs::write(&path, &first).unwrap();
+        let file = read_all_flat_layers_from_file(&path).unwrap();
+        assert_eq!(file.layer_data[0].attributes.other.len(), 12);
+        assert_eq!(read_exr_rgba(&path).unwrap(), ramp(5, 3));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn failed_writes_leave_the_target_untouched() {
         let dir = test_dir("write-fail");
@@ -192,7 +280,11 @@ mod tests {
 
         let nowhere = dir.join("no_such_dir").join("out.exr");
         let err = write_exr_rgba(&nowhere, &ramp(4, 2), &opts).unwrap_err();
-        assert!(err.to_string().contains(&format!("cannot write \"{}\"", nowhere.display())), "{err}");
+        let folder = dir.join("no_such_dir");
+        assert_eq!(
+            err.to_string(),
+            format!("output \"{}\": the folder \"{}\" does not exist", nowhere.display(), folder.display())
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

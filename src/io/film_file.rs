@@ -90,11 +90,9 @@ impl FilmFile {
     }
 
     pub fn parse(text: &str, path: &Path) -> Result<FilmFile, FilmFileError> {
-        let line_at = |pos: usize| text[..pos.min(text.len())].matches('\n').count() + 1;
-        let raw: RawFilm = toml::from_str(text).map_err(|e| FilmFileError::Parse {
-            path: path.to_path_buf(),
-            line: e.span().map_or(0, |s| line_at(s.start)),
-            message: e.message().trim().to_string(),
+        let raw: RawFilm = toml::from_str(text).map_err(|e| {
+            let (line, message) = crate::optics::prescription::toml_error(text, &e);
+            FilmFileError::Parse { path: path.to_path_buf(), line, message }
         })?;
         let line_of = |key: &str| text.lines().position(|l| l.trim_start().starts_with(key)).map_or(0, |i| i + 1);
         let err =

@@ -21,6 +21,9 @@ pub enum LensAnalysisError {
     Prescription(#[from] PrescriptionError),
     #[error("lens file {}: it has no [[surface]] tables to analyze", .path.display())]
     NoSurfaces { path: PathBuf },
+    /// The prescription's focal length is not between 0.01 mm and 1 km: it forms no real image.
+    #[error("lens file {}: the prescription forms no real image (EFL = {} mm)", .path.display(), crate::optics::Num(*.efl_mm))]
+    NoImage { path: PathBuf, efl_mm: f64 },
     /// `f_number`.
     #[error("f-number must be a positive number, got {value}")]
     FNumber { value: f64 },
@@ -97,6 +100,10 @@ pub fn analyze_text(
         Some(value) => return Err(LensAnalysisError::FNumber { value }),
         None => f_number_min.unwrap_or_else(|| prescription.f_number_at_table_stop()),
     };
+    let efl_mm = prescription.paraxial(crate::optics::prescription::LAMBDA_D_NM).efl_mm;
+    if !(efl_mm.is_finite() && (0.01..1e6).contains(&efl_mm)) {
+        return Err(LensAnalysisError::NoImage { path: path.to_path_buf(), efl_mm });
+    }
     let analysis = prescription.analyze(f_number, field_deg);
     Ok(LensReport { analysis, path: path.to_path_buf(), text, is_lens_file })
 }
@@ -179,6 +186,17 @@ mod tests {
 
         let err = analyze(Path::new("/no/such/lens.toml"), None, &[0.0]).unwrap_err();
         assert_eq!(err.to_string(), "lens file /no/such/lens.toml: cannot read it");
+        // Flat glass has no power: no real image, and a message instead of EFL 0 or NaN.
+        let flat = "name = \"x\"\n[[surface]]\nradius_mm = 0\nthickness_mm = 5\nn_d = 1.5\nsemi_diameter_mm = 10\nstop = true\n[[surface]]\nradius_mm = 0\nthickness_mm = 50\nsemi_diameter_mm = 10\n";
+        let err = analyze_text(flat.into(), path, Some(2.0), &[0.0]).unwrap_err();
+        assert!(err.to_string().starts_with("lens file t.toml: the prescription forms no real image (EFL = "), "{err}");
+        for (key, bad, message) in [
+            ("n_d = 1.5", "n_d = 1e12", "n_d = 1e12 must be at most 3 (no optical material has more)"),
+            ("thickness_mm = 5", "thickness_mm = -5", "thickness_mm = -5 must not be negative"),
+        ] {
+            let err = analyze_text(flat.replacen(key, bad, 1), path, None, &[0.0]).unwrap_err();
+            assert!(err.to_string().ends_with(&format!("surface 0: {message}")), "{err}");
+        }
         let err = analyze_text("name = \"x\"\n[[surface]]\nradius_mm = 1\n".into(), path, None, &[0.0]).unwrap_err();
         assert!(matches!(err, LensAnalysisError::Prescription(_)), "{err:?}");
     }

@@ -10,9 +10,10 @@
 //! - [`lens_analysis`]: a lens file's or a prescription's trace, and the lens file its tables make.
 //! - [`lensfun`]: lenses of the lensfun database converted into lens files.
 //!
-//! Both writers write a temporary file next to the target and rename it onto the target
-//! only after a complete, successful write, so a failed write never touches an existing
-//! target.
+//! - [`output`]: every file realcam writes goes through a temporary beside its target, renamed
+//!   onto it only after a complete write of every output of the run, so a failed or interrupted
+//!   run never touches an existing file; targets that are not regular files, or are inputs, are
+//!   refused before any work.
 
 pub mod exr_read;
 pub mod exr_write;
@@ -21,15 +22,14 @@ pub mod flare_lights;
 pub mod lens_analysis;
 pub mod lens_file;
 pub mod lensfun;
+pub mod output;
 pub mod png;
 
-pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba};
-pub use exr_write::{write_exr_channels, write_exr_rgba, ExrWriteOptions};
-pub use png::write_png_srgb;
+pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
+pub use exr_write::{encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrWriteOptions};
+pub use png::{encode_png_srgb, write_png_srgb};
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Every failure of this module. Each names the file involved and, where relevant, the
 /// channel.
@@ -76,6 +76,16 @@ pub enum IoError {
     PngEncode { path: PathBuf, source: image::ImageError },
     #[error("cannot write \"{}\": {source}", .path.display())]
     Write { path: PathBuf, source: std::io::Error },
+    /// The view layer asked for is not in the file, or two would be mixed.
+    #[error("layer: \"{}\": {reason}", .path.display())]
+    Layer { path: PathBuf, reason: String },
+    /// An image larger than the memory budget, refused before anything of its size is allocated.
+    #[error("{what}: \"{}\" declares a {width}x{height} px image{reason}", .path.display())]
+    TooLarge { what: String, path: PathBuf, width: u64, height: u64, reason: String, field: Option<&'static str> },
+    /// An output path refused before any work (see [`output::Outputs::new`]), by the field
+    /// that named it.
+    #[error("{field} \"{}\": {reason}", .path.display())]
+    Output { field: &'static str, path: PathBuf, reason: String },
 }
 
 /// Interleaved f32 image, row-major, top row first (y down), `channels` values per pixel.
@@ -131,6 +141,10 @@ pub struct PassSources {
     pub depth_path: Option<PathBuf>,
     /// None: look in `color_path` if present there, else no velocity.
     pub velocity_path: Option<PathBuf>,
+    /// The view layer (Blender `<layer>.Combined`, `<layer>.Depth`, `<layer>.Vector`) every
+    /// pass is taken from; None: the colour override's, else the file's first (said in the
+    /// report).
+    pub layer: Option<String>,
     /// Override: a layer prefix ("ViewLayer.Combined") or an explicit comma list "R,G,B[,A]".
     pub color_channels: Option<String>,
     /// Override: exact channel name.
@@ -141,6 +155,8 @@ pub struct PassSources {
     pub depth_unit_m: f64,
     /// The user asked for velocity: missing velocity is an error.
     pub require_velocity: bool,
+    /// What reading may allocate; checked against each file's declared size before reading it.
+    pub budget: MemoryBudget,
     /// How the velocity channels are to be read; [`VelocityFormat::Auto`] from their names.
     pub velocity_format: VelocityFormat,
     /// Multiplies the velocity after its format's conversion (1: as the format says).
@@ -201,11 +217,13 @@ impl PassSources {
             color_path: color_path.into(),
             depth_path: None,
             velocity_path: None,
+            layer: None,
             color_channels: None,
             depth_channel: None,
             velocity_channels: None,
             depth_unit_m: 1.0,
             require_velocity: false,
+            budget: MemoryBudget::system(),
             velocity_format: VelocityFormat::Auto,
             velocity_scale: 1.0,
             velocity_flip_y: false,
@@ -214,11 +232,90 @@ impl PassSources {
     }
 }
 
+/// How large an image realcam reads: a limit on its pixels (`--max-pixels`), and the memory
+/// this process may still take (free memory and the address-space limit, `ulimit -v`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemoryBudget {
+    /// Largest image (width x height); None: no limit but memory.
+    pub max_pixels: Option<u64>,
+    /// Bytes reading one image may allocate.
+    pub max_bytes: u64,
+}
+
+impl MemoryBudget {
+    /// No pixel limit; the memory available now ([`available_memory_bytes`]).
+    pub fn system() -> MemoryBudget {
+        MemoryBudget { max_pixels: None, max_bytes: available_memory_bytes() }
+    }
+
+    /// Errors, naming the file and its declared size, unless an image of `width` x `height`
+    /// px whose reading takes `bytes` fits this budget.
+    pub fn check(&self, what: &str, path: &Path, width: u64, height: u64, bytes: u64) -> Result<(), IoError> {
+        let too_large = |reason: String, field| IoError::TooLarge {
+            what: what.into(),
+            path: path.into(),
+            width,
+            height,
+            reason,
+            field,
+        };
+        let pixels = width.saturating_mul(height);
+        if let Some(max) = self.max_pixels.filter(|&max| pixels > max) {
+            return Err(too_large(
+                format!(" ({pixels} pixels), more than the limit of {max} pixels"),
+                Some("max_pixels"),
+            ));
+        }
+        if bytes > self.max_bytes {
+            return Err(too_large(
+                format!(
+                    ": reading it takes {}, more than the {} of memory available (free memory, address-space limit)",
+                    gigabytes(bytes),
+                    gigabytes(self.max_bytes)
+                ),
+                None,
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `bytes` as "12.3 GB" (or MB below a gigabyte).
+fn gigabytes(bytes: u64) -> String {
+    if bytes >= 1_000_000_000 {
+        format!("{:.1} GB", bytes as f64 / 1e9)
+    } else {
+        format!("{:.1} MB", bytes as f64 / 1e6)
+    }
+}
+
+/// The memory this process may still allocate: the free memory (`MemAvailable`), and under an
+/// address-space limit (`ulimit -v`) what is left of it. `u64::MAX` where neither is known.
+pub fn available_memory_bytes() -> u64 {
+    let kb_field = |file: &str, key: &str| {
+        let text = std::fs::read_to_string(file).ok()?;
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        let kb: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
+        Some(kb.saturating_mul(1024))
+    };
+    let free = kb_field("/proc/meminfo", "MemAvailable:");
+    let address_space = std::fs::read_to_string("/proc/self/limits").ok().and_then(|text| {
+        let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+        let limit: u64 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
+        let used = kb_field("/proc/self/status", "VmSize:").unwrap_or(0);
+        Some(limit.saturating_sub(used))
+    });
+    free.into_iter().chain(address_space).min().unwrap_or(u64::MAX)
+}
+
 impl IoError {
     /// The field of [`PassSources`] the error is about, if it is about one.
     pub fn field(&self) -> Option<&'static str> {
         match self {
-            IoError::InvalidArgument { field, .. } | IoError::MissingSetting { field, .. } => Some(field),
+            IoError::InvalidArgument { field, .. }
+            | IoError::Output { field, .. }
+            | IoError::MissingSetting { field, .. } => Some(field),
+            IoError::TooLarge { field, .. } => *field,
             _ => None,
         }
     }
@@ -249,37 +346,6 @@ pub struct ScenePasses {
     pub color_nan_count: u64,
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it onto `path`. On any
-/// failure the temporary file is removed and an existing `path` is left untouched.
-pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path.file_name().ok_or_else(|| IoError::InvalidImage {
-        path: path.to_path_buf(),
-        reason: "the path does not name a file".into(),
-    })?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        IoError::Write { path: path.to_path_buf(), source }
-    })
-}
-
 /// A fresh, empty directory under the system temp dir for one test.
 #[cfg(test)]
 pub(crate) fn test_dir(name: &str) -> PathBuf {
@@ -303,13 +369,13 @@ mod tests {
     }
 
     #[test]
-    fn atomic_write_replaces_and_cleans_up() {
+    fn writes_replace_and_clean_up() {
         let dir = test_dir("atomic");
         let target = dir.join("a.bin");
-        write_file_atomically(&target, b"one").unwrap();
-        write_file_atomically(&target, b"two").unwrap();
+        output::write_file("output", &target, b"one").unwrap();
+        output::write_file("output", &target, b"two").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"two");
-        let err = write_file_atomically(&dir.join("missing/a.bin"), b"x").unwrap_err();
+        let err = output::write_file("output", &dir.join("missing/a.bin"), b"x").unwrap_err();
         assert!(err.to_string().contains("missing/a.bin"), "{err}");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         let _ = std::fs::remove_dir_all(&dir);

@@ -1,6 +1,6 @@
 //! Writing 8-bit sRGB PNG previews.
 
-use super::{write_file_atomically, Image, IoError};
+use super::{Image, IoError};
 use image::ImageEncoder;
 use std::path::Path;
 
@@ -21,6 +21,11 @@ fn to_srgb8(v: f32) -> u8 {
 
 /// Writes a linear image (3 or 4 channels; alpha ignored) as an 8-bit RGB sRGB PNG.
 pub fn write_png_srgb(path: &Path, image: &Image) -> Result<(), IoError> {
+    super::output::write_file("png", path, &encode_png_srgb(path, image)?)
+}
+
+/// [`write_png_srgb`]'s bytes (`path` for messages).
+pub fn encode_png_srgb(path: &Path, image: &Image) -> Result<Vec<u8>, IoError> {
     let n = image.channels as usize;
     if n != 3 && n != 4 {
         return Err(IoError::WrongChannelCount {
@@ -43,7 +48,7 @@ pub fn write_png_srgb(path: &Path, image: &Image) -> Result<(), IoError> {
     image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(&rgb, image.width, image.height, image::ExtendedColorType::Rgb8)
         .map_err(|source| IoError::PngEncode { path: path.into(), source })?;
-    write_file_atomically(path, &bytes)
+    Ok(bytes)
 }
 
 #[cfg(test)]

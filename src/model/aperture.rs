@@ -57,9 +57,26 @@ pub const MASK_SIZE: u32 = 64;
 pub enum ApertureMaskError {
     #[error("aperture image {path}: {message}")]
     Read { path: PathBuf, message: String },
+    /// Larger than the memory budget (checked before decoding).
+    #[error(transparent)]
+    TooLarge(crate::io::IoError),
     #[error("aperture image {path}: the mask is empty (every value is 0 or below)")]
     Empty { path: PathBuf },
 }
+
+impl ApertureMaskError {
+    /// The setting the error is about, if any (`max_pixels`).
+    pub fn field(&self) -> Option<&'static str> {
+        match self {
+            ApertureMaskError::TooLarge(e) => e.field(),
+            _ => None,
+        }
+    }
+}
+
+/// Bytes per pixel an aperture image takes while loaded: the decoded image (at most 4 channels
+/// of 16 bits) and its grey levels with alpha as f32.
+const APERTURE_BYTES_PER_PX: u64 = 8 + 8 + 4;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ApertureMask {
@@ -72,16 +89,35 @@ pub struct ApertureMask {
 
 impl ApertureMask {
     /// Load a PNG (luminance, times alpha if any) or an EXR (the first of A, Y, R, G, B found as
-    /// its colour channels' mean) and resample it, centred, into the square grid.
-    pub fn load(path: &Path) -> Result<ApertureMask, ApertureMaskError> {
+    /// its colour channels' mean) and resample it, centred, into the square grid. Its declared
+    /// size is checked against `budget` before it is decoded.
+    pub fn load(path: &Path, budget: &crate::io::MemoryBudget) -> Result<ApertureMask, ApertureMaskError> {
         let err = |message: String| ApertureMaskError::Read { path: path.to_path_buf(), message };
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         let (w, h, grey) = if is_exr {
-            let img = crate::io::read_exr_rgba(path).map_err(|e| err(e.to_string()))?;
+            let img = crate::io::read_exr_rgba_within(path, budget).map_err(|e| match e {
+                e @ crate::io::IoError::TooLarge { .. } => ApertureMaskError::TooLarge(e),
+                e => err(e.to_string()),
+            })?;
             let grey: Vec<f32> = img.data.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
             (img.width, img.height, grey)
         } else {
-            let img = image::open(path).map_err(|e| err(e.to_string()))?.to_luma_alpha32f();
+            let reader = || {
+                image::ImageReader::open(path)
+                    .map_err(|e| err(e.to_string()))?
+                    .with_guessed_format()
+                    .map_err(|e| err(e.to_string()))
+            };
+            let (w, h) = reader()?.into_dimensions().map_err(|e| err(e.to_string()))?;
+            let (w, h) = (w as u64, h as u64);
+            budget
+                .check("aperture image", path, w, h, w.saturating_mul(h).saturating_mul(APERTURE_BYTES_PER_PX))
+                .map_err(ApertureMaskError::TooLarge)?;
+            let mut reader = reader()?;
+            let mut limits = image::Limits::default();
+            limits.max_alloc = Some(budget.max_bytes);
+            reader.limits(limits);
+            let img = reader.decode().map_err(|e| err(e.to_string()))?.to_luma_alpha32f();
             let grey: Vec<f32> = img.pixels().map(|p| p.0[0] * p.0[1]).collect();
             (img.width(), img.height(), grey)
         };
@@ -160,7 +196,8 @@ mod tests {
 
     #[test]
     fn missing_file_is_named() {
-        let e = ApertureMask::load(Path::new("/nonexistent/iris.png")).unwrap_err().to_string();
+        let budget = crate::io::MemoryBudget::system();
+        let e = ApertureMask::load(Path::new("/nonexistent/iris.png"), &budget).unwrap_err().to_string();
         assert!(e.starts_with("aperture image /nonexistent/iris.png:"), "{e}");
     }
 }

@@ -6,7 +6,7 @@ use crate::io::lens_file::LensFile;
 use crate::model::aperture::ApertureShape;
 use crate::optics::film::FilmCurve;
 use crate::optics::sensor::SensorFit;
-use crate::optics::{OpticsError, Sensor, ThinLens};
+use crate::optics::{Num, OpticsError, Sensor, ThinLens};
 use std::path::Path;
 
 /// Why [`Camera::new`] refused a request. A refused setting is named by its field, with the
@@ -19,7 +19,7 @@ pub enum CameraError {
     #[error("{} is outside what the lens {lens:?} allows ({allowed})", .field.quantity(*.value))]
     OutOfRange { field: CameraField, value: f64, lens: String, allowed: String },
     /// A setting no camera takes.
-    #[error("{} must be {allowed}, got {value}", .field.label())]
+    #[error("{} must be {allowed}, got {}", .field.label(), Num(*.value))]
     Invalid { field: CameraField, value: f64, allowed: &'static str },
 }
 
@@ -45,8 +45,9 @@ pub enum CameraField {
     Blades,
     SphericalAberration,
     CatsEye,
-    MaxCocPx,
+    MaxCoc,
     Grain,
+    BladeRotationDeg,
     BladeCurvature,
     Fps,
     ShutterAngleDeg,
@@ -58,7 +59,7 @@ pub enum CameraField {
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 19] = [
+    pub const ALL: [CameraField; 20] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -68,8 +69,9 @@ impl CameraField {
         CameraField::Blades,
         CameraField::SphericalAberration,
         CameraField::CatsEye,
-        CameraField::MaxCocPx,
+        CameraField::MaxCoc,
         CameraField::Grain,
+        CameraField::BladeRotationDeg,
         CameraField::BladeCurvature,
         CameraField::Fps,
         CameraField::ShutterAngleDeg,
@@ -92,8 +94,9 @@ impl CameraField {
             CameraField::Blades => "blades",
             CameraField::SphericalAberration => "spherical_aberration",
             CameraField::CatsEye => "cats_eye",
-            CameraField::MaxCocPx => "max_coc_px",
+            CameraField::MaxCoc => "max_coc",
             CameraField::Grain => "grain",
+            CameraField::BladeRotationDeg => "blade_rotation_deg",
             CameraField::BladeCurvature => "blade_curvature",
             CameraField::Fps => "fps",
             CameraField::ShutterAngleDeg => "shutter_angle_deg",
@@ -117,8 +120,9 @@ impl CameraField {
             CameraField::Blades => "number of aperture blades",
             CameraField::SphericalAberration => "spherical aberration",
             CameraField::CatsEye => "cat's eye",
-            CameraField::MaxCocPx => "maximum CoC diameter",
+            CameraField::MaxCoc => "maximum CoC diameter",
             CameraField::Grain => "grain",
+            CameraField::BladeRotationDeg => "aperture rotation",
             CameraField::BladeCurvature => "blade curvature",
             CameraField::Fps => "frame rate",
             CameraField::ShutterAngleDeg => "shutter angle",
@@ -132,15 +136,54 @@ impl CameraField {
 
     /// A value of this setting in words, with its unit: `f/2.8`, `focus distance 0.3 m`.
     pub fn quantity(self, value: f64) -> String {
+        let value = Num(value);
         let unit = match self {
             CameraField::FNumber => return format!("f/{value}"),
             CameraField::FocalLengthMm => " mm",
             CameraField::FocusDistanceM => " m",
             CameraField::ShutterS => " s",
-            CameraField::MaxCocPx => " px",
+            CameraField::BladeRotationDeg => " deg",
             _ => "",
         };
         format!("{} {value}{unit}", self.label())
+    }
+}
+
+/// The clamp on the CoC diameter: on the film in mm, so that one camera looks the same at every
+/// resolution, or in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CocLimit {
+    FilmMm(f64),
+    Px(f64),
+}
+
+impl CocLimit {
+    /// 1.2 mm on the film: 64 px of a 1920 px wide full-frame (36 mm) image, the clamp realcam
+    /// had in pixels; a twentieth to a thirtieth of the frame's width on the usual sensors.
+    pub const DEFAULT: CocLimit = CocLimit::FilmMm(1.2);
+
+    /// The clamp in pixels of `pixel_pitch_mm`.
+    pub fn px(self, pixel_pitch_mm: f64) -> f64 {
+        match self {
+            CocLimit::FilmMm(mm) => mm / pixel_pitch_mm,
+            CocLimit::Px(px) => px,
+        }
+    }
+
+    /// The number as given, in its unit.
+    pub fn value(self) -> f64 {
+        match self {
+            CocLimit::FilmMm(v) | CocLimit::Px(v) => v,
+        }
+    }
+}
+
+impl std::fmt::Display for CocLimit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CocLimit::FilmMm(mm) => write!(f, "{} mm on the film", Num(*mm)),
+            CocLimit::Px(px) => write!(f, "{} px", Num(*px)),
+        }
     }
 }
 
@@ -240,8 +283,8 @@ pub struct Camera {
     pub exposure: bool,
     pub vignetting: bool,
     pub film: FilmMode,
-    /// User clamp on |CoC| in pixels.
-    pub max_coc_px: f64,
+    /// Clamp on |CoC| ([`CocLimit::px`] for a frame's pitch).
+    pub max_coc: CocLimit,
     pub bokeh: BokehMode,
     /// How the CoC follows depth.
     pub coc_model: CocModel,
@@ -334,8 +377,8 @@ pub struct CameraRequest {
     pub vignetting: bool,
     /// The filmic curve when None.
     pub film: Option<FilmMode>,
-    /// Clamp on |CoC| in pixels.
-    pub max_coc_px: f64,
+    /// Clamp on |CoC|, on the film or in pixels.
+    pub max_coc: CocLimit,
     /// Allow settings outside the lens's range.
     pub force: bool,
     pub bokeh: BokehMode,
@@ -374,7 +417,8 @@ impl Default for CameraRequest {
     /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
     /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
     /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
-    /// 64 px, tiled bokeh, no grain, lens flare from one stop over saturation.
+    /// 1.2 mm on the film ([`CocLimit::DEFAULT`]), tiled bokeh, no grain, lens flare from one stop
+    /// over saturation.
     fn default() -> Self {
         CameraRequest {
             focal_length_mm: None,
@@ -392,7 +436,7 @@ impl Default for CameraRequest {
             exposure: true,
             vignetting: true,
             film: None,
-            max_coc_px: 64.0,
+            max_coc: CocLimit::DEFAULT,
             force: false,
             bokeh: BokehMode::Tiled,
             coc_model: None,
@@ -462,21 +506,22 @@ impl Camera {
         let out_of_range = |field: CameraField, value: f64, allowed: String| {
             Err(CameraError::OutOfRange { field, value, lens: lens_file.name.clone(), allowed })
         };
+        // What no lens can do (f/0, focus inside the focal length) first: --force cannot help.
+        let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
         if !req.force && !lens_file.ideal {
             if f_number < lens_file.f_number_min - 1e-9 || f_number > lens_file.f_number_max + 1e-9 {
-                let allowed = format!("f/{} to f/{}", lens_file.f_number_min, lens_file.f_number_max);
+                let allowed = format!("f/{} to f/{}", Num(lens_file.f_number_min), Num(lens_file.f_number_max));
                 return out_of_range(CameraField::FNumber, f_number, allowed);
             }
             if req.focus_distance_m < lens_file.focus_min_m {
-                let allowed = format!("closest focus {} m", lens_file.focus_min_m);
+                let allowed = format!("closest focus {} m", Num(lens_file.focus_min_m));
                 return out_of_range(CameraField::FocusDistanceM, req.focus_distance_m, allowed);
             }
             if (focal_length_mm - lens_file.focal_length_mm).abs() > 1e-9 {
-                let allowed = format!("a prime of {} mm", lens_file.focal_length_mm);
+                let allowed = format!("a prime of {} mm", Num(lens_file.focal_length_mm));
                 return out_of_range(CameraField::FocalLengthMm, focal_length_mm, allowed);
             }
         }
-        let lens = thin_lens(lens_file, Some(focal_length_mm), Some(f_number), req.focus_distance_m)?;
         let sensor = Sensor::parse(req.sensor.as_deref().unwrap_or("full-frame"))?;
         let require = |field: CameraField, value: f64, ok: bool, allowed: &'static str| {
             if ok && value.is_finite() {
@@ -507,7 +552,8 @@ impl Camera {
         }
         require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
         require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
-        require(CameraField::MaxCocPx, req.max_coc_px, req.max_coc_px >= 0.0, ">= 0 px")?;
+        let max_coc = req.max_coc.value();
+        require(CameraField::MaxCoc, max_coc, max_coc >= 0.0, "a diameter >= 0 (px, or mm on the film)")?;
         if let Some(c) = req.cats_eye {
             require(CameraField::CatsEye, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
         }
@@ -522,6 +568,9 @@ impl Camera {
             "0 (circular) or 3..32",
         )?;
         require(CameraField::Grain, req.grain, req.grain >= 0.0, "a non-negative number")?;
+        if let Some(r) = req.blade_rotation_deg {
+            require(CameraField::BladeRotationDeg, r, true, "a finite angle in degrees")?;
+        }
         if let Some(c) = req.blade_curvature {
             require(CameraField::BladeCurvature, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
         }
@@ -559,7 +608,7 @@ impl Camera {
             exposure: req.exposure,
             vignetting: req.vignetting && lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
-            max_coc_px: req.max_coc_px,
+            max_coc: req.max_coc,
             bokeh: req.bokeh,
             coc_model: req.coc_model.or(lens_file.coc_model).unwrap_or(if lens_file.ideal {
                 CocModel::Renderer
@@ -696,7 +745,9 @@ mod tests {
         let c = camera(&CameraRequest::default()).unwrap();
         assert_eq!((c.lens.focal_length_mm, c.lens.f_number, c.lens.focus_distance_mm), (50.0, 2.8, 2000.0));
         assert_eq!((c.sensor.width_mm, c.sensor.height_mm, c.sensor_fit), (36.0, 24.0, SensorFit::Horizontal));
-        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc_px), (0.02, 100.0, 160.0, 64.0));
+        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc), (0.02, 100.0, 160.0, CocLimit::FilmMm(1.2)));
+        // 64 px of a 1920 px wide full-frame image.
+        assert!((c.max_coc.px(36.0 / 1920.0) - 64.0).abs() < 1e-12);
         assert!(c.exposure && c.vignetting);
         assert_eq!(c.film, FilmMode::Curve(FilmCurve::default_filmic()));
         assert_eq!((c.bokeh, c.grain, c.seed), (BokehMode::Tiled, 0.0, 0));
@@ -727,9 +778,9 @@ mod tests {
                 "shutter time must be a positive number, got 0",
             ),
             (
-                CameraRequest { max_coc_px: -1.0, ..Default::default() },
-                CameraField::MaxCocPx,
-                "maximum CoC diameter must be >= 0 px, got -1",
+                CameraRequest { max_coc: CocLimit::Px(-1.0), ..Default::default() },
+                CameraField::MaxCoc,
+                "maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1",
             ),
             (
                 CameraRequest { cats_eye: Some(1.5), ..Default::default() },
@@ -750,6 +801,21 @@ mod tests {
                 CameraRequest { grain: -0.5, ..Default::default() },
                 CameraField::Grain,
                 "grain must be a non-negative number, got -0.5",
+            ),
+            (
+                CameraRequest { blade_rotation_deg: Some(f64::NAN), ..Default::default() },
+                CameraField::BladeRotationDeg,
+                "aperture rotation must be a finite angle in degrees, got NaN",
+            ),
+            (
+                CameraRequest { blade_rotation_deg: Some(f64::INFINITY), ..Default::default() },
+                CameraField::BladeRotationDeg,
+                "aperture rotation must be a finite angle in degrees, got inf",
+            ),
+            (
+                CameraRequest { iso: 1e308, nits_per_unit: f64::INFINITY, ..Default::default() },
+                CameraField::NitsPerUnit,
+                "nits per unit must be a positive number, got inf",
             ),
         ];
         for (req, field, message) in cases {
@@ -788,6 +854,26 @@ mod tests {
             assert_eq!(err.to_string(), format!("{what} is outside what the lens {lens} allows ({allowed})"));
             camera(&CameraRequest { force: true, ..req }).unwrap();
         }
+    }
+
+    #[test]
+    fn what_no_lens_can_do_is_refused_without_offering_force() {
+        for req in [
+            CameraRequest { f_number: Some(0.0), ..Default::default() },
+            CameraRequest { f_number: Some(0.0), force: true, ..Default::default() },
+        ] {
+            let err = camera(&req).unwrap_err();
+            assert!(matches!(err, CameraError::Optics(_)), "{err:?}");
+            assert_eq!(err.to_string(), "f-number must be positive, got f/0");
+        }
+        // A lens file's limit of 1e308 is printed as such, not as 309 digits.
+        let mut lens = LensFile::default_lens();
+        lens.f_number_max = 1e308;
+        let err = Camera::new(&lens, &CameraRequest { f_number: Some(1.0), ..Default::default() }).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/1e308)"
+        );
     }
 
     #[test]

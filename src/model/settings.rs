@@ -17,6 +17,20 @@ pub enum SettingError {
     NotASize { text: String },
     #[error("{text:?} is not X,Y,ENERGY[,AREA] (pixels; the energy a sum of scene values over pixels, at least 0)")]
     NotAFlareLight { text: String },
+    #[error("{text:?} is not a diameter in px (64, 64px) or on the film in mm (1.2mm)")]
+    NotACocLimit { text: String },
+}
+
+/// A clamp on the CoC diameter: pixels (`64`, `64px`) or mm on the film (`1.2mm`). The range
+/// is checked where the camera is built.
+pub fn parse_coc_limit(text: &str) -> Result<crate::model::camera::CocLimit, SettingError> {
+    use crate::model::camera::CocLimit;
+    let t = text.trim();
+    let (number, make): (&str, fn(f64) -> CocLimit) = match t.strip_suffix("mm") {
+        Some(n) => (n, CocLimit::FilmMm),
+        None => (t.strip_suffix("px").unwrap_or(t), CocLimit::Px),
+    };
+    number.trim().parse::<f64>().map(make).map_err(|_| SettingError::NotACocLimit { text: text.to_string() })
 }
 
 /// A shutter time in seconds, as a fraction (`1/50`) or a decimal (`0.02`); it must be
@@ -114,6 +128,18 @@ mod tests {
         let err = parse_spherical_aberration("strong").unwrap_err();
         assert!(matches!(err, SettingError::SphericalAberration(_)));
         assert_eq!(err.to_string(), "a number in [-1, 1] or 'uniform'");
+    }
+
+    #[test]
+    fn coc_limits_in_pixels_or_on_the_film() {
+        use crate::model::camera::CocLimit;
+        assert_eq!(parse_coc_limit("64"), Ok(CocLimit::Px(64.0)));
+        assert_eq!(parse_coc_limit(" 64px"), Ok(CocLimit::Px(64.0)));
+        assert_eq!(parse_coc_limit("1.2mm"), Ok(CocLimit::FilmMm(1.2)));
+        assert_eq!(parse_coc_limit("1.2 mm"), Ok(CocLimit::FilmMm(1.2)));
+        for bad in ["", "mm", "1.2cm", "big"] {
+            assert_eq!(parse_coc_limit(bad), Err(SettingError::NotACocLimit { text: bad.into() }), "{bad}");
+        }
     }
 
     #[test]

@@ -6,13 +6,14 @@
 pub enum OpticsError {
     #[error("{name} must be a finite number, got {value}")]
     NotFinite { name: &'static str, value: f64 },
-    #[error("focal length must be positive, got {focal_length_mm} mm")]
+    #[error("focal length must be positive, got {} mm", super::Num(*.focal_length_mm))]
     NonPositiveFocalLength { focal_length_mm: f64 },
-    #[error("f-number must be positive, got f/{f_number}")]
+    #[error("f-number must be positive, got f/{}", super::Num(*.f_number))]
     NonPositiveFNumber { f_number: f64 },
     #[error(
-        "focus distance {focus_distance_mm} mm is not beyond the focal length {focal_length_mm} mm; \
-         a lens can only focus on objects farther away than its focal length"
+        "focus distance {} mm is not beyond the focal length {} mm; \
+         a lens can only focus on objects farther away than its focal length",
+        super::Num(*.focus_distance_mm), super::Num(*.focal_length_mm)
     )]
     FocusInsideFocalLength { focus_distance_mm: f64, focal_length_mm: f64 },
     #[error("pupil magnification (exit / entrance pupil diameter) must be positive, got {pupil_magnification}")]
@@ -180,6 +181,25 @@ mod tests {
 
     fn rel_eq(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol * a.abs().max(b.abs())
+    }
+
+    #[test]
+    fn the_renderers_coc_is_the_pinhole_thin_lens_and_eq_5_3_is_larger_by_v_over_f() {
+        // Scene A's camera: 50 mm at f/2 focused at 2 m. A point at 8 m: the renderers' disc is
+        // A f |u - S| / (u S) with A = f/N = 25 mm: 25 * 50 * 6000 / (8000 * 2000) = 0.46875 mm.
+        let lens = ThinLens::new(50.0, 2.0, 2000.0).unwrap();
+        let renderer = lens.coc_renderer_mm(8000.0);
+        assert!(rel_eq(renderer, 0.46875, 1e-12), "{renderer}");
+        // In front of the focus plane it is negative, exactly 0 at the focus distance.
+        assert!(rel_eq(lens.coc_renderer_mm(1000.0), -25.0 * 50.0 * 1000.0 / (1000.0 * 2000.0), 1e-12));
+        assert_eq!(lens.coc_renderer_mm(2000.0), 0.0);
+        // Eq 5.3 puts the film at v = 1/(1/50 - 1/2000) = 51.282 mm behind an exit pupil of
+        // v / N' with the working f-number N' = N v / f (P = 1): v^2 / N' = v f / N, so the
+        // physical disc is v / f = 2.6% larger in diameter, 5.2% in area.
+        let v = 1.0 / (1.0 / 50.0 - 1.0 / 2000.0);
+        let physical = lens.coc_mm(8000.0);
+        assert!(rel_eq(physical / renderer, v / 50.0, 1e-12), "{physical} / {renderer}");
+        assert!((physical / renderer - 1.02564).abs() < 1e-5);
     }
 
     #[test]

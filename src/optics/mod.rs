@@ -32,3 +32,37 @@ pub use dof::{dof_limits, dof_report, CocCriterion, DofLimits};
 pub use film::FilmCurve;
 pub use lens::{OpticsError, ThinLens};
 pub use sensor::{Sensor, SensorFit};
+
+/// A number as messages print it: as Rust writes it when that is short, in scientific notation
+/// when it is very large or very small (`1e308`, not 309 digits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x.is_finite() && x != 0.0 && !(1e-6..1e9).contains(&x.abs()) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
+    }
+}
+
+#[cfg(test)]
+mod num_tests {
+    use super::Num;
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        assert_eq!(Num(1e308).to_string(), "1e308");
+        assert_eq!(Num(f64::MAX).to_string(), "1.7976931348623157e308");
+        assert_eq!(Num(-2.5e-9).to_string(), "-2.5e-9");
+        for (x, text) in
+            [(0.0, "0"), (2.8, "2.8"), (-50.0, "-50"), (123456789.0, "123456789"), (-1e9, "-1e9"), (f64::NAN, "NaN")]
+        {
+            assert_eq!(Num(x).to_string(), text);
+        }
+        assert_eq!(Num(f64::INFINITY).to_string(), "inf");
+    }
+}

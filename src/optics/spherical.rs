@@ -14,6 +14,11 @@
 //! under-corrected lens (s > 0 behind) gives the background a bright core fading outwards and
 //! the foreground a dark core with a bright rim; over-correction swaps them.
 
+/// The CoC diameter on the film (mm) at which an amount reaches its full strength: 64 px of a
+/// 1920 px wide full-frame image, where it was set; on the film, so that the look does not
+/// change with the resolution.
+pub const FULL_STRENGTH_COC_MM: f64 = 1.2;
+
 /// Largest |s|: at s = -1/3 the rim rays cross (a caustic), so the model stays below it.
 pub const MAX_STRENGTH: f64 = 0.3;
 

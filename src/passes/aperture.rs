@@ -183,10 +183,9 @@ pub fn mask_value(mask: &[f32], uv: [f32; 2]) -> f32 {
     top + (bottom - top) * fy
 }
 
-/// The weight of aperture_weight_at in glsl/include/aperture.glsl: from the shape table (texels
-/// `table`, of half-size `p.shape_radius`) for an integer offset `o`, the general
-/// [`aperture_weight`] otherwise.
-#[allow(clippy::too_many_arguments)]
+/// The weight of aperture_weight_at in glsl/include/aperture.glsl: from the shape table
+/// (`data.shape`, of half-size `p.shape_radius`) for an integer offset `o`, the general
+/// [`aperture_weight`] (with the aperture image `data.mask`) otherwise.
 pub fn aperture_weight_at(
     o: [i32; 2],
     r: f32,
@@ -194,9 +193,9 @@ pub fn aperture_weight_at(
     sample_px: [f32; 2],
     flip: f32,
     ramp: f32,
-    mask: &[f32],
-    table: &[f32],
+    data: &ApertureData,
 ) -> f32 {
+    let (mask, table) = (&data.mask[..], &data.shape[..]);
     let with_mask = mask.first().copied().unwrap_or(0.0) > 0.0 && r > 1.0;
     let in_table = p.shape_radius > 0 && o[0].abs() <= p.shape_radius && o[1].abs() <= p.shape_radius;
     if !in_table || p.cats_eye_per_px > 0.0 || with_mask {

@@ -58,3 +58,17 @@ pub fn buffer_after_compute_write(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier
         .offset(0)
         .size(vk::WHOLE_SIZE)
 }
+
+/// A buffer just zeroed (or set) by `vkCmdFillBuffer`, which compute shaders then read and
+/// update with atomics. Validation layers place the fill in the COPY stage and the spec in
+/// CLEAR: both are in ALL_TRANSFER.
+pub fn buffer_after_fill(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
+    vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .buffer(buffer.buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)
+}

@@ -90,7 +90,7 @@ pub fn gather_exact(
             let flip = if coc_q < 0.0 { -1 } else { 1 };
             let o = [-dx * flip, -dy * flip];
             let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
-            let wgt = aperture_weight_at(o, reach, aperture, sample_px, flip as f32, 1.0, &data.mask, &data.shape)
+            let wgt = aperture_weight_at(o, reach, aperture, sample_px, flip as f32, 1.0, data)
                 * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, aperture);
             if wgt <= 0.0 {
                 continue;
@@ -174,7 +174,7 @@ impl Pass for BokehGather {
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();
         let mut push =
-            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+            GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, f.sa_full_strength_coc_px, input.frame.centre_px);
         let (aperture, data) = ApertureData::new(
             push.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),

@@ -53,7 +53,7 @@ impl CocPush {
         let push = CocPush::new(
             &camera.lens,
             pixel_pitch_mm,
-            camera.max_coc_px,
+            super::scene::coc_clamp_px(camera, pixel_pitch_mm, frame),
             frame.width,
             frame.height,
             frame.centre_px,
@@ -179,8 +179,8 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
         let (qx, qy) = offset(i);
         let c = color.clamped(qx, qy);
         let layer = if w[i as usize] > w_mid { &mut near } else { &mut far };
-        for (sum, &v) in layer.0.iter_mut().zip(c) {
-            *sum += finite_or_zero(v);
+        for (sum, v) in layer.0.iter_mut().zip(c) {
+            *sum += finite_or_zero(*v);
         }
         layer.1 += 1.0;
         layer.2 += w[i as usize];
@@ -195,11 +195,26 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
     if dd <= 1.0e-12 {
         return w_p;
     }
-    let c_p = color.clamped(x, y);
-    let alpha = ((0..3).map(|k| (finite_or_zero(c_p[k]) - c_far[k]) * d[k]).sum::<f32>() / dd).clamp(0.0, 1.0);
+    let c_p: [f32; 3] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
+    // Along the line from the far layer's mean colour to the near one's, the own layer's pixels
+    // span a range of alpha: a near pixel inside it (a textured surface at a hard edge) stays.
+    let own_near = w_p > w_mid;
+    let alpha_of = |c: [f32; 3]| (0..3).map(|k| (c[k] - c_far[k]) * d[k]).sum::<f32>() / dd;
+    let (lo, hi) = (0..9)
+        .filter(|&i| i != 4 && (w[i as usize] > w_mid) == own_near)
+        .map(|i| {
+            let (qx, qy) = offset(i);
+            alpha_of(std::array::from_fn(|k| finite_or_zero(color.clamped(qx, qy)[k])))
+        })
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
+    let alpha_p = alpha_of(c_p);
+    if own_near && alpha_p >= lo && alpha_p <= hi {
+        return w_p;
+    }
+    let alpha = alpha_p.clamp(0.0, 1.0);
     let brightness = |c: [f32; 3]| c.iter().map(|v| v.max(0.0)).sum::<f32>();
     let to_near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
-    if to_near == (w_p > w_mid) {
+    if to_near == own_near {
         w_p
     } else if to_near {
         near.2 / near.1
@@ -277,6 +292,10 @@ impl Pass for Coc {
             camera.lens.f_number,
             camera.lens.focus_distance_mm / 1000.0
         );
+        let why = match f.coc_clamp_note(camera) {
+            Some(note) => format!("{why}; {note}"),
+            None => why,
+        };
         if !f.dof_visible() {
             return Decision::skip(format!(
                 "{why}: every CoC is at most {VISIBLE_COC_PX} px, depth of field is invisible"
@@ -356,5 +375,68 @@ mod tests {
         // Without a table the reciprocal form is used: exactly 0 in focus.
         let plain = CocPush::new(&lens, pitch_mm, 1000.0, 2001, 1, [1000.5, 0.5], None);
         assert_eq!(plain.coc_px_at(2.0, 1500, 0, &[0.0]), 0.0);
+    }
+
+    /// A 7x5 frame: sky (1e10 m, colour 0.1) with an in-focus object (2 m) in columns 0..=2.
+    fn edge_frame(object: impl Fn(u32, u32) -> [f32; 3]) -> (Vec<f32>, Vec<f32>) {
+        let (w, h) = (7u32, 5u32);
+        let mut depth = Vec::new();
+        let mut rgba = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                depth.push(if x <= 2 { 2.0 } else { 1.0e10 });
+                let c = if x <= 2 { object(x, y) } else { [0.1; 3] };
+                rgba.extend([c[0], c[1], c[2], 1.0]);
+            }
+        }
+        (depth, rgba)
+    }
+
+    fn resolve_push(resolve_edges: i32) -> CocPush {
+        let lens = ThinLens::new(50.0, 2.0, 2000.0).unwrap();
+        CocPush { resolve_edges, ..CocPush::new(&lens, 0.01, 1000.0, 7, 5, [3.5, 2.5], None) }
+    }
+
+    #[test]
+    fn an_anti_aliased_fringe_blurs_with_the_surface_whose_light_it_holds() {
+        // A bright in-focus object (10) in front of the sky; the renderer's filter put 30% of its
+        // light into column 3, whose one depth sample hit the sky. Without the resolve that
+        // pixel spreads 3 of the object's 10 over the sky's disc; with it, it stays sharp.
+        let (depth, mut rgba) = edge_frame(|_, _| [10.0; 3]);
+        for y in 0..5 {
+            let i = (y * 7 + 3) * 4;
+            rgba[i..i + 3].copy_from_slice(&[0.3 * 10.0 + 0.7 * 0.1; 3]);
+        }
+        let sky_coc = resolve_push(0).coc_px(1.0e10);
+        assert!(sky_coc > 40.0, "{sky_coc}");
+        let stored = coc_resolved_cpu(&depth, &rgba, &resolve_push(0), &[0.0]);
+        let resolved = coc_resolved_cpu(&depth, &rgba, &resolve_push(1), &[0.0]);
+        for y in 0..5 {
+            assert_eq!(stored[y * 7 + 3], sky_coc);
+            assert!(resolved[y * 7 + 3].abs() < 1e-3, "row {y}: {}", resolved[y * 7 + 3]);
+            // The sky pixel next to it holds only sky light and keeps the sky's CoC.
+            assert_eq!(resolved[y * 7 + 4], sky_coc);
+        }
+        // A dim fringe (the object is as dark as the sky's 1/10): 30% of a dim object does not
+        // outweigh 70% of the sky, so the pixel keeps the sky's depth.
+        let (depth, mut rgba) = edge_frame(|_, _| [0.01; 3]);
+        for y in 0..5 {
+            let i = (y * 7 + 3) * 4;
+            rgba[i..i + 3].copy_from_slice(&[0.3 * 0.01 + 0.7 * 0.1; 3]);
+        }
+        let resolved = coc_resolved_cpu(&depth, &rgba, &resolve_push(1), &[0.0]);
+        assert!((0..5).all(|y| resolved[y * 7 + 3] == sky_coc));
+    }
+
+    #[test]
+    fn a_textured_surface_at_a_hard_edge_keeps_its_depth() {
+        // Stripes on the object (rows alternately 0.8 and 0.15, the sky 0.1): the object's edge
+        // pixels in a dark row look more like the sky than like the object's mean, but their
+        // colour lies within the object's own range, so they keep the object's depth (CoC 0).
+        let (depth, rgba) = edge_frame(|_, y| if y % 2 == 0 { [0.8, 0.35, 0.2] } else { [0.15, 0.08, 0.05] });
+        let resolved = coc_resolved_cpu(&depth, &rgba, &resolve_push(1), &[0.0]);
+        let stored = coc_resolved_cpu(&depth, &rgba, &resolve_push(0), &[0.0]);
+        assert_eq!(resolved, stored);
+        assert!((0..5).all(|y| resolved[y * 7 + 2] == 0.0));
     }
 }

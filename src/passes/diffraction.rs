@@ -165,7 +165,7 @@ impl Pass for Diffraction {
         }
         let settings = PsfTableSettings {
             subpixel: 1,
-            max_radius_px: (0.5 * camera.max_coc_px).ceil().max(1.0) as u32 + 4,
+            max_radius_px: (0.5 * f.max_coc_px).ceil().max(1.0) as u32 + 4,
             ..Default::default()
         };
         let (near_m, far_m) = f.depth_range_m;

@@ -1,7 +1,7 @@
 //! Tiled depth of field: the highlight sprites binned to the level tiles their disks reach, one
 //! invocation per sprite. Shader: glsl/dof_bin.comp.
 
-use super::barriers::buffer_after_compute_write;
+use super::barriers::{buffer_after_compute_write, buffer_after_fill};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_OVERFLOWS, ARGS_SPRITE_COUNT, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use ash::vk;
@@ -95,17 +95,8 @@ pub fn record(
     // bin_counts: zeroed by the transfer fill just before, then counted up with atomics here.
     // sprites, args (the sprite count and this dispatch's size): written by dof_downsample.
     // tile_radius (the tiles' classes): written by dof_classify, already made visible to compute.
-    // The fill is a clear in the specification's newer stage list and a copy in older ones (and
-    // in the validation layer on lavapipe CI): both stages.
     rec.buffer_barriers(&[
-        vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .buffer(b.bin_counts.buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE),
+        buffer_after_fill(b.bin_counts),
         buffer_after_compute_write(b.sprites),
         args_for_indirect(b.args),
     ]);

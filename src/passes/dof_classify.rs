@@ -2,14 +2,13 @@
 //! tiles (copy / exact small gather / a pyramid level), build the tile lists and the indirect
 //! dispatch counts. Shader: glsl/dof_classify.comp.
 
-use super::barriers::buffer_after_compute_write;
+use super::barriers::{buffer_after_compute_write, buffer_after_fill};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_DISPATCH_WORDS, ARGS_LEVEL_GATHER_BASE, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL,
     GROUP_SIZE, LEVELS, LEVEL_RADIUS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use ash::vk;
 
 pub const NAME: &str = "dof_classify";
 
@@ -154,17 +153,7 @@ pub fn record(
     // args: zeroed by the transfer fill just before, then counted up with atomics here:
     //   transfer write -> compute read/write.
     // tile_coc: written by dof_tiles: compute write -> compute read.
-    rec.buffer_barriers(&[
-        vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .buffer(args.buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE),
-        buffer_after_compute_write(tile_coc),
-    ]);
+    rec.buffer_barriers(&[buffer_after_fill(args), buffer_after_compute_write(tile_coc)]);
     let tile_count = (push.tiles[0] * push.tiles[1]) as u32;
     kernel.dispatch(rec, b, push, [tile_count.div_ceil(64), 1, 1])?;
     rec.end_pass();

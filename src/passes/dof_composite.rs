@@ -80,7 +80,7 @@ pub fn sprite_light(s: &[f32], p: [i32; 2], coc_p: f32, ap: &ApertureConstants, 
     let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
     let flip = if coc_q < 0.0 { -1 } else { 1 };
     let o = [(p[0] - centre[0].floor() as i32) * flip, (p[1] - centre[1].floor() as i32) * flip];
-    let w = aperture_weight_at(o, reach, ap, centre, flip as f32, 1.0, &data.mask, &data.shape)
+    let w = aperture_weight_at(o, reach, ap, centre, flip as f32, 1.0, data)
         * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, ap);
     [s[4] * w, s[5] * w, s[6] * w]
 }

@@ -94,16 +94,8 @@ impl Twin for LevelGatherShader {
                         let flip = if coc_q < 0.0 { -1 } else { 1 };
                         let o = [-dx * flip, -dy * flip];
                         let sample = [(p[0] + dx) as f32 + 0.5, (p[1] + dy) as f32 + 0.5];
-                        let w = aperture_weight_at(
-                            o,
-                            reach,
-                            &pc.aperture,
-                            sample,
-                            flip as f32,
-                            1.0,
-                            &data.mask,
-                            &data.shape,
-                        ) * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, &pc.aperture);
+                        let w = aperture_weight_at(o, reach, &pc.aperture, sample, flip as f32, 1.0, &data)
+                            * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, &pc.aperture);
                         if w <= 0.0 {
                             continue;
                         }

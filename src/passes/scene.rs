@@ -18,6 +18,19 @@ pub enum Channel {
     Blue,
 }
 
+/// The clamp on |CoC| (px) for `camera` on `frame` of pixel pitch `pixel_pitch_mm`: the
+/// camera's (`--max-coc`), and at most twice the frame's diagonal, where a disk centred on any
+/// pixel covers the whole frame; larger disks would only size tables and images (the aperture
+/// shape, the diffraction kernels) beyond any offset the frame has.
+pub fn coc_clamp_px(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> f64 {
+    camera.max_coc.px(pixel_pitch_mm).min(frame_cover_px(frame))
+}
+
+/// Twice the diagonal of the frame's data window (px).
+fn frame_cover_px(frame: &Frame) -> f64 {
+    2.0 * (frame.width as f64).hypot(frame.height as f64)
+}
+
 /// The input of every pass's plan.
 pub struct PlanInput<'a> {
     pub frame: &'a Frame,
@@ -35,6 +48,15 @@ pub struct SceneFacts {
     /// Signed CoC range over the frame in pixels: after the user's clamp, with field curvature
     /// (every pixel evaluated) and the longitudinal colour offsets when those are visible.
     pub coc_range_px: (f64, f64),
+    /// The same before the clamp (infinite for depth 0).
+    pub unclamped_coc_range_px: (f64, f64),
+    /// The clamp on |CoC| in pixels of this frame ([`coc_clamp_px`]).
+    pub max_coc_px: f64,
+    /// The clamp is twice the frame's diagonal, not the camera's (smaller) one.
+    pub clamp_is_frame_cover: bool,
+    /// The CoC diameter (px) at which the amount model of spherical aberration reaches its
+    /// full strength ([`crate::optics::spherical::FULL_STRENGTH_COC_MM`] on the film).
+    pub sa_full_strength_coc_px: f64,
     /// Longitudinal colour: the red and blue channels' CoC offsets (px), when the lens has it.
     pub channel_offsets_px: Option<[f64; 2]>,
 }
@@ -45,16 +67,14 @@ impl SceneFacts {
         let pitch_mm = camera.pixel_pitch_mm(dw, dh);
         // The CoC is monotonic in depth, so the nearest and farthest depths bound it.
         let depth_range_m = frame.depth_m.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &d| (lo.min(d), hi.max(d)));
-        let coc_px = |d_m: f32| {
-            let c = camera.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
-            c.clamp(-camera.max_coc_px, camera.max_coc_px)
-        };
+        let max_coc_px = coc_clamp_px(camera, pitch_mm, frame);
+        let coc_px = |d_m: f32| camera.coc_mm(d_m as f64 * 1000.0) / pitch_mm;
         let mut coc_range_px =
             if frame.depth_m.is_empty() { (0.0, 0.0) } else { (coc_px(depth_range_m.0), coc_px(depth_range_m.1)) };
         // With field curvature the CoC also depends on the image height: evaluate every pixel
-        // with the CoC pass's CPU twin.
+        // with the CoC pass's CPU twin, unclamped.
         if let Some(field_curvature) = &camera.field_curvature {
-            let push = coc::CocPush::for_frame(camera, pitch_mm, frame);
+            let push = coc::CocPush { max_coc_px: f32::INFINITY, ..coc::CocPush::for_frame(camera, pitch_mm, frame) };
             let table = coc::table_data(Some(field_curvature));
             coc_range_px = coc::coc_cpu(&frame.depth_m, &push, &table)
                 .iter()
@@ -64,10 +84,37 @@ impl SceneFacts {
         // red and blue disks of those diameters. Visible when one exceeds a pixel.
         let channel_offsets_px = camera.longitudinal_color_coc_px(pitch_mm);
         if let Some([r, b]) = channel_offsets_px.filter(|o| offsets_visible(*o)) {
-            let clamp = |c: f64| c.clamp(-camera.max_coc_px, camera.max_coc_px);
-            coc_range_px = (clamp(coc_range_px.0 + r.min(b).min(0.0)), clamp(coc_range_px.1 + r.max(b).max(0.0)));
+            coc_range_px = (coc_range_px.0 + r.min(b).min(0.0), coc_range_px.1 + r.max(b).max(0.0));
         }
-        SceneFacts { pixel_pitch_mm: pitch_mm, depth_range_m, coc_range_px, channel_offsets_px }
+        let clamp = |c: f64| c.clamp(-max_coc_px, max_coc_px);
+        SceneFacts {
+            pixel_pitch_mm: pitch_mm,
+            depth_range_m,
+            coc_range_px: (clamp(coc_range_px.0), clamp(coc_range_px.1)),
+            unclamped_coc_range_px: coc_range_px,
+            max_coc_px,
+            clamp_is_frame_cover: max_coc_px < camera.max_coc.px(pitch_mm),
+            sa_full_strength_coc_px: crate::optics::spherical::FULL_STRENGTH_COC_MM / pitch_mm,
+            channel_offsets_px,
+        }
+    }
+
+    /// When the clamp changes the picture (some |CoC| beyond it by more than a hundredth of a
+    /// pixel), what it does, in words.
+    pub fn coc_clamp_note(&self, camera: &Camera) -> Option<String> {
+        let (lo, hi) = self.unclamped_coc_range_px;
+        if lo.abs().max(hi.abs()) <= self.max_coc_px + 0.01 {
+            return None;
+        }
+        let clamp = if self.clamp_is_frame_cover {
+            "twice the frame's diagonal".to_string()
+        } else {
+            camera.max_coc.to_string()
+        };
+        Some(format!(
+            "the CoC is clamped to +-{:.2} px ({clamp}): the lens gives {lo:.2} to {hi:.2} px in this frame, so the clamp changes the picture",
+            self.max_coc_px
+        ))
     }
 
     /// The largest |CoC| diameter in the frame (px).

@@ -127,8 +127,14 @@ impl Pass for TiledDof {
         }
         let (w, h) = input.size();
         let max_abs_coc_px = f.max_abs_coc_px();
-        let mut base =
-            TiledDofParams::new(w, h, max_abs_coc_px, &camera.aperture, camera.max_coc_px, input.frame.centre_px);
+        let mut base = TiledDofParams::new(
+            w,
+            h,
+            max_abs_coc_px,
+            &camera.aperture,
+            f.sa_full_strength_coc_px,
+            input.frame.centre_px,
+        );
         (base.aperture, base.aperture_data) = ApertureData::new(
             base.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),

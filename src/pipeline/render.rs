@@ -25,6 +25,15 @@ pub struct Rendered {
     pub profile: Profile,
 }
 
+/// A generous estimate of the GPU memory a render of `frame` takes: the colour (RGBA32F) in and
+/// a new one per planned run (the recorder keeps each until the frame is submitted), depth,
+/// CoC and tile images, and the staging buffers up and down.
+fn estimated_gpu_bytes(frame: &Frame, plan: &Plan) -> u64 {
+    let runs = plan.passes.iter().map(|p| p.run_params().count() as u64).sum::<u64>();
+    let per_px = 16 * (2 + 2 * runs) + 4 + 4 + (16 + 4) + 16;
+    frame.width as u64 * frame.height as u64 * per_px
+}
+
 impl Renderer {
     /// A renderer with the pipelines of the passes `plan` runs.
     pub fn new(gpu: &Gpu, plan: &Plan) -> GpuResult<Renderer> {
@@ -71,6 +80,7 @@ impl Renderer {
             return Err(GpuError::Internal("the plan was made for another pass order".into()));
         }
         let (w, h) = (frame.width, frame.height);
+        self.gpu.check_fits(w, h, estimated_gpu_bytes(frame, plan))?;
         let mut rec = if twin_checks {
             Recorder::with_twin_checks(&self.gpu, "realcam frame")?
         } else {

@@ -46,7 +46,7 @@ fn bench_camera(width: u32, height: u32, bokeh: BokehMode) -> Camera {
         sensor: Some(format!("{}x{}", width as f64 * PIXEL_PITCH_MM, height as f64 * PIXEL_PITCH_MM)),
         blades: Some(7),
         blade_rotation_deg: Some(0.0),
-        max_coc_px: 256.0,
+        max_coc: crate::model::camera::CocLimit::Px(256.0),
         force: true,
         bokeh,
         ..CameraRequest::blur_only().with_lens(50.0, 1.4, 0.5)

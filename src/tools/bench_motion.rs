@@ -41,7 +41,7 @@ pub struct MotionBenchOptions {
 
 fn bench_camera(mode: MotionBlurMode) -> Camera {
     let request = CameraRequest {
-        max_coc_px: 0.0,
+        max_coc: crate::model::camera::CocLimit::Px(0.0),
         force: true,
         fps: Some(24.0),
         shutter_angle_deg: Some(360.0 * SHUTTER_FRAMES),

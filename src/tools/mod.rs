@@ -1,6 +1,6 @@
 //! What measures realcam rather than renders with it: the benchmark (`realcam bench`), the
 //! accuracy report (`realcam accuracy`), image error metrics (`realcam compare`) and the
-//! synthetic test scenes (`realcam synth`).
+//! synthetic test scenes (`realcam synth`); the entry points of the fuzzing harness.
 
 pub mod accuracy;
 pub mod accuracy_flare;
@@ -8,5 +8,6 @@ pub mod bench;
 pub mod bench_flare;
 pub mod bench_motion;
 pub mod error_budget;
+pub mod fuzz;
 pub mod metrics;
 pub mod synth;

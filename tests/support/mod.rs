@@ -80,7 +80,7 @@ pub fn at(rgba: &[f32], w: u32, x: u32, y: u32, c: usize) -> f32 {
 pub fn motion_camera(fps: f64, shutter_frames: f64) -> Camera {
     let request = CameraRequest {
         sensor: Some("9.6x5.4".into()),
-        max_coc_px: 0.0,
+        max_coc: realcam::model::camera::CocLimit::Px(0.0),
         force: true,
         fps: Some(fps),
         shutter_angle_deg: Some(360.0 * shutter_frames),

@@ -24,9 +24,9 @@ pub struct AccuracyArgs {
     /// Aperture blades (0 = circular); default from the lens file.
     #[arg(long)]
     blades: Option<u32>,
-    /// Clamp on the CoC diameter in pixels.
-    #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
-    max_coc_px: f64,
+    /// Clamp on the CoC diameter: on the film in mm (1.2mm) or in pixels (64, 64px).
+    #[arg(long = "max-coc", default_value = "1.2mm")]
+    max_coc: String,
     /// Ray-traced ground truth (EXR of the frame's size): compare the pinhole input and the tiled
     /// and reference depth of field with it (energy-matched, clamped RMSE and its error budget)
     /// instead of running every method against the diffraction reference. The camera's lens
@@ -56,9 +56,11 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     }
     let lens_file = args.lens.lens.load()?;
     // The blur alone, on the geometric reference (the report runs every method).
+    let max_coc = realcam::model::settings::parse_coc_limit(&args.max_coc)
+        .with_context(|| format!("--max-coc {:?}", args.max_coc))?;
     let request = args.lens.request(CameraRequest {
         blades: Some(args.blades.unwrap_or(0)),
-        max_coc_px: args.max_coc_px,
+        max_coc,
         bokeh: BokehMode::Reference,
         ..CameraRequest::blur_only()
     });
@@ -119,7 +121,7 @@ fn read_ground_truth(path: &std::path::Path, frame: &Frame) -> Result<realcam::i
 fn motion(args: &AccuracyArgs, truth: &std::path::Path) -> Result<()> {
     let lens_file = args.lens.lens.load()?;
     let request = args.lens.request(CameraRequest {
-        max_coc_px: 0.0,
+        max_coc: realcam::model::camera::CocLimit::Px(0.0),
         fps: Some(args.fps),
         shutter_angle_deg: Some(args.shutter_angle_deg),
         ..CameraRequest::blur_only()

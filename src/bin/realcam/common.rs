@@ -140,19 +140,10 @@ impl GpuArgs {
     }
 }
 
-/// Writes `text` to a temporary file beside `path`, then renames it onto `path`; a failed
-/// write leaves an existing `path` as it was.
-pub fn write_text_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let tmp = dir.join(format!(".realcam-{}.tmp", std::process::id()));
-    std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
-}
-
-/// [`write_text_atomically`], the error naming the path.
+/// Writes `text` to `path` through a temporary beside it (`realcam::io::output`): a failed
+/// write leaves an existing `path` as it was; a path that is not a regular file is refused.
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    write_text_atomically(path, text).with_context(|| format!("writing {}", path.display()))
+    Ok(realcam::io::output::write_file("output", path, text.as_bytes())?)
 }
 
 /// A progress bar of `len` steps, showing each step's message.

@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 29] = [
+const FLAGS: [(&str, &str); 34] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -19,7 +19,7 @@ const FLAGS: [(&str, &str); 29] = [
     ("blade_curvature", "--blade-curvature"),
     ("spherical_aberration", "--spherical-aberration"),
     ("cats_eye", "--cats-eye"),
-    ("max_coc_px", "--max-coc"),
+    ("max_coc", "--max-coc"),
     ("grain", "--grain"),
     ("flare_threshold", "--flare-threshold"),
     ("flare_lights", "--flare-light"),
@@ -30,6 +30,11 @@ const FLAGS: [(&str, &str); 29] = [
     ("f_number_min", "--f-number-min"),
     ("focus_min_m", "--focus-min-m"),
     ("sensor_diagonal_mm", "--sensor-diagonal-mm"),
+    ("output", "--output"),
+    ("png", "--png"),
+    ("trace", "--trace"),
+    ("max_pixels", "--max-pixels"),
+    ("blade_rotation_deg", "--blade-rotation"),
     ("fps", "--fps"),
     ("shutter_angle_deg", "--shutter-angle"),
     ("shutter_ramp", "--shutter-curve"),
@@ -72,6 +77,12 @@ impl FieldError for IoError {
 }
 
 impl FieldError for realcam::io::lensfun::LensfunError {
+    fn field_name(&self) -> Option<&'static str> {
+        self.field()
+    }
+}
+
+impl FieldError for realcam::model::aperture::ApertureMaskError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()
     }
@@ -127,8 +138,14 @@ mod tests {
     fn errors_show_the_flag() {
         let lens = realcam::io::lens_file::LensFile::default_lens();
         let camera = |req| realcam::model::camera::Camera::new(&lens, &req).name_flags().map(|_| ()).unwrap_err();
-        let req = realcam::model::camera::CameraRequest { max_coc_px: -1.0, ..Default::default() };
-        assert_eq!(camera(req).to_string(), "maximum CoC diameter must be >= 0 px, got -1 (--max-coc)");
+        let req = realcam::model::camera::CameraRequest {
+            max_coc: realcam::model::camera::CocLimit::Px(-1.0),
+            ..Default::default()
+        };
+        assert_eq!(
+            camera(req).to_string(),
+            "maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)"
+        );
         let req = realcam::model::camera::CameraRequest { f_number: Some(1.0), ..Default::default() };
         assert_eq!(
             camera(req).to_string(),

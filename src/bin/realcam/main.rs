@@ -68,6 +68,8 @@ enum Command {
 }
 
 fn main() {
+    // First, before any thread starts: SIGINT/SIGTERM remove the temporary outputs.
+    realcam::io::output::remove_temporaries_on_signals();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result = match cli.command {
@@ -82,7 +84,36 @@ fn main() {
         Command::Synth { out } => synth::run(&out),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_text(&e));
         std::process::exit(1);
+    }
+}
+
+/// An error and its causes, each said once: a cause whose text the message already holds
+/// (an error that prints its source, as io and exr errors do) is left out.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let s = cause.to_string();
+        if s.is_empty() || text.contains(&s) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&s);
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn each_cause_is_said_once() {
+        let io = std::io::Error::other("it is a directory");
+        let e = anyhow::Error::new(realcam::io::IoError::Read { what: "color".into(), path: "d".into(), source: io });
+        assert_eq!(super::error_text(&e), "color: cannot read \"d\": it is a directory");
+        let e = anyhow::anyhow!("invalid: reference to missing bytes").context("decoding x.exr");
+        assert_eq!(super::error_text(&e), "decoding x.exr: invalid: reference to missing bytes");
     }
 }

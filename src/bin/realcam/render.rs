@@ -1,16 +1,17 @@
 //! `realcam render`: color + depth (+ velocity) passes through a camera.
 
-use crate::common::{write_text_atomically, GpuArgs, LensArgs};
+use crate::common::{GpuArgs, LensArgs};
 use crate::flags::NameFlags;
 use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use realcam::io::{self, DepthKind, ExrWriteOptions, Image, PassSources};
+use realcam::io::output::Outputs;
+use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
-use realcam::model::settings::{parse_flare_light, parse_shutter_s, parse_spherical_aberration};
+use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
 use realcam::pipeline::render::Renderer;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum FilmArg {
@@ -142,9 +143,10 @@ pub struct RenderArgs {
     /// Do not apply natural (cos^4) vignetting.
     #[arg(long = "no-vignetting")]
     no_vignetting: bool,
-    /// Clamp on the CoC diameter in pixels.
-    #[arg(long = "max-coc", default_value_t = CameraRequest::default().max_coc_px)]
-    max_coc_px: f64,
+    /// Clamp on the CoC diameter: on the film in mm (1.2mm, the same look at every resolution)
+    /// or in pixels (64, 64px). A clamp that changes the picture is said.
+    #[arg(long = "max-coc", default_value = "1.2mm")]
+    max_coc: String,
     #[command(flatten)]
     flare: FlareArgs,
     /// What the depth values measure.
@@ -153,6 +155,10 @@ pub struct RenderArgs {
     /// Metres per depth unit in the file (0.01 for centimetres).
     #[arg(long = "depth-unit", default_value_t = PassSources::default().depth_unit_m)]
     depth_unit_m: f64,
+    /// The view layer of a multilayer EXR every pass is taken from (Blender: ViewLayer);
+    /// default: the colour override's, else the first (said in --explain and a warning).
+    #[arg(long)]
+    layer: Option<String>,
     /// Color channel override: a layer prefix (ViewLayer.Combined) or a list "R,G,B[,A]".
     #[arg(long = "color-channels")]
     color_channels: Option<String>,
@@ -162,6 +168,10 @@ pub struct RenderArgs {
     /// Velocity channel override: "x,y" or Blender "X,Y,Z,W".
     #[arg(long = "velocity-channels")]
     velocity_channels: Option<String>,
+    /// Refuse an input or aperture image larger than this many pixels (width x height); the
+    /// memory available is checked in any case.
+    #[arg(long = "max-pixels")]
+    max_pixels: Option<u64>,
     /// Output EXR.
     #[arg(short, long)]
     output: PathBuf,
@@ -231,6 +241,7 @@ impl RenderArgs {
             }
             None => None,
         };
+        let max_coc = parse_coc_limit(&self.max_coc).with_context(|| format!("--max-coc {:?}", self.max_coc))?;
         let request = self.lens.request(self.motion.request(CameraRequest {
             shutter_s,
             iso: self.iso,
@@ -244,7 +255,7 @@ impl RenderArgs {
             exposure: !self.no_exposure,
             vignetting: !self.no_vignetting,
             film: Some(film),
-            max_coc_px: self.max_coc_px,
+            max_coc,
             bokeh: self.bokeh.into(),
             grain: self.grain,
             seed: self.seed,
@@ -255,9 +266,32 @@ impl RenderArgs {
         })?);
         let mut camera = Camera::new(&lens_file, &request).name_flags()?;
         if let Some(path) = &self.aperture_image {
-            camera.aperture_mask = Some(realcam::model::aperture::ApertureMask::load(path)?);
+            camera.aperture_mask =
+                Some(realcam::model::aperture::ApertureMask::load(path, &self.budget()).name_flags()?);
         }
         Ok(camera)
+    }
+
+    /// The outputs, checked against each other and the inputs and reserved, before any work.
+    fn outputs(&self) -> Result<Outputs> {
+        let mut outputs: Vec<(&'static str, &Path)> = vec![("output", &self.output)];
+        outputs.extend(self.png.as_deref().map(|p| ("png", p)));
+        outputs.extend(self.trace.as_deref().map(|p| ("trace", p)));
+        let inputs = [
+            ("color pass", Some(self.color.as_path())),
+            ("depth pass", self.depth.as_deref()),
+            ("velocity pass", self.velocity.as_deref()),
+            ("aperture image", self.aperture_image.as_deref()),
+            ("lens file", self.lens.lens.lens.as_deref()),
+            ("film file", self.film_file.as_deref()),
+        ];
+        let inputs: Vec<(&'static str, &Path)> = inputs.into_iter().filter_map(|(w, p)| Some((w, p?))).collect();
+        Outputs::new(&outputs, &inputs).name_flags()
+    }
+
+    /// What reading an image may take.
+    fn budget(&self) -> MemoryBudget {
+        MemoryBudget { max_pixels: self.max_pixels, ..MemoryBudget::system() }
     }
 
     /// Where the passes are, as these flags say.
@@ -266,17 +300,20 @@ impl RenderArgs {
             color_path: self.color.clone(),
             depth_path: self.depth.clone(),
             velocity_path: self.velocity.clone(),
+            layer: self.layer.clone(),
             color_channels: self.color_channels.clone(),
             depth_channel: self.depth_channel.clone(),
             velocity_channels: self.velocity_channels.clone(),
             depth_unit_m: self.depth_unit_m,
             require_velocity: self.velocity.is_some(),
+            budget: self.budget(),
             ..PassSources::default()
         })
     }
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let mut outputs = args.outputs()?;
     let camera = args.camera()?;
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
@@ -286,16 +323,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("inputs:\n{}", indent(&channel_report));
         eprintln!("{}", plan.explain());
     }
+    if let Some(warning) = &plan.coc_clamp_warning {
+        let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
+        eprintln!("warning: {warning}{hint}");
+    }
 
     let gpu = args.gpu.open()?;
     let renderer = Renderer::new(&gpu, &plan)?;
     let rendered = renderer.render(&frame, &plan, false)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
-    }
-    if let Some(trace) = &args.trace {
-        write_text_atomically(trace, &rendered.profile.chrome_trace_json())
-            .with_context(|| format!("writing the trace {}", trace.display()))?;
     }
     if gpu.validation_message_count() > 0 {
         bail!("{} Vulkan validation messages (see above)", gpu.validation_message_count());
@@ -308,11 +345,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         data_origin: frame.data_origin,
         attributes: camera.attributes(),
     };
-    io::write_exr_rgba(&args.output, &image, &exr_options)?;
-    eprintln!("wrote {}", args.output.display());
+    // Every output to its temporary first; renamed together only when all were written.
+    outputs.write("output", &io::encode_exr_rgba(&args.output, &image, &exr_options)?)?;
     if let Some(png) = &args.png {
-        io::write_png_srgb(png, &image)?;
-        eprintln!("wrote {}", png.display());
+        outputs.write("png", &io::encode_png_srgb(png, &image)?)?;
+    }
+    if args.trace.is_some() {
+        outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
+    }
+    outputs.commit()?;
+    for path in [Some(&args.output), args.png.as_ref(), args.trace.as_ref()].into_iter().flatten() {
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }

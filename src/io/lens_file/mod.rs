@@ -2,6 +2,7 @@
 //! the line. The full format (aberration tables, prescriptions) grows with the lens model; the
 //! fields here are what the camera pipeline uses today.
 
+use crate::optics::Num;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -356,6 +357,17 @@ impl LensFile {
         )
     }
 
+    /// Whether `n` is an f-number this lens has (1% either way for rounding): the f-number at
+    /// which its blur tables or its spherical aberration were measured must be, or scaling them
+    /// to the lens's own f-numbers would blow them up.
+    fn is_own_f_number(&self, n: f64) -> bool {
+        n.is_finite() && n >= 0.99 * self.f_number_min && n <= 1.01 * self.f_number_max
+    }
+
+    fn f_number_range(&self) -> String {
+        format!("f/{} to f/{}", Num(self.f_number_min), Num(self.f_number_max))
+    }
+
     pub fn load(path: &Path) -> Result<LensFile, LensFileError> {
         let text =
             std::fs::read_to_string(path).map_err(|source| LensFileError::Read { path: path.to_path_buf(), source })?;
@@ -379,8 +391,8 @@ impl LensFile {
 
     pub fn parse(text: &str, path: &Path) -> Result<LensFile, LensFileError> {
         let lens: LensFile = toml::from_str(text).map_err(|e| {
-            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-            LensFileError::Parse { path: path.to_path_buf(), line, message: e.message().to_string() }
+            let (line, message) = crate::optics::prescription::toml_error(text, &e);
+            LensFileError::Parse { path: path.to_path_buf(), line, message }
         })?;
         lens.validate(path, text)?;
         Ok(lens)
@@ -410,6 +422,10 @@ impl LensFile {
                     ),
                 );
             }
+            // What each table may hold: distortion in percent; lengths on the film within a
+            // tenth of the focal length, as for longitudinal colour; blur lengths not negative;
+            // relative illumination as [[tables.vignetting]] takes it.
+            let tenth_mm = 0.1 * self.focal_length_mm;
             for (key, table) in t.columns() {
                 if let Some(v) = table {
                     if v.len() != h.len() {
@@ -418,8 +434,20 @@ impl LensFile {
                             format!("tables.{key} has {} values but image_height_mm has {}", v.len(), h.len()),
                         );
                     }
-                    if let Some(x) = v.iter().find(|x| !(x.is_finite() && x.abs() < 50.0)) {
-                        return at(key, format!("tables.{key} value {x} is out of range (-50..50 percent)"));
+                    let (ok, allowed): (Box<dyn Fn(f64) -> bool>, String) = match key {
+                        "relative_illumination" => (Box::new(|x| x > 0.0 && x <= 2.0), "in (0, 2]".into()),
+                        "tangential_blur_mm" | "sagittal_blur_mm" => (
+                            Box::new(move |x| (0.0..tenth_mm).contains(&x)),
+                            format!("from 0 to {} mm, a tenth of the focal length", Num(tenth_mm)),
+                        ),
+                        "field_curvature_mm" | "coma_mm" => (
+                            Box::new(move |x| x.abs() < tenth_mm),
+                            format!("-{0}..{0} mm, a tenth of the focal length", Num(tenth_mm)),
+                        ),
+                        _ => (Box::new(|x| x.abs() < 50.0), "-50..50 percent".into()),
+                    };
+                    if let Some(x) = v.iter().find(|x| !(x.is_finite() && ok(**x))) {
+                        return at(key, format!("tables.{key} value {} is out of range ({allowed})", Num(*x)));
                     }
                 }
             }
@@ -463,10 +491,15 @@ impl LensFile {
                     ));
                 }
             }
-            if let Some(n0) = t.at_f_number {
-                if !(n0.is_finite() && n0 > 0.0) {
-                    return at("at_f_number", format!("tables.at_f_number = {n0} must be a positive f-number"));
-                }
+            if let Some(n0) = t.at_f_number.filter(|&n0| !self.is_own_f_number(n0)) {
+                return at(
+                    "at_f_number",
+                    format!(
+                        "tables.at_f_number = {} must be an f-number of the lens ({})",
+                        Num(n0),
+                        self.f_number_range()
+                    ),
+                );
             }
         }
         let positive = [
@@ -478,11 +511,21 @@ impl LensFile {
         ];
         for (key, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return bad(format!("{key} = {value} must be a positive number"));
+                return bad(format!("{key} = {} must be a positive number", Num(value)));
             }
         }
         if self.f_number_max < self.f_number_min {
-            return bad(format!("f_number_max = {} is below f_number_min = {}", self.f_number_max, self.f_number_min));
+            return bad(format!(
+                "f_number_max = {} is below f_number_min = {}",
+                Num(self.f_number_max),
+                Num(self.f_number_min)
+            ));
+        }
+        if !self.aperture.rotation_deg.is_finite() {
+            return bad(format!(
+                "aperture.rotation_deg = {} must be a finite angle in degrees",
+                self.aperture.rotation_deg
+            ));
         }
         if !(self.transmittance > 0.0 && self.transmittance <= 1.0) {
             return bad(format!("transmittance = {} must be in (0, 1]", self.transmittance));
@@ -512,10 +555,11 @@ impl LensFile {
                     l.rim_mm
                 ));
             }
-            if !(l.at_f_number.is_finite() && l.at_f_number > 0.0) {
+            if !self.is_own_f_number(l.at_f_number) {
                 return bad(format!(
-                    "longitudinal_spherical_aberration.at_f_number = {} must be a positive f-number",
-                    l.at_f_number
+                    "longitudinal_spherical_aberration.at_f_number = {} must be an f-number of the lens ({})",
+                    Num(l.at_f_number),
+                    self.f_number_range()
                 ));
             }
         }
@@ -698,6 +742,72 @@ mod tests {
         assert_eq!(err("halo_fraction = 0.9"), "lens file f.toml: flare.halo_fraction = 0.9 must be in [0, 0.5]");
         assert_eq!(err("halo_radius_mm = -1"), "lens file f.toml: flare.halo_radius_mm = -1 must be a positive length");
         assert!(err("halo = 1").contains("line 10"), "{}", err("halo = 1"));
+    }
+
+    #[test]
+    fn every_table_has_its_own_range_and_unit() {
+        let cases = [
+            (
+                "relative_illumination = [1, 0.5, -0.2]",
+                "tables.relative_illumination value -0.2 is out of range (in (0, 2])",
+            ),
+            (
+                "relative_illumination = [1, 2.5, 1]",
+                "tables.relative_illumination value 2.5 is out of range (in (0, 2])",
+            ),
+            ("coma_mm = [0, 49, 0]", "tables.coma_mm value 49 is out of range (-5..5 mm, a tenth of the focal length)"),
+            (
+                "field_curvature_mm = [0, -6, 0]",
+                "tables.field_curvature_mm value -6 is out of range (-5..5 mm, a tenth of the focal length)",
+            ),
+            (
+                "tangential_blur_mm = [0, 0.01, -0.01]",
+                "tables.tangential_blur_mm value -0.01 is out of range (from 0 to 5 mm, a tenth of the focal length)",
+            ),
+            (
+                "sagittal_blur_mm = [0, 49, 0]",
+                "tables.sagittal_blur_mm value 49 is out of range (from 0 to 5 mm, a tenth of the focal length)",
+            ),
+            (
+                "distortion_percent = [0, 1e300, 0]",
+                "tables.distortion_percent value 1e300 is out of range (-50..50 percent)",
+            ),
+        ];
+        for (line, message) in cases {
+            let err = LensFile::parse(&format!("{HEAD}{line}\n"), Path::new("t.toml")).unwrap_err().to_string();
+            assert_eq!(err, format!("lens file t.toml, line 11: {message}"));
+        }
+        let err = LensFile::parse(&format!("{HEAD}at_f_number = 1e308\ncoma_mm = [0, 1, 2]\n"), Path::new("t.toml"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "lens file t.toml, line 11: tables.at_f_number = 1e308 must be an f-number of the lens (f/1.4 to f/16)"
+        );
+        let ok = format!("{HEAD}relative_illumination = [1, 1.1, 0.4]\ncoma_mm = [0, -4.9, 4.9]\n");
+        LensFile::parse(&ok, Path::new("t.toml")).unwrap();
+    }
+
+    #[test]
+    fn bad_values_and_characters_are_named() {
+        let head = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n[aperture]\nblades = 9\n";
+        for (value, shown) in [("nan", "NaN"), ("inf", "inf"), ("-inf", "-inf")] {
+            let err = LensFile::parse(&format!("{head}rotation_deg = {value}\n"), Path::new("r.toml")).unwrap_err();
+            assert_eq!(
+                err.to_string(),
+                format!("lens file r.toml: aperture.rotation_deg = {shown} must be a finite angle in degrees")
+            );
+        }
+        let err = LensFile::parse(&format!("{head}# a comment \0 with NUL\n"), Path::new("n.toml")).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "lens file n.toml, line 9: control character U+0000 is not allowed in a TOML file, not even in a comment"
+        );
+        let big = head
+            .replace("f_number_max = 16", "f_number_max = 1e308")
+            .replace("f_number_min = 1.4", "f_number_min = inf");
+        let err = LensFile::parse(&big, Path::new("b.toml")).unwrap_err();
+        assert_eq!(err.to_string(), "lens file b.toml: f_number_min = inf must be a positive number");
     }
 
     #[test]

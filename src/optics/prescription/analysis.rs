@@ -45,8 +45,9 @@ impl Prescription {
                 r6 += l * h2 * h2;
             }
         }
+        // NaN (no fit) when fewer than two zones pass or the system is singular.
         let det = s44 * s66 - s46 * s46;
-        let (lsa_a, lsa_b) = if det.abs() > 0.0 {
+        let (lsa_a, lsa_b) = if det.abs() > 1e-12 * (s44 * s66).abs() && det.is_finite() {
             ((r4 * s66 - r6 * s46) / det, (s44 * r6 - s46 * r4) / det)
         } else {
             (f64::NAN, f64::NAN)
@@ -436,11 +437,12 @@ impl fmt::Display for LensAnalysis {
                 }
             )?;
         }
-        writeln!(
-            f,
-            "  fit LSA = {:.4e} h^2 + {:.4e} h^4",
-            self.lsa_h2_coefficient_per_mm, self.lsa_h4_coefficient_per_mm3
-        )?;
+        let (a, b) = (self.lsa_h2_coefficient_per_mm, self.lsa_h4_coefficient_per_mm3);
+        if a.is_finite() && b.is_finite() {
+            writeln!(f, "  fit LSA = {a:.4e} h^2 + {b:.4e} h^4")?;
+        } else {
+            writeln!(f, "  fit LSA: too few unclipped zones to fit")?;
+        }
         let lc = &self.longitudinal_color;
         writeln!(
             f,

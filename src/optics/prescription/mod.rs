@@ -35,7 +35,7 @@ pub use analysis::{
     LsaSample,
 };
 pub use paraxial::{Paraxial, RayMatrix};
-pub use parse::SurfaceSpec;
+pub use parse::{toml_error, SurfaceSpec};
 pub use trace::{Ray, RayFailure};
 
 /// Fraunhofer F line (hydrogen, blue), nm.

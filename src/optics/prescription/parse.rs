@@ -4,6 +4,7 @@
 use serde::Deserialize;
 
 use super::{Prescription, PrescriptionError, Surface};
+use crate::optics::Num;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -20,6 +21,9 @@ fn one() -> f64 {
     1.0
 }
 
+/// The longest thickness or semi-diameter a surface may have (10 m).
+const MAX_LENGTH_MM: f64 = 10_000.0;
+
 /// One `[[surface]]` table as written in a prescription or lens file (not yet validated).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -33,6 +37,24 @@ pub struct SurfaceSpec {
     pub semi_diameter_mm: f64,
     #[serde(default)]
     pub stop: bool,
+}
+
+/// The 1-based line and the message of a TOML error in `text`. Where the parser gives no
+/// message (a control character such as NUL, even in a comment), the message names it.
+pub fn toml_error(text: &str, e: &toml::de::Error) -> (usize, String) {
+    let line = e.span().map_or(0, |s| line_of(text, s.start));
+    let message = e.message().trim();
+    if !message.is_empty() {
+        return (line, message.to_string());
+    }
+    let control = text.char_indices().find(|(_, c)| c.is_control() && !matches!(c, '\t' | '\n' | '\r'));
+    match control {
+        Some((at, c)) => (
+            line_of(text, at),
+            format!("control character U+{:04X} is not allowed in a TOML file, not even in a comment", c as u32),
+        ),
+        None => (line, "invalid TOML".to_string()),
+    }
 }
 
 /// 1-based line of byte offset `pos` in `text`.
@@ -60,10 +82,9 @@ impl Prescription {
     /// `radius_mm` (0 or `inf` = flat), `thickness_mm`, `n_d` (default 1), `v_d` (default 0),
     /// `semi_diameter_mm` and `stop` (default false).
     pub fn parse_toml(text: &str, path: &str) -> Result<Prescription, PrescriptionError> {
-        let raw: RawFile = toml::from_str(text).map_err(|e| PrescriptionError::Toml {
-            path: path.to_string(),
-            line: e.span().map(|s| line_of(text, s.start)).unwrap_or(0),
-            message: e.message().trim().to_string(),
+        let raw: RawFile = toml::from_str(text).map_err(|e| {
+            let (line, message) = toml_error(text, &e);
+            PrescriptionError::Toml { path: path.to_string(), line, message }
         })?;
         Self::from_specs(&raw.name, &raw.surfaces, text, path)
     }
@@ -105,8 +126,26 @@ impl Prescription {
             if s.n_d < 1.0 {
                 return Err(invalid(i, format!("n_d = {} must be >= 1", s.n_d)));
             }
-            if s.v_d < 0.0 {
-                return Err(invalid(i, format!("v_d = {} must be >= 0", s.v_d)));
+            // Beyond 3 no glass or crystal refracts visible light (diamond 2.42, rutile 2.9).
+            if s.n_d > 3.0 {
+                return Err(invalid(
+                    i,
+                    format!("n_d = {} must be at most 3 (no optical material has more)", Num(s.n_d)),
+                ));
+            }
+            if s.thickness_mm < 0.0 {
+                return Err(invalid(i, format!("thickness_mm = {} must not be negative", Num(s.thickness_mm))));
+            }
+            // Lengths beyond 10 m are no camera lens and overflow the ray algebra.
+            for (key, v) in [("thickness_mm", s.thickness_mm), ("semi_diameter_mm", s.semi_diameter_mm)] {
+                if v > MAX_LENGTH_MM {
+                    return Err(invalid(i, format!("{key} = {} must be at most {MAX_LENGTH_MM} mm", Num(v))));
+                }
+            }
+            // Abbe numbers of real glasses lie between about 15 and 100; below 1 the dispersion
+            // (n_d - 1) / v_d would exceed any material's, and near 0 it overflows.
+            if s.v_d < 0.0 || (s.v_d > 0.0 && s.v_d < 1.0) {
+                return Err(invalid(i, format!("v_d = {} must be 0 (no dispersion) or at least 1", Num(s.v_d))));
             }
             let c = if s.radius_mm == 0.0 || s.radius_mm.is_infinite() { 0.0 } else { 1.0 / s.radius_mm };
             if c != 0.0 && s.semi_diameter_mm > 1.0 / c.abs() {

@@ -1,0 +1,381 @@
+//! Output files, so that a run never loses a file:
+//!
+//! - [`Outputs::new`] checks every output of a run before any work: the folder exists and takes
+//!   a new file, the target is absent or a regular file (never a device, FIFO, symlink or
+//!   folder), no target is an input of the run (same file, whatever the path says) or another
+//!   output. It reserves a temporary file beside each target at once, which proves the folder
+//!   writable.
+//! - [`Outputs::write`] fills a temporary; [`Outputs::commit`] renames them all onto their
+//!   targets only when every one was written. Dropped uncommitted (a failed run), the
+//!   temporaries are removed and the targets stay as they were.
+//! - [`remove_temporaries_on_signals`]: SIGINT, SIGTERM and SIGHUP remove the temporaries
+//!   before the process ends. A process killed outright (SIGKILL) leaves its temporaries; the
+//!   next run into the same folder removes those of dead processes of this host (the name
+//!   carries host and process id, so a folder shared by a render farm is safe).
+
+use super::IoError;
+use std::ffi::OsStr;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+/// Temporaries of this process not yet renamed or removed (for the signal handler).
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The part of a temporary's name between the target's name and the owner.
+const TMP_TAG: &str = ".realcam-";
+const TMP_SUFFIX: &str = ".tmp";
+
+/// This host's name, as temporaries carry it (characters other than ASCII letters, digits
+/// and `.` replaced by `_`).
+fn host_name() -> String {
+    let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "host".into());
+    raw.trim().chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect()
+}
+
+/// `.NAME.realcam-HOST-PID-N.tmp` beside `target`.
+fn temporary_name(name: &OsStr) -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    format!(
+        ".{}{TMP_TAG}{}-{}-{}{TMP_SUFFIX}",
+        name.to_string_lossy(),
+        host_name(),
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    )
+}
+
+/// The host and process id of a temporary's name, if it is one of realcam's.
+fn temporary_owner(name: &str) -> Option<(&str, u32)> {
+    let rest = name.strip_prefix('.')?.strip_suffix(TMP_SUFFIX)?;
+    let (rest, _counter) = rest.rsplit_once('-')?;
+    let (rest, pid) = rest.rsplit_once('-')?;
+    let (_, host) = rest.rsplit_once(TMP_TAG)?;
+    Some((host, pid.parse().ok()?))
+}
+
+/// Whether process `pid` of this host exists.
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else { return false };
+    // SAFETY: kill with signal 0 only checks that the process exists and may be signalled.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+/// Removes the temporaries that processes of this host which no longer exist left in `dir`;
+/// returns how many.
+pub fn remove_stale_temporaries(dir: &Path) -> usize {
+    let host = host_name();
+    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some((owner, pid)) = name.to_str().and_then(temporary_owner) else { continue };
+        let stale = owner == host && !process_alive(pid) && entry.file_type().is_ok_and(|t| t.is_file());
+        if stale && std::fs::remove_file(entry.path()).is_ok() {
+            log::info!("removed {}, left by process {pid} which no longer runs", entry.path().display());
+            removed += 1;
+        }
+    }
+    removed
+}
+
+fn forget(tmp: &Path) {
+    let mut live = LIVE.lock().unwrap_or_else(|p| p.into_inner());
+    live.retain(|p| p != tmp);
+}
+
+/// What a non-regular file is, in words.
+fn file_kind(t: std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// One output of a run.
+struct Output {
+    field: &'static str,
+    path: PathBuf,
+    tmp: PathBuf,
+    written: bool,
+}
+
+/// The outputs of one run, checked and reserved; see the module docs.
+pub struct Outputs {
+    files: Vec<Output>,
+}
+
+/// A path made absolute through its folder's real path (the file itself need not exist).
+fn resolved(path: &Path, dir: &Path, name: &OsStr) -> PathBuf {
+    std::fs::canonicalize(dir).map(|d| d.join(name)).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// Same file: the same real path, or (both existing) the same device and inode.
+fn same_file(a: &Path, a_resolved: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    if std::fs::canonicalize(b).is_ok_and(|b| b == a_resolved) {
+        return true;
+    }
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+impl Outputs {
+    /// Checks `outputs` (the field that named each, and its path) against each other and
+    /// against `inputs` (field, path), removes stale temporaries from their folders and
+    /// reserves a temporary beside each. Nothing existing is touched.
+    pub fn new(outputs: &[(&'static str, &Path)], inputs: &[(&'static str, &Path)]) -> Result<Outputs, IoError> {
+        let mut checked: Vec<(&'static str, &Path, PathBuf, PathBuf)> = Vec::new();
+        for &(field, path) in outputs {
+            let refuse = |reason: String| IoError::Output { field, path: path.to_path_buf(), reason };
+            let name = path.file_name().ok_or_else(|| refuse("the path does not name a file".into()))?;
+            let dir = match path.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            match std::fs::metadata(dir) {
+                Ok(m) if m.is_dir() => {}
+                Ok(_) => return Err(refuse(format!("\"{}\" is not a folder", dir.display()))),
+                Err(_) => return Err(refuse(format!("the folder \"{}\" does not exist", dir.display()))),
+            }
+            if let Ok(m) = std::fs::symlink_metadata(path) {
+                if !m.file_type().is_file() {
+                    return Err(refuse(format!(
+                        "it is {}; realcam writes only new files or replaces regular ones",
+                        file_kind(m.file_type())
+                    )));
+                }
+            }
+            let real = resolved(path, dir, name);
+            for &(input_field, input) in inputs {
+                if same_file(path, &real, input) {
+                    return Err(refuse(format!(
+                        "it is the input {} \"{}\"; realcam never writes over its inputs",
+                        input_field,
+                        input.display()
+                    )));
+                }
+            }
+            if let Some((other, other_path, ..)) = checked.iter().find(|c| c.2 == real) {
+                return Err(refuse(format!("the {other} \"{}\" is the same file", other_path.display())));
+            }
+            checked.push((field, path, real, dir.to_path_buf()));
+        }
+        for (.., dir) in &checked {
+            remove_stale_temporaries(dir);
+        }
+        let mut reserved = Outputs { files: Vec::new() };
+        for (field, path, _, dir) in checked {
+            let name = path.file_name().unwrap_or_default();
+            let tmp = dir.join(temporary_name(name));
+            // Registered before it exists, so that a signal between the two still removes it.
+            LIVE.lock().unwrap_or_else(|p| p.into_inner()).push(tmp.clone());
+            if let Err(source) = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp) {
+                forget(&tmp);
+                return Err(IoError::Output {
+                    field,
+                    path: path.to_path_buf(),
+                    reason: format!("cannot create a file in \"{}\": {source}", dir.display()),
+                });
+            }
+            reserved.files.push(Output { field, path: path.to_path_buf(), tmp, written: false });
+        }
+        Ok(reserved)
+    }
+
+    /// Writes `bytes` into the temporary of the output named by `field`.
+    pub fn write(&mut self, field: &str, bytes: &[u8]) -> Result<(), IoError> {
+        let Some(out) = self.files.iter_mut().find(|o| o.field == field) else {
+            return Err(IoError::Output {
+                field: "output",
+                path: PathBuf::from(field),
+                reason: "no such output was reserved".into(),
+            });
+        };
+        let result = (|| {
+            let mut file = std::fs::OpenOptions::new().write(true).truncate(true).open(&out.tmp)?;
+            file.write_all(bytes)?;
+            file.sync_all()
+        })();
+        result.map_err(|source| IoError::Write { path: out.path.clone(), source })?;
+        out.written = true;
+        Ok(())
+    }
+
+    /// The path of the output named by `field`.
+    pub fn path(&self, field: &str) -> Option<&Path> {
+        self.files.iter().find(|o| o.field == field).map(|o| o.path.as_path())
+    }
+
+    /// Renames every temporary onto its target, once all were written; otherwise (or when a
+    /// rename fails) an error and no target that was not already renamed is touched.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        if let Some(out) = self.files.iter().find(|o| !o.written) {
+            return Err(IoError::Output {
+                field: out.field,
+                path: out.path.clone(),
+                reason: "it was never written".into(),
+            });
+        }
+        for out in std::mem::take(&mut self.files) {
+            let renamed = std::fs::rename(&out.tmp, &out.path);
+            forget(&out.tmp);
+            if let Err(source) = renamed {
+                let _ = std::fs::remove_file(&out.tmp);
+                return Err(IoError::Write { path: out.path, source });
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        for out in &self.files {
+            let _ = std::fs::remove_file(&out.tmp);
+            forget(&out.tmp);
+        }
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary (the checks of [`Outputs::new`], `field`
+/// naming the setting that chose the path).
+pub fn write_file(field: &'static str, path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    let mut outputs = Outputs::new(&[(field, path)], &[])?;
+    outputs.write(field, bytes)?;
+    outputs.commit()
+}
+
+/// Removes this process's temporaries on SIGINT, SIGTERM and SIGHUP, then ends the process
+/// by that signal as it would have without this. Call it first thing in `main`, before any
+/// thread starts: the signals are blocked in the calling thread (and so in every thread it
+/// starts later) and taken by a thread of their own.
+pub fn remove_temporaries_on_signals() {
+    const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
+    // SAFETY: plain signal-set manipulation on a local set; pthread_sigmask on this thread.
+    let set = unsafe {
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        for s in SIGNALS {
+            libc::sigaddset(&mut set, s);
+        }
+        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
+            return;
+        }
+        set
+    };
+    let spawned = std::thread::Builder::new().name("realcam-signals".into()).spawn(move || loop {
+        let mut sig: libc::c_int = 0;
+        // SAFETY: waits for one of the blocked signals of `set`.
+        if unsafe { libc::sigwait(&set, &mut sig) } != 0 {
+            continue;
+        }
+        let live = std::mem::take(&mut *LIVE.lock().unwrap_or_else(|p| p.into_inner()));
+        for tmp in live {
+            let _ = std::fs::remove_file(tmp);
+        }
+        // SAFETY: restore the default action and deliver the signal to this thread, the only
+        // one where it is unblocked: the process ends as the signal asks.
+        unsafe {
+            libc::signal(sig, libc::SIG_DFL);
+            let mut one: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&mut one);
+            libc::sigaddset(&mut one, sig);
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
+            libc::raise(sig);
+        }
+    });
+    if spawned.is_err() {
+        // No thread to take them: let the signals act as before.
+        // SAFETY: unblock the set blocked above on this thread.
+        unsafe { libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut()) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::test_dir;
+
+    #[test]
+    fn temporary_names_carry_host_and_process() {
+        let name = temporary_name(OsStr::new("out-1.exr"));
+        assert!(name.starts_with(".out-1.exr.realcam-") && name.ends_with(".tmp"), "{name}");
+        assert_eq!(temporary_owner(&name), Some((host_name().as_str(), std::process::id())));
+        assert_eq!(temporary_owner(".a.exr.realcam-my-host.lan-123-7.tmp"), Some(("my-host.lan", 123)));
+        for other in ["a.exr", ".a.exr.tmp", ".a.realcam-h-x-1.tmp", "realcam-h-1-2.tmp"] {
+            assert_eq!(temporary_owner(other), None, "{other}");
+        }
+    }
+
+    #[test]
+    fn outputs_are_renamed_together_or_not_at_all() {
+        let dir = test_dir("outputs");
+        let (a, b) = (dir.join("a.exr"), dir.join("b.png"));
+        std::fs::write(&a, b"old a").unwrap();
+        let listing = || {
+            let mut v: Vec<String> =
+                std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+            v.sort();
+            v
+        };
+        // One written, the other not: nothing is renamed, the temporaries go.
+        let mut outs = Outputs::new(&[("output", &a), ("png", &b)], &[]).unwrap();
+        assert_eq!(listing().len(), 3, "{:?}", listing());
+        outs.write("output", b"new a").unwrap();
+        let err = outs.commit().unwrap_err().to_string();
+        assert_eq!(err, format!("png \"{}\": it was never written", b.display()));
+        assert_eq!(std::fs::read(&a).unwrap(), b"old a");
+        assert_eq!(listing(), ["a.exr"]);
+        // Dropped (a failed run): the same.
+        let mut outs = Outputs::new(&[("output", &a), ("png", &b)], &[]).unwrap();
+        outs.write("output", b"new a").unwrap();
+        drop(outs);
+        assert_eq!(listing(), ["a.exr"]);
+        // Both written: both renamed.
+        let mut outs = Outputs::new(&[("output", &a), ("png", &b)], &[]).unwrap();
+        outs.write("output", b"new a").unwrap();
+        outs.write("png", b"new b").unwrap();
+        outs.commit().unwrap();
+        assert_eq!((std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap()), (b"new a".to_vec(), b"new b".to_vec()));
+        assert_eq!(listing(), ["a.exr", "b.png"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_go_and_live_ones_stay() {
+        let dir = test_dir("stale");
+        let host = host_name();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let stale = dir.join(format!(".o.exr.realcam-{host}-{dead}-0.tmp"));
+        let live = dir.join(format!(".o.exr.realcam-{host}-{}-0.tmp", std::process::id()));
+        let other_host = dir.join(format!(".o.exr.realcam-{host}x-{dead}-0.tmp"));
+        for p in [&stale, &live, &other_host] {
+            std::fs::write(p, b"x").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(&dir), 1);
+        assert!(!stale.exists() && live.exists() && other_host.exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
