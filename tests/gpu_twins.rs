@@ -137,7 +137,41 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     camera.bokeh = BokehMode::Diffraction;
     camera.max_coc = realcam::model::camera::CocLimit::Px(12.0);
     cases.push(("diffraction", busy_frame(24, 16), camera));
+    // Lens flare: the Tessar's ghosts, a 5-bladed starburst and the halo, from two lights in
+    // the frame (one of 3x3 px spanning two tiles) and one given just outside it.
+    cases.push(("flare", flare_frame(72, 40), flare_camera(5)));
     cases
+}
+
+/// A dim frame with two lights: 3x3 px of 4000 across a tile edge and one pixel of 20000.
+fn flare_frame(w: u32, h: u32) -> Frame {
+    let mut color: Vec<f32> = (0..w * h).flat_map(|_| [0.05, 0.04, 0.03, 1.0]).collect();
+    let mut set = |x: u32, y: u32, v: [f32; 3]| color[((y * w + x) * 4) as usize..][..3].copy_from_slice(&v);
+    for (x, y) in (15..18).flat_map(|x| (9..12).map(move |y| (x, y))) {
+        set(x, y, [4000.0, 3000.0, 2000.0]);
+    }
+    set(50, 30, [20000.0, 20000.0, 20000.0]);
+    Frame::new(w, h, color, vec![3.0; (w * h) as usize])
+}
+
+/// The Tessar with flare on, scene values kept (no exposure, vignetting or film curve), a
+/// 10.8 mm wide sensor and a light just outside the frame.
+fn flare_camera(blades: u32) -> Camera {
+    let lens = realcam::io::lens_file::LensFile::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/lenses/tessar-walch-lens.toml"
+    )))
+    .expect("the Tessar's lens file");
+    let request = realcam::model::camera::CameraRequest {
+        sensor: Some("10.8x6".into()),
+        blades: Some(blades),
+        blade_rotation_deg: Some(10.0),
+        flare: true,
+        flare_lights: vec![realcam::model::flare::FlareLight::white(-6.0, 20.0, 5.0e4)],
+        force: true,
+        ..realcam::model::camera::CameraRequest::blur_only().with_lens(100.0, 4.0, 50.0)
+    };
+    Camera::new(&lens, &request).expect("flare camera")
 }
 
 #[test]

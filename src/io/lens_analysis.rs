@@ -142,12 +142,14 @@ mod tests {
     fn a_prescription_traces_and_makes_a_lens_file() {
         let path = Path::new("lenses/tessar-walch.toml");
         let report = analyze_text(TESSAR.into(), path, None, &[0.0, 10.0, 20.0]).unwrap();
-        assert!((report.analysis.paraxial.efl_mm - 101.8278).abs() < 1e-3, "{}", report.analysis.paraxial.efl_mm);
+        // The published focal length of the design is 100 mm; with Schott's SF7 and LLF7 the
+        // paraxial trace gives 100.013 mm (101.83 mm with SF2's data in place of SF7's).
+        assert!((report.analysis.paraxial.efl_mm - 100.0129).abs() < 1e-3, "{}", report.analysis.paraxial.efl_mm);
         assert_eq!(report.analysis.f_number, Prescription::parse_toml(TESSAR, "t").unwrap().f_number_at_table_stop());
         let text = report.lens_file_with_tables(Path::new("out.toml")).unwrap();
         let lens = LensFile::parse(&text, Path::new("out.toml")).unwrap();
         assert!(lens.tables.is_some() && lens.longitudinal_color.is_some());
-        assert!((lens.focal_length_mm - 101.8278).abs() < 1e-3);
+        assert!((lens.focal_length_mm - 100.0129).abs() < 1e-3);
         assert!(text.contains("from the prescription lenses/tessar-walch.toml"));
         let report = analyze_text(TESSAR.into(), path, Some(4.0), &[0.0]).unwrap();
         assert_eq!(report.analysis.f_number, 4.0);

@@ -6,6 +6,7 @@
 //! - [`exr_write`]: writes RGBA or arbitrary channels as half or float32 EXR.
 //! - [`png`]: writes an 8-bit sRGB preview.
 //! - [`lens_file`], [`film_file`]: realcam's TOML lens and film files, every field checked.
+//! - [`flare_lights`]: explicit lights for the lens flare, as a JSON list a renderer can write.
 //! - [`lens_analysis`]: a lens file's or a prescription's trace, and the lens file its tables make.
 //! - [`lensfun`]: lenses of the lensfun database converted into lens files.
 //!
@@ -17,6 +18,7 @@
 pub mod exr_read;
 pub mod exr_write;
 pub mod film_file;
+pub mod flare_lights;
 pub mod lens_analysis;
 pub mod lens_file;
 pub mod lensfun;

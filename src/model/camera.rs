@@ -54,10 +54,12 @@ pub enum CameraField {
     ShutterRamp,
     RollingShutterS,
     MaxBlurPx,
+    FlareThreshold,
+    FlareLight,
 }
 
 impl CameraField {
-    pub const ALL: [CameraField; 18] = [
+    pub const ALL: [CameraField; 20] = [
         CameraField::FocalLengthMm,
         CameraField::FNumber,
         CameraField::FocusDistanceM,
@@ -76,6 +78,8 @@ impl CameraField {
         CameraField::ShutterRamp,
         CameraField::RollingShutterS,
         CameraField::MaxBlurPx,
+        CameraField::FlareThreshold,
+        CameraField::FlareLight,
     ];
 
     /// The field's name in [`CameraRequest`].
@@ -99,6 +103,8 @@ impl CameraField {
             CameraField::ShutterRamp => "shutter_ramp",
             CameraField::RollingShutterS => "rolling_shutter_s",
             CameraField::MaxBlurPx => "max_blur_px",
+            CameraField::FlareThreshold => "flare_threshold",
+            CameraField::FlareLight => "flare_lights",
         }
     }
 
@@ -123,6 +129,8 @@ impl CameraField {
             CameraField::ShutterRamp => "shutter curve ramp",
             CameraField::RollingShutterS => "rolling-shutter readout time",
             CameraField::MaxBlurPx => "largest motion blur",
+            CameraField::FlareThreshold => "flare threshold",
+            CameraField::FlareLight => "a flare light's numbers",
         }
     }
 
@@ -304,6 +312,8 @@ pub struct Camera {
     pub longitudinal_color_mm: Option<[f64; 2]>,
     /// The shutter in time and the motion-blur method.
     pub motion: Motion,
+    /// Lens flare: ghosts, starburst and halo around bright lights.
+    pub flare: crate::model::flare::FlareSettings,
 }
 
 /// Which motion-blur method renders the velocity pass.
@@ -382,6 +392,12 @@ pub struct CameraRequest {
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
+    /// Record lens flare where it would be visible.
+    pub flare: bool,
+    /// A pixel belongs to a light from this many times the sensor's saturation.
+    pub flare_threshold: f64,
+    /// Lights given explicitly.
+    pub flare_lights: Vec<crate::model::flare::FlareLight>,
     /// Frames per second of the sequence; [`DEFAULT_FPS`] when None.
     pub fps: Option<f64>,
     /// The shutter as an angle (degrees of a frame) instead of `shutter_s`; the exposure uses the
@@ -401,7 +417,8 @@ impl Default for CameraRequest {
     /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
     /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
     /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
-    /// 1.2 mm on the film ([`CocLimit::DEFAULT`]), tiled bokeh, no grain.
+    /// 1.2 mm on the film ([`CocLimit::DEFAULT`]), tiled bokeh, no grain, lens flare from one stop
+    /// over saturation.
     fn default() -> Self {
         CameraRequest {
             focal_length_mm: None,
@@ -435,20 +452,24 @@ impl Default for CameraRequest {
             rolling_direction: Default::default(),
             motion_blur: MotionBlurMode::Fast,
             max_blur_px: 512.0,
+            flare: true,
+            flare_threshold: crate::model::flare::FlareSettings::DEFAULT_THRESHOLD,
+            flare_lights: Vec::new(),
         }
     }
 }
 
 impl CameraRequest {
-    /// Depth of field alone: no exposure gain, vignetting or film curve, so pixel values stay
-    /// scene values, and no spherical aberration or cat's eye in the bokeh (which the
-    /// diffraction reference does not model); the rest as [`Default`].
+    /// Depth of field alone: no exposure gain, vignetting, film curve or lens flare, so pixel
+    /// values stay scene values, and no spherical aberration or cat's eye in the bokeh (which
+    /// the diffraction reference does not model); the rest as [`Default`].
     pub fn blur_only() -> CameraRequest {
         CameraRequest {
             spherical_aberration: Some(0.0),
             cats_eye: Some(0.0),
             exposure: false,
             vignetting: false,
+            flare: false,
             film: Some(FilmMode::Linear),
             ..CameraRequest::default()
         }
@@ -553,6 +574,12 @@ impl Camera {
         if let Some(c) = req.blade_curvature {
             require(CameraField::BladeCurvature, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
         }
+        require(CameraField::FlareThreshold, req.flare_threshold, req.flare_threshold > 0.0, "a positive factor")?;
+        if let Some(bad) = req.flare_lights.iter().find(|l| !l.is_valid()) {
+            let value =
+                [bad.x_px, bad.y_px, bad.area_px].into_iter().chain(bad.energy).find(|v| !v.is_finite() || *v < 0.0);
+            require(CameraField::FlareLight, value.unwrap_or(f64::NAN), false, "finite, with energy and area >= 0")?;
+        }
         Ok(Camera {
             lens_name: lens_file.name.clone(),
             lens,
@@ -610,6 +637,28 @@ impl Camera {
                 timing,
                 mode: req.motion_blur,
                 max_blur_px: req.max_blur_px,
+            },
+            flare: crate::model::flare::FlareSettings {
+                enabled: req.flare,
+                threshold: req.flare_threshold,
+                lights: req.flare_lights.clone(),
+                // The file was checked when it was read: its surfaces make a prescription.
+                prescription: (!lens_file.surfaces.is_empty())
+                    .then(|| {
+                        crate::optics::prescription::Prescription::from_specs(
+                            &lens_file.name,
+                            &lens_file.surfaces,
+                            "",
+                            "",
+                        )
+                    })
+                    .and_then(Result::ok)
+                    .map(std::sync::Arc::new),
+                coating_design_nm: lens_file.flare.coating_nm(),
+                halo: crate::optics::flare::starburst::Halo {
+                    fraction: lens_file.flare.halo_fraction,
+                    radius_mm: lens_file.flare.halo_radius_mm,
+                },
             },
         })
     }

@@ -5,5 +5,6 @@
 
 pub mod aperture;
 pub mod camera;
+pub mod flare;
 pub mod frame;
 pub mod settings;

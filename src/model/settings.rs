@@ -15,6 +15,8 @@ pub enum SettingError {
     SphericalAberration(#[source] ParseFloatError),
     #[error("{text:?} is not WIDTHxHEIGHT")]
     NotASize { text: String },
+    #[error("{text:?} is not X,Y,ENERGY[,AREA] (pixels; the energy a sum of scene values over pixels, at least 0)")]
+    NotAFlareLight { text: String },
     #[error("{text:?} is not a diameter in px (64, 64px) or on the film in mm (1.2mm)")]
     NotACocLimit { text: String },
 }
@@ -63,9 +65,42 @@ pub fn parse_size_px(text: &str) -> Result<(u32, u32), SettingError> {
     }
 }
 
+/// An explicit flare light `X,Y,ENERGY[,AREA]`: its position in pixels (may be outside the
+/// frame), its white energy (scene value x pixels) and visible area (pixels, default 1).
+pub fn parse_flare_light(text: &str) -> Result<crate::model::flare::FlareLight, SettingError> {
+    let bad = || SettingError::NotAFlareLight { text: text.to_string() };
+    let numbers: Vec<f64> =
+        text.split(',').map(|v| v.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let light = match numbers[..] {
+        [x, y, e] => crate::model::flare::FlareLight::white(x, y, e),
+        [x, y, e, area_px] => {
+            crate::model::flare::FlareLight { area_px, ..crate::model::flare::FlareLight::white(x, y, e) }
+        }
+        _ => return Err(bad()),
+    };
+    if light.is_valid() {
+        Ok(light)
+    } else {
+        Err(bad())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn flare_lights_as_text() {
+        use crate::model::flare::FlareLight;
+        assert_eq!(parse_flare_light("-20, 300.5, 1e6"), Ok(FlareLight::white(-20.0, 300.5, 1e6)));
+        assert_eq!(parse_flare_light("1,2,3,9").map(|l| l.area_px), Ok(9.0));
+        for bad in ["1,2", "1,2,x", "1,2,-5", "1,2,3,4,5", "nan,2,3"] {
+            assert_eq!(
+                parse_flare_light(bad).unwrap_err().to_string(),
+                format!("{bad:?} is not X,Y,ENERGY[,AREA] (pixels; the energy a sum of scene values over pixels, at least 0)")
+            );
+        }
+    }
 
     #[test]
     fn shutter_times_as_fractions_and_decimals() {

@@ -20,6 +20,7 @@ pub mod distortion;
 pub mod dof;
 pub mod exposure;
 pub mod film;
+pub mod flare;
 pub mod focus_processor;
 pub mod lens;
 pub mod prescription;

@@ -31,6 +31,10 @@ pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
 pub mod filter;
+pub mod flare;
+pub mod flare_lights;
+pub mod flare_tiles;
+pub mod ghost_sprites;
 pub mod longitudinal_color;
 pub mod mb_gather;
 pub mod mb_neighbor;
@@ -52,7 +56,8 @@ use std::sync::Arc;
 
 /// The pass order: every pass the renderer can record, in recording order. Motion blur and depth
 /// of field come first (they need the pinhole image and its depth and velocity, before anything
-/// moves pixels), then the lens's aberrations of the image, then the light's falloff and the film.
+/// moves pixels), then the lens's aberrations of the image, its flare around the bright lights,
+/// then the light's falloff and the film.
 ///
 /// Motion blur before depth of field: both act while the shutter is open. The film integrates,
 /// over the open time, the defocused image of each instant; for one surface point that is its
@@ -74,6 +79,7 @@ pub static PASS_ORDER: &[PassEntry] = &[
     entry::<distortion::Distortion>(),
     entry::<astigmatism::Astigmatism>(),
     entry::<coma::Coma>(),
+    entry::<flare::Flare>(),
     entry::<vignette::Vignette>(),
     entry::<film::Film>(),
 ];

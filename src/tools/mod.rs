@@ -3,7 +3,9 @@
 //! synthetic test scenes (`realcam synth`); the entry points of the fuzzing harness.
 
 pub mod accuracy;
+pub mod accuracy_flare;
 pub mod bench;
+pub mod bench_flare;
 pub mod bench_motion;
 pub mod error_budget;
 pub mod fuzz;

@@ -1,4 +1,5 @@
-//! `realcam bench`: GPU time per pass of the depth-of-field methods against the CoC radius.
+//! `realcam bench`: GPU time per pass of the depth-of-field methods against the CoC radius (or
+//! of the motion blur, `--motion-blur`, or of the lens flare, `--flare`).
 
 use crate::common::{command_line, progress_bar, write_text, GpuArgs};
 use anyhow::{Context, Result};
@@ -30,6 +31,13 @@ pub struct BenchArgs {
     /// Longest motion blurs in pixels (with --motion-blur).
     #[arg(long = "blur", default_value = "8,32,128", value_delimiter = ',')]
     blurs_px: Vec<f64>,
+    /// Benchmark the lens flare instead (the Tessar's ghosts, starburst and halo for --lights
+    /// lights found in the frame).
+    #[arg(long, conflicts_with = "motion_blur")]
+    flare: bool,
+    /// Numbers of lights in the frame (with --flare).
+    #[arg(long = "lights", default_value = "1,4,16", value_delimiter = ',')]
+    light_counts: Vec<usize>,
     /// Also write the Markdown table here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -41,7 +49,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let resolutions =
         args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
     let gpu = args.gpu.open()?;
-    let table = if args.motion_blur {
+    let table = if args.flare {
+        use realcam::tools::bench_flare::{markdown, run, FlareBenchOptions};
+        let options = FlareBenchOptions { resolutions, light_counts: args.light_counts.clone(), runs: args.runs };
+        // Two progress steps per configuration: the bare pass and each light count are one each.
+        let steps = (options.resolutions.len() * (options.light_counts.len() + 1)).div_ceil(2);
+        let rows = with_progress(steps, |step| run(&gpu, &options, step))?;
+        markdown(&gpu.info().to_string(), &command_line(), &rows)
+    } else if args.motion_blur {
         use realcam::tools::bench_motion::{markdown, run, MotionBenchOptions};
         let options = MotionBenchOptions {
             resolutions,

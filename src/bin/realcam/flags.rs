@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 32] = [
+const FLAGS: [(&str, &str); 34] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -21,6 +21,8 @@ const FLAGS: [(&str, &str); 32] = [
     ("cats_eye", "--cats-eye"),
     ("max_coc", "--max-coc"),
     ("grain", "--grain"),
+    ("flare_threshold", "--flare-threshold"),
+    ("flare_lights", "--flare-light"),
     ("force", "--force"),
     ("depth_unit_m", "--depth-unit"),
     ("tables_path", "--write-tables"),

@@ -9,6 +9,7 @@ mod compare;
 mod devices;
 mod dof;
 mod flags;
+mod flare;
 mod lens;
 mod motion_args;
 mod render;
@@ -43,6 +44,10 @@ enum Command {
     /// Every depth-of-field method on your frame against the diffraction reference: GPU time,
     /// RMSE, PSNR, energy and FLIP, as Markdown, CSV and an SVG plot of error against time.
     Accuracy(accuracy::AccuracyArgs),
+    /// The lens flare's ghost models against ghosts traced with real rays through the lens's
+    /// prescription, for a point light at several angles: centroid, energy and size errors, and
+    /// the CPU and GPU time of each.
+    Flare(flare::FlareArgs),
     /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
     /// defocused), with the fast path's error against the reference.
     Bench(bench::BenchArgs),
@@ -73,6 +78,7 @@ fn main() {
         Command::Devices => devices::run(),
         Command::Lens { command } => lens::run(&command),
         Command::Accuracy(args) => accuracy::run(&args),
+        Command::Flare(args) => flare::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Compare { test, reference } => compare::run(&test, &reference),
         Command::Synth { out } => synth::run(&out),

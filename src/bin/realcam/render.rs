@@ -9,7 +9,7 @@ use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
-use realcam::model::settings::{parse_coc_limit, parse_shutter_s, parse_spherical_aberration};
+use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
 use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
 
@@ -147,6 +147,8 @@ pub struct RenderArgs {
     /// or in pixels (64, 64px). A clamp that changes the picture is said.
     #[arg(long = "max-coc", default_value = "1.2mm")]
     max_coc: String,
+    #[command(flatten)]
+    flare: FlareArgs,
     /// What the depth values measure.
     #[arg(long = "depth-kind", value_enum, default_value = "planar")]
     depth_kind: DepthKindArg,
@@ -194,6 +196,39 @@ pub struct RenderArgs {
     gpu: GpuArgs,
 }
 
+/// The lens flare's flags.
+#[derive(Args)]
+pub struct FlareArgs {
+    /// Record no lens flare (ghosts, starburst, halo) around bright lights.
+    #[arg(long = "no-flare")]
+    no_flare: bool,
+    /// A pixel with a channel at this many times the sensor's saturation (after the exposure)
+    /// belongs to a light.
+    #[arg(long = "flare-threshold", default_value_t = CameraRequest::default().flare_threshold)]
+    flare_threshold: f64,
+    /// A light given explicitly, X,Y,ENERGY[,AREA]: pixels (may be outside the frame), the sum
+    /// of scene values over the pixels it covers, its area in pixels; repeat for more.
+    #[arg(long = "flare-light", value_name = "X,Y,ENERGY", allow_hyphen_values = true)]
+    flare_light: Vec<String>,
+    /// Lights given explicitly as a JSON list: [{"x": .., "y": .., "energy": .. | "rgb": [r, g, b], "area_px": ..}].
+    #[arg(long = "flare-lights", value_name = "FILE")]
+    flare_lights: Option<PathBuf>,
+}
+
+impl FlareArgs {
+    /// The lights the flags give.
+    fn lights(&self) -> Result<Vec<realcam::model::flare::FlareLight>> {
+        let mut lights = Vec::new();
+        for text in &self.flare_light {
+            lights.push(parse_flare_light(text).with_context(|| format!("--flare-light {text:?}"))?);
+        }
+        if let Some(path) = &self.flare_lights {
+            lights.extend(realcam::io::flare_lights::load_flare_lights(path)?);
+        }
+        Ok(lights)
+    }
+}
+
 impl RenderArgs {
     /// The camera these flags ask for.
     fn camera(&self) -> Result<Camera> {
@@ -224,6 +259,9 @@ impl RenderArgs {
             bokeh: self.bokeh.into(),
             grain: self.grain,
             seed: self.seed,
+            flare: !self.flare.no_flare,
+            flare_threshold: self.flare.flare_threshold,
+            flare_lights: self.flare.lights()?,
             ..CameraRequest::default()
         })?);
         let mut camera = Camera::new(&lens_file, &request).name_flags()?;

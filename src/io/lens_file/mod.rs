@@ -119,6 +119,55 @@ pub struct LensFile {
     /// (`realcam lens analyze` traces it; its keys are those of src/optics/prescription.rs).
     #[serde(default, rename = "surface")]
     pub surfaces: Vec<crate::optics::prescription::SurfaceSpec>,
+    /// Lens flare: the coatings (for the ghosts of the prescription) and the halo.
+    #[serde(default)]
+    pub flare: FlareSpec,
+}
+
+/// `[flare]`: what the lens's flare depends on besides its prescription and aperture.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FlareSpec {
+    /// Design wavelength (nm) of the single-layer quarter-wave anti-reflection coatings of the
+    /// air|glass surfaces; 0: uncoated.
+    #[serde(default = "FlareSpec::default_coating_nm")]
+    pub coating_design_nm: f64,
+    /// Share of a light the glass scatters into the halo around it.
+    #[serde(default = "FlareSpec::default_halo_fraction")]
+    pub halo_fraction: f64,
+    /// The halo's radius on the film (mm): its light falls as (1 + r^2/rho^2)^-1.5.
+    #[serde(default = "FlareSpec::default_halo_radius_mm")]
+    pub halo_radius_mm: f64,
+}
+
+impl FlareSpec {
+    fn default_coating_nm() -> f64 {
+        550.0
+    }
+
+    fn default_halo_fraction() -> f64 {
+        0.01
+    }
+
+    fn default_halo_radius_mm() -> f64 {
+        0.1
+    }
+
+    /// The coatings' design wavelength, None when uncoated.
+    pub fn coating_nm(&self) -> Option<f64> {
+        (self.coating_design_nm > 0.0).then_some(self.coating_design_nm)
+    }
+}
+
+impl Default for FlareSpec {
+    /// Coatings for 550 nm; an illustrative halo of 1% of the light within about 0.1 mm.
+    fn default() -> Self {
+        FlareSpec {
+            coating_design_nm: Self::default_coating_nm(),
+            halo_fraction: Self::default_halo_fraction(),
+            halo_radius_mm: Self::default_halo_radius_mm(),
+        }
+    }
 }
 
 /// Longitudinal colour in mm on the image side: + = the channel focuses behind green.
@@ -526,6 +575,19 @@ impl LensFile {
         if !self.surfaces.is_empty() {
             self.prescription(path, text)?;
         }
+        let f = &self.flare;
+        if !(f.coating_design_nm == 0.0 || (200.0..=2000.0).contains(&f.coating_design_nm)) {
+            return bad(format!(
+                "flare.coating_design_nm = {} must be 0 (uncoated) or a wavelength in 200..2000 nm",
+                f.coating_design_nm
+            ));
+        }
+        if !(0.0..=0.5).contains(&f.halo_fraction) {
+            return bad(format!("flare.halo_fraction = {} must be in [0, 0.5]", f.halo_fraction));
+        }
+        if !(f.halo_radius_mm.is_finite() && f.halo_radius_mm > 0.0) {
+            return bad(format!("flare.halo_radius_mm = {} must be a positive length", f.halo_radius_mm));
+        }
         if let Some(h) = a.cats_eye_at_mm {
             if !(h.is_finite() && h > 0.0) {
                 return bad(format!("aperture.cats_eye_at_mm = {h} must be a positive height"));
@@ -659,6 +721,27 @@ mod tests {
         let bad = format!("{text}[longitudinal_color]\nred_mm = 20\nblue_mm = 0\n");
         let err = LensFile::parse(&bad, Path::new("p.toml")).unwrap_err().to_string();
         assert!(err.contains("longitudinal_color.red_mm = 20"), "{err}");
+    }
+
+    #[test]
+    fn flare_settings_default_and_are_checked() {
+        let head = "name = \"x\"\nsource = \"y\"\nfocal_length_mm = 50\nf_number_min = 1.4\nf_number_max = 16\nfocus_min_m = 0.45\n[aperture]\nblades = 9\n";
+        let lens = LensFile::parse(head, Path::new("f.toml")).unwrap();
+        assert_eq!(lens.flare, FlareSpec::default());
+        assert_eq!(lens.flare.coating_nm(), Some(550.0));
+        let text = format!("{head}[flare]\ncoating_design_nm = 0\nhalo_fraction = 0.02\n");
+        let lens = LensFile::parse(&text, Path::new("f.toml")).unwrap();
+        assert_eq!((lens.flare.coating_nm(), lens.flare.halo_fraction, lens.flare.halo_radius_mm), (None, 0.02, 0.1));
+        let err = |extra: &str| {
+            LensFile::parse(&format!("{head}[flare]\n{extra}\n"), Path::new("f.toml")).unwrap_err().to_string()
+        };
+        assert_eq!(
+            err("coating_design_nm = 50"),
+            "lens file f.toml: flare.coating_design_nm = 50 must be 0 (uncoated) or a wavelength in 200..2000 nm"
+        );
+        assert_eq!(err("halo_fraction = 0.9"), "lens file f.toml: flare.halo_fraction = 0.9 must be in [0, 0.5]");
+        assert_eq!(err("halo_radius_mm = -1"), "lens file f.toml: flare.halo_radius_mm = -1 must be a positive length");
+        assert!(err("halo = 1").contains("line 10"), "{}", err("halo = 1"));
     }
 
     #[test]

@@ -188,10 +188,12 @@ mod tests {
             p.bfl_mm,
             lens.f_number_at_table_stop()
         );
-        // Stated elsewhere for these numbers: 100 mm EFL (the seed states none).
-        assert!(rel(p.efl_mm, 100.0) < 0.03, "EFL {}", p.efl_mm);
-        // the table's image distance is near the paraxial BFL
-        assert!((p.bfl_mm - 79.831).abs() < 3.0, "BFL {}", p.bfl_mm);
+        // Published for these numbers: 100 mm EFL (the seed states none). With Schott's SF7
+        // (n_d 1.6398, V_d 34.6) and LLF7 (1.5488, 45.4) the trace gives 100.013 mm; with SF2's
+        // data in SF7's place it was 101.83 mm.
+        assert!(rel(p.efl_mm, 100.0) < 2e-4, "EFL {}", p.efl_mm);
+        // ... and the table's last thickness, 79.831 mm, is the paraxial back focal length.
+        assert!((p.bfl_mm - 79.831).abs() < 0.01, "BFL {}", p.bfl_mm);
         let a = lens.analyze(2.8, &[0.0, 5.0, 10.0, 15.0, 20.0]);
         println!("{a}");
         assert!(a.fields[0].distortion_percent.unwrap().abs() < 1e-12);
