@@ -57,7 +57,8 @@ impl FramePattern {
                     Some((start, byte_end(&chars, i, &text), run))
                 }
                 '%' => {
-                    let digits: String = chars[i + 1..].iter().map(|(_, d)| *d).take_while(char::is_ascii_digit).collect();
+                    let digits: String =
+                        chars[i + 1..].iter().map(|(_, d)| *d).take_while(char::is_ascii_digit).collect();
                     let after = i + 1 + digits.len();
                     if chars.get(after).map(|(_, d)| *d) != Some('d') {
                         return Err(refuse(format!(
@@ -132,7 +133,10 @@ impl FrameRange {
             }
             let (span, step) = match item.split_once('x') {
                 Some((span, step)) => {
-                    let step: i64 = step.trim().parse().map_err(|_| refuse(format!("\"{item}\": the step \"{step}\" is not a whole number")))?;
+                    let step: i64 = step
+                        .trim()
+                        .parse()
+                        .map_err(|_| refuse(format!("\"{item}\": the step \"{step}\" is not a whole number")))?;
                     if step < 1 {
                         return Err(refuse(format!("\"{item}\": the step must be at least 1, got {step}")));
                     }
@@ -140,9 +144,8 @@ impl FrameRange {
                 }
                 None => (item, None),
             };
-            let (first, last) = split_span(span).ok_or_else(|| {
-                refuse(format!("\"{item}\" is not a frame, a span A-B or a stepped span A-BxN"))
-            })?;
+            let (first, last) = split_span(span)
+                .ok_or_else(|| refuse(format!("\"{item}\" is not a frame, a span A-B or a stepped span A-BxN")))?;
             if step.is_some() && split_dash(span).is_none() {
                 return Err(refuse(format!("\"{item}\": a step needs a span A-B")));
             }
@@ -317,12 +320,21 @@ mod tests {
             range_error("1001,,1003"),
             "frame range \"1001,,1003\": an empty item; write frames as 1001, 1001-1100 or 1001-1100x2"
         );
-        assert_eq!(range_error("1100-1001"), "frame range \"1100-1001\": \"1100-1001\": the span ends before it starts (1001 < 1100)");
+        assert_eq!(
+            range_error("1100-1001"),
+            "frame range \"1100-1001\": \"1100-1001\": the span ends before it starts (1001 < 1100)"
+        );
         assert_eq!(range_error("1-10x0"), "frame range \"1-10x0\": \"1-10x0\": the step must be at least 1, got 0");
         assert_eq!(range_error("1-10x-2"), "frame range \"1-10x-2\": \"1-10x-2\": the step must be at least 1, got -2");
         assert_eq!(range_error("1-10xa"), "frame range \"1-10xa\": \"1-10xa\": the step \"a\" is not a whole number");
-        assert_eq!(range_error("a-b"), "frame range \"a-b\": \"a-b\" is not a frame, a span A-B or a stepped span A-BxN");
-        assert_eq!(range_error("1:10"), "frame range \"1:10\": \"1:10\" is not a frame, a span A-B or a stepped span A-BxN");
+        assert_eq!(
+            range_error("a-b"),
+            "frame range \"a-b\": \"a-b\" is not a frame, a span A-B or a stepped span A-BxN"
+        );
+        assert_eq!(
+            range_error("1:10"),
+            "frame range \"1:10\": \"1:10\" is not a frame, a span A-B or a stepped span A-BxN"
+        );
         assert_eq!(range_error("5x2"), "frame range \"5x2\": \"5x2\": a step needs a span A-B");
         assert_eq!(range_error("1-5,3"), "frame range \"1-5,3\": frame 3 is listed twice");
         assert_eq!(range_error("1-100000000"), "frame range \"1-100000000\": more than 1000000 frames");
