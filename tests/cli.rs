@@ -1641,3 +1641,65 @@ fn sequence_errors_name_the_flag_before_any_work() {
     assert!(!err.contains("device:"), "{err}");
     assert!(dir.listing().iter().all(|name| name.starts_with("c.") || name.starts_with("d.")), "{:?}", dir.listing());
 }
+
+#[test]
+fn a_long_exposure_is_the_average_of_the_frames() {
+    let dir = TestDir::new("long_exposure");
+    let linear = ["--film", "linear", "--float"];
+    let mut args = sequence_args(&dir);
+    for arg in args.iter_mut() {
+        if *arg == dir.arg("o.####.exr") {
+            *arg = dir.arg("exposure.exr");
+        }
+    }
+    args.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
+    args.extend(s(&linear));
+    let run = render(&dir, &args).success();
+    assert_contains(&run.stderr, &format!("wrote {} (a long exposure of 6 frames)", dir.arg("exposure.exr")));
+    assert_eq!(farm_progress(&run.stderr), [16, 33, 50, 66, 83, 100]);
+    // The same frames one by one, averaged here in f64.
+    let mut sequence = sequence_args(&dir);
+    sequence.extend(s(&["--frames", "1001-1006"]));
+    sequence.extend(s(&linear));
+    render(&dir, &sequence).success();
+    let exposure = read_exr_rgba(&dir.join("exposure.exr")).unwrap();
+    let frames: Vec<Image> =
+        SEQUENCE.iter().map(|f| read_exr_rgba(&dir.join(&format!("o.{f}.exr"))).unwrap()).collect();
+    for (i, &value) in exposure.data.iter().enumerate() {
+        let mean = frames.iter().map(|f| f64::from(f.data[i])).sum::<f64>() / 6.0;
+        assert!((f64::from(value) - mean).abs() <= 1e-6 * mean.abs().max(1e-3), "value {i}: {value} against {mean}");
+    }
+    // Frames differ, so the average is none of them.
+    assert!(frames.iter().all(|f| f.data != exposure.data));
+
+    // Refused before any work: a film curve, an output with a frame number.
+    let mut curve = args.clone();
+    curve.truncate(curve.len() - linear.len());
+    let err = render(&dir, &curve).failure();
+    assert_contains(
+        &err,
+        "error: --long-exposure averages the frames' light, which comes before a film curve: give --film linear",
+    );
+    let mut patterned = sequence_args(&dir);
+    patterned.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
+    patterned.extend(s(&linear));
+    let err = render(&dir, &patterned).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --output \"{}\" has a frame number, but --long-exposure writes one exposure of all the frames",
+            dir.arg("o.####.exr")
+        ),
+    );
+    assert!(!err.contains("device:"), "{err}");
+
+    // A frame that fails stops the exposure; the one written before stays as it was.
+    let before = std::fs::read(dir.join("exposure.exr")).unwrap();
+    std::fs::write(dir.join("c.1004.exr"), b"not an EXR").unwrap();
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: frame 1004: color: ");
+    assert_contains(&err, "frames: 3 done, 0 skipped, 1 failed, 2 not run (the exposure stopped) of 6 in ");
+    assert_contains(&err, "error: frame 1004 failed: the long exposure of 6 frames is not written");
+    assert_eq!(std::fs::read(dir.join("exposure.exr")).unwrap(), before);
+    assert!(temporaries(&dir).is_empty());
+}

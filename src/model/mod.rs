@@ -6,4 +6,5 @@
 pub mod aperture;
 pub mod camera;
 pub mod frame;
+pub mod long_exposure;
 pub mod settings;

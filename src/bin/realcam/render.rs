@@ -301,14 +301,27 @@ pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
 }
 
+/// One frame rendered, ready to write.
+pub struct RenderedFrame {
+    pub image: Image,
+    pub exr_options: ExrWriteOptions,
+    pub profile: realcam::gpu::Profile,
+}
+
 /// Renders the frame whose passes `args` names into its reserved `outputs` through `camera`;
 /// the paths written.
 pub fn render_frame(
     args: &RenderArgs,
     camera: &Camera,
-    mut outputs: Outputs,
+    outputs: Outputs,
     session: &mut Session,
 ) -> Result<Vec<PathBuf>> {
+    let rendered = render_image(args, camera, session)?;
+    write_outputs(args, outputs, &rendered)
+}
+
+/// Renders the frame whose passes `args` names through `camera`.
+pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
     let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
@@ -347,16 +360,28 @@ pub fn render_frame(
         data_origin: frame.data_origin,
         attributes: camera.attributes(),
     };
+    Ok(RenderedFrame { image, exr_options, profile: rendered.profile })
+}
+
+/// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
+pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
+    let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
-    outputs.write("output", &io::encode_exr_rgba(&args.output, &image, &exr_options)?)?;
+    outputs.write("output", &io::encode_exr_rgba(&args.output, image, &rendered.exr_options)?)?;
     if let Some(png) = &args.png {
-        outputs.write("png", &io::encode_png_srgb(png, &image)?)?;
+        outputs.write("png", &io::encode_png_srgb(png, image)?)?;
     }
     if args.trace.is_some() {
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
     }
     outputs.commit()?;
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
+}
+
+/// Whether the film is scene-referred linear (--film linear, no --film-file): sensor values,
+/// which a long exposure may average.
+pub fn film_is_linear(args: &RenderArgs) -> bool {
+    matches!(args.film, FilmArg::Linear) && args.film_file.is_none()
 }
 
 fn indent(text: &str) -> String {

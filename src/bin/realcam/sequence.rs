@@ -3,10 +3,12 @@
 //! render farms.
 
 use crate::common::progress_bar;
-use crate::render::{render_frame, RenderArgs, Session};
+use crate::render::{film_is_linear, render_frame, render_image, write_outputs, RenderArgs, RenderedFrame, Session};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use realcam::io::sequence::{FramePattern, FrameRange};
+use realcam::model::camera::Camera;
+use realcam::model::long_exposure::LongExposure;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -31,6 +33,10 @@ pub struct SequenceArgs {
     /// Stop at the first frame that fails (by default it is reported and the others go on).
     #[arg(long = "fail-fast", requires = "frames")]
     pub fail_fast: bool,
+    /// Accumulate the frames of --frames into one exposure, the average of their light (Kyaw
+    /// 2013 sec. 7.4), written to --output (a path without a frame number); needs --film linear.
+    #[arg(long = "long-exposure", requires = "frames", conflicts_with = "skip_existing")]
+    pub long_exposure: bool,
 }
 
 /// The frames to render: --frames, or its chunk that --frames-from-env names.
@@ -59,8 +65,9 @@ struct Patterns {
 
 impl Patterns {
     /// The patterns of `args`' paths; an output without a frame number is refused (every frame
-    /// would write over it).
+    /// would write over it), and with one for a long exposure (one file).
     fn new(args: &RenderArgs) -> Result<Patterns> {
+        let one_output = args.sequence.long_exposure;
         let parse = |flag: &str, path: Option<&std::path::Path>| -> Result<Option<FramePattern>> {
             match path {
                 Some(path) => FramePattern::parse(path).with_context(|| flag.to_string()),
@@ -69,7 +76,13 @@ impl Patterns {
         };
         let output = |flag: &str, path: Option<&std::path::Path>| -> Result<Option<FramePattern>> {
             let pattern = parse(flag, path)?;
-            if let (None, Some(path)) = (&pattern, path) {
+            if let (true, Some(_), Some(path)) = (one_output, &pattern, path) {
+                bail!(
+                    "{flag} \"{}\" has a frame number, but --long-exposure writes one exposure of all the frames",
+                    path.display()
+                );
+            }
+            if let (false, None, Some(path)) = (one_output, &pattern, path) {
                 bail!(
                     "{flag} \"{}\" has no frame number (####, %04d): every frame of --frames would write over it",
                     path.display()
@@ -160,6 +173,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let range = frames(&args.sequence)?;
     let patterns = Patterns::new(args)?;
     let camera = args.camera()?;
+    if args.sequence.long_exposure {
+        return long_exposure(args, &range, &patterns, &camera);
+    }
     // The first frame's outputs are checked (folders, inputs, each other) before any work.
     if let Some(&first) = range.frames.first() {
         drop(patterns.frame_args(args, first).outputs()?);
@@ -194,17 +210,71 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
     }
     progress.finish();
-    let wall_s = started.elapsed().as_secs_f64();
-    let not_run = total - done - skipped - failed.len();
-    eprintln!(
-        "frames: {done} done, {skipped} skipped, {} failed{} of {total} in {wall_s:.1} s ({:.2} frames/s)",
-        failed.len(),
-        if not_run > 0 { format!(", {not_run} not run (--fail-fast)") } else { String::new() },
-        if wall_s > 0.0 { done as f64 / wall_s } else { 0.0 }
-    );
+    summary(done, skipped, failed.len(), total, started, "(--fail-fast)");
     if !failed.is_empty() {
         let list: Vec<String> = failed.iter().map(i64::to_string).collect();
         bail!("{} of {total} frames failed: {}", failed.len(), list.join(", "));
+    }
+    Ok(())
+}
+
+/// The summary line: frames done, skipped, failed and not run (`why`), wall time, frames per second.
+fn summary(done: usize, skipped: usize, failed: usize, total: usize, started: Instant, why: &str) {
+    let wall_s = started.elapsed().as_secs_f64();
+    let not_run = total - done - skipped - failed;
+    eprintln!(
+        "frames: {done} done, {skipped} skipped, {failed} failed{} of {total} in {wall_s:.1} s ({:.2} frames/s)",
+        if not_run > 0 { format!(", {not_run} not run {why}") } else { String::new() },
+        if wall_s > 0.0 { done as f64 / wall_s } else { 0.0 }
+    );
+}
+
+/// `--long-exposure`: the frames of `range` rendered and accumulated into one exposure, written
+/// only when every frame was.
+fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, camera: &Camera) -> Result<()> {
+    if !film_is_linear(args) {
+        bail!(
+            "--long-exposure averages the frames' light, which comes before a film curve: give --film linear \
+             (scene-referred sensor values) and apply the curve to the exposure"
+        );
+    }
+    if args.trace.is_some() {
+        bail!("--trace: GPU times are per frame; --long-exposure writes no trace");
+    }
+    let outputs = args.outputs()?;
+    let started = Instant::now();
+    let total = range.frames.len();
+    let mut progress = Progress::new(total);
+    let mut session = Session::default();
+    let mut exposure = LongExposure::default();
+    let mut exr_options = None;
+    let mut failed = None;
+    for &frame in &range.frames {
+        let one = patterns.frame_args(args, frame);
+        let added = render_image(&one, camera, &mut session).and_then(|rendered| {
+            exposure.add(frame, &rendered.image)?;
+            exr_options = Some(rendered.exr_options);
+            Ok(())
+        });
+        if let Err(e) = added {
+            progress.say(&format!("error: frame {frame}: {}", crate::error_text(&e)));
+            failed = Some(frame);
+        }
+        progress.frame_finished(frame);
+        if failed.is_some() {
+            break;
+        }
+    }
+    progress.finish();
+    let done = exposure.frames() as usize;
+    summary(done, 0, usize::from(failed.is_some()), total, started, "(the exposure stopped)");
+    if let Some(frame) = failed {
+        bail!("frame {frame} failed: the long exposure of {total} frames is not written");
+    }
+    let exr_options = exr_options.unwrap_or_default();
+    let rendered = RenderedFrame { image: exposure.image()?, exr_options, profile: Default::default() };
+    for path in write_outputs(args, outputs, &rendered)? {
+        eprintln!("wrote {} (a long exposure of {done} frames)", path.display());
     }
     Ok(())
 }
