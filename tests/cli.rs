@@ -1703,3 +1703,56 @@ fn a_long_exposure_is_the_average_of_the_frames() {
     assert_eq!(std::fs::read(dir.join("exposure.exr")).unwrap(), before);
     assert!(temporaries(&dir).is_empty());
 }
+
+#[test]
+fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
+    let dir = TestDir::new("long_exposure_state");
+    let mut args = sequence_args(&dir);
+    for arg in args.iter_mut() {
+        if *arg == dir.arg("o.####.exr") {
+            *arg = dir.arg("whole.exr");
+        }
+    }
+    args.extend(s(&["--frames", "1001-1006", "--long-exposure", "--film", "linear", "--float"]));
+    render(&dir, &args).success();
+    // Frame 1004 is broken: the run stops there, the state keeps 1001-1003.
+    let with_state = |out: &str| {
+        let mut a: Vec<String> = args.iter().map(|x| x.replace("whole.exr", out)).collect();
+        a.extend(s(&["--state", &dir.arg("exposure.state")]));
+        a
+    };
+    std::fs::write(dir.join("c.1004.exr"), b"not an EXR").unwrap();
+    let err = render(&dir, &with_state("resumed.exr")).failure();
+    assert_contains(&err, "frames: 3 done, 0 skipped, 1 failed, 2 not run (the exposure stopped) of 6 in ");
+    assert!(!dir.join("resumed.exr").exists());
+    // Repaired and run again: 1001-1003 come from the state, the sums are the same, the bytes too.
+    sequence_args(&dir);
+    let run = render(&dir, &with_state("resumed.exr")).success();
+    assert_contains(&run.stderr, "frame 1002: already in the exposure (--state)");
+    assert_contains(&run.stderr, "frames: 3 done, 3 skipped, 0 failed of 6 in ");
+    assert_contains(&run.stderr, "(a long exposure of 6 frames)");
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert!(read("resumed.exr") == read("whole.exr"), "the resumed exposure differs from the uninterrupted one");
+    // A state from another range, and a state that is not one, are named.
+    let mut other = with_state("other.exr");
+    let frames_at = other.iter().position(|a| a == "1001-1006").unwrap();
+    other[frames_at] = "1004-1006".into();
+    let err = render(&dir, &other).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --state \"{}\": frame 1001 of the exposure is not in --frames \"1004-1006\"",
+            dir.arg("exposure.state")
+        ),
+    );
+    std::fs::write(dir.join("exposure.state"), b"hello").unwrap();
+    let err = render(&dir, &with_state("other.exr")).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --state \"{}\": not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 1\"",
+            dir.arg("exposure.state")
+        ),
+    );
+    assert!(!dir.join("other.exr").exists());
+}

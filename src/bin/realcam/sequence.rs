@@ -37,6 +37,10 @@ pub struct SequenceArgs {
     /// 2013 sec. 7.4), written to --output (a path without a frame number); needs --film linear.
     #[arg(long = "long-exposure", requires = "frames", conflicts_with = "skip_existing")]
     pub long_exposure: bool,
+    /// The long exposure's state: written (atomically) after every frame, read at the start,
+    /// so that a stopped exposure resumes where it was (the frames in it are not rendered again).
+    #[arg(long, value_name = "FILE", requires = "long_exposure")]
+    pub state: Option<PathBuf>,
 }
 
 /// The frames to render: --frames, or its chunk that --frames-from-env names.
@@ -242,18 +246,32 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
         bail!("--trace: GPU times are per frame; --long-exposure writes no trace");
     }
     let outputs = args.outputs()?;
+    let state = args.sequence.state.as_deref();
+    let mut exposure = match state.filter(|p| p.exists()) {
+        Some(path) => read_state(path, range)?,
+        None => LongExposure::default(),
+    };
     let started = Instant::now();
     let total = range.frames.len();
     let mut progress = Progress::new(total);
     let mut session = Session::default();
-    let mut exposure = LongExposure::default();
     let mut exr_options = None;
     let mut failed = None;
+    let mut skipped = 0;
     for &frame in &range.frames {
         let one = patterns.frame_args(args, frame);
+        if exposure.has(frame) {
+            skipped += 1;
+            progress.say(&format!("frame {frame}: already in the exposure (--state)"));
+            progress.frame_finished(frame);
+            continue;
+        }
         let added = render_image(&one, camera, &mut session).and_then(|rendered| {
             exposure.add(frame, &rendered.image)?;
             exr_options = Some(rendered.exr_options);
+            if let Some(path) = state {
+                realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
+            }
             Ok(())
         });
         if let Err(e) = added {
@@ -266,17 +284,28 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
         }
     }
     progress.finish();
-    let done = exposure.frames() as usize;
-    summary(done, 0, usize::from(failed.is_some()), total, started, "(the exposure stopped)");
+    let done = exposure.frames() as usize - skipped;
+    summary(done, skipped, usize::from(failed.is_some()), total, started, "(the exposure stopped)");
     if let Some(frame) = failed {
         bail!("frame {frame} failed: the long exposure of {total} frames is not written");
     }
     let exr_options = exr_options.unwrap_or_default();
     let rendered = RenderedFrame { image: exposure.image()?, exr_options, profile: Default::default() };
     for path in write_outputs(args, outputs, &rendered)? {
-        eprintln!("wrote {} (a long exposure of {done} frames)", path.display());
+        eprintln!("wrote {} (a long exposure of {} frames)", path.display(), exposure.frames());
     }
     Ok(())
+}
+
+/// The state of a stopped long exposure, all of whose frames are in `range`.
+fn read_state(path: &std::path::Path, range: &FrameRange) -> Result<LongExposure> {
+    let context = || format!("--state \"{}\"", path.display());
+    let bytes = std::fs::read(path).with_context(context)?;
+    let exposure = LongExposure::from_bytes(&bytes).with_context(context)?;
+    if let Some(frame) = exposure.done().iter().find(|f| !range.frames.contains(f)) {
+        bail!("{}: frame {frame} of the exposure is not in --frames \"{}\"", context(), range.text);
+    }
+    Ok(exposure)
 }
 
 #[cfg(test)]
