@@ -96,9 +96,19 @@ where
     I: IntoIterator<Item = S>,
     S: Into<OsString>,
 {
+    realcam_env(dir, args, &[])
+}
+
+/// [`realcam`] with the environment variables `env` set.
+fn realcam_env<I, S>(dir: &TestDir, args: I, env: &[(&str, &str)]) -> Run
+where
+    I: IntoIterator<Item = S>,
+    S: Into<OsString>,
+{
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     let out = Command::new(env!("CARGO_BIN_EXE_realcam"))
         .args(&args)
+        .envs(env.iter().copied())
         .current_dir(&dir.path)
         .env("REALCAM_CACHE_DIR", &dir.cache)
         .env_remove("REALCAM_VALIDATE")
@@ -563,6 +573,13 @@ fn outputs_that_are_inputs_are_refused() {
     let at = args.iter().position(|a| a == "-o").unwrap();
     args[at + 1] = color_arg.clone();
     assert_contains(&render(&dir, &args).failure(), "it is the input color pass");
+    // The flare's light list is an input too.
+    let lights = dir.arg("lights.json");
+    std::fs::write(&lights, r#"[{"x": 8, "y": 6, "energy": 1e6}]"#).unwrap();
+    let err = run(&lights, &["--flare-lights", &lights]);
+    assert_contains(&err, &format!("it is the input flare light list \"{lights}\""));
+    assert_eq!(std::fs::read_to_string(&lights).unwrap(), r#"[{"x": 8, "y": 6, "energy": 1e6}]"#);
+    std::fs::remove_file(&lights).unwrap();
     // --png and -o the same file.
     let out = dir.arg("out.exr");
     let err = run(&out, &["--png", &out]);
@@ -1458,4 +1475,307 @@ fn the_flare_report_needs_a_prescription_and_says_so() {
     assert_contains(&run.stderr, "--lens: lens \"realcam standard 50 mm f/1.4\" has no [[surface]] prescription");
     assert_contains(&run.stderr, "--lens lenses/tessar-walch-lens.toml");
     assert!(!dir.join("report").exists());
+}
+
+// ---- Frame sequences (`render --frames`) ----
+
+/// The frames of the generated sequence.
+const SEQUENCE: [i64; 6] = [1001, 1002, 1003, 1004, 1005, 1006];
+
+/// Writes a 6-frame sequence `c.1001.exr` .. `c.1006.exr` and `d.1001.exr` .. (24x16 px crops of
+/// the demo passes, each frame's crop 8 px further right and 25 % brighter, so that every
+/// frame differs) and
+/// returns the sequence arguments that read it and write `o.####.exr`.
+fn sequence_args(dir: &TestDir) -> Vec<String> {
+    let testdata = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata");
+    let color = read_exr_rgba(&testdata.join("demo_color.exr")).unwrap();
+    let depth = read_exr_channel(&testdata.join("demo_depth.exr"), "Z").unwrap();
+    let (w, h) = (24u32, 16u32);
+    for (i, frame) in SEQUENCE.iter().enumerate() {
+        let (x0, y0) = (300 + 8 * i as u32, 200u32);
+        let crop = |im: &Image, gain: f32| {
+            let mut out = Image::new(w, h, im.channels);
+            for y in 0..h {
+                for x in 0..w {
+                    for c in 0..im.channels {
+                        out.set(x, y, c, im.get(x0 + x, y0 + y, c) * if c < 3 { gain } else { 1.0 });
+                    }
+                }
+            }
+            out
+        };
+        write_exr_rgba(&dir.join(&format!("c.{frame}.exr")), &crop(&color, 1.0 + 0.25 * i as f32), &float_opts())
+            .unwrap();
+        let z = crop(&depth, 1.0);
+        write_exr_channels(&dir.join(&format!("d.{frame}.exr")), w, h, &[("Z", &z.data)], &float_opts()).unwrap();
+    }
+    let mut args = vec!["--color".into(), dir.arg("c.####.exr"), "--depth".into(), dir.arg("d.%04d.exr")];
+    args.extend(["-o".into(), dir.arg("o.####.exr"), "--fstop".into(), "1.4".into(), "--focus".into(), "2".into()]);
+    args
+}
+
+/// The percentages of the `openjd_progress:` lines of `stderr`, checking that each comes with
+/// its Tractor and Deadline lines.
+fn farm_progress(stderr: &str) -> Vec<u32> {
+    let lines: Vec<&str> = stderr.lines().collect();
+    let mut percents = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        if let Some(n) = line.strip_prefix("openjd_progress: ") {
+            assert_eq!(lines.get(i + 1), Some(&format!("ALF_PROGRESS {n}%").as_str()), "{stderr}");
+            assert_eq!(lines.get(i + 2), Some(&format!("Progress: {n}%").as_str()), "{stderr}");
+            percents.push(n.parse().unwrap());
+        }
+    }
+    percents
+}
+
+#[test]
+fn a_sequence_renders_each_frame_as_a_single_run_would() {
+    let dir = TestDir::new("sequence");
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("p.@@@@.png")]));
+    let run = render(&dir, &args).success();
+    // One device for the whole sequence; the farm lines after each frame; the summary.
+    assert_eq!(run.stderr.matches("device: ").count(), 1, "{}", run.stderr);
+    assert_eq!(farm_progress(&run.stderr), [16, 33, 50, 66, 83, 100]);
+    assert_contains(&run.stderr, "frames: 6 done, 0 skipped, 0 failed of 6 in ");
+    assert_contains(&run.stderr, &format!("frame 1004: wrote {}, {}", dir.arg("o.1004.exr"), dir.arg("p.1004.png")));
+    for frame in SEQUENCE {
+        let mut one = sequence_args(&dir);
+        let (exr, png) = (format!("single.{frame}.exr"), format!("single.{frame}.png"));
+        for arg in one.iter_mut() {
+            *arg = arg.replace("####", &frame.to_string()).replace("%04d", &frame.to_string());
+            if *arg == dir.arg(&format!("o.{frame}.exr")) {
+                *arg = dir.arg(&exr);
+            }
+        }
+        one.extend(s(&["--png", &dir.arg(&png)]));
+        render(&dir, &one).success();
+        let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+        assert!(read(&format!("o.{frame}.exr")) == read(&exr), "frame {frame}: EXR differs from a single run");
+        assert!(read(&format!("p.{frame}.png")) == read(&png), "frame {frame}: PNG differs from a single run");
+    }
+    // The frames differ: a sequence writing one frame six times would not pass.
+    let first = std::fs::read(dir.join("o.1001.exr")).unwrap();
+    assert!(SEQUENCE[1..].iter().all(|f| std::fs::read(dir.join(&format!("o.{f}.exr"))).unwrap() != first));
+    assert!(temporaries(&dir).is_empty());
+}
+
+#[test]
+fn skip_existing_skips_exactly_the_frames_whose_outputs_all_exist() {
+    let dir = TestDir::new("sequence_skip");
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("p.####.png"), "--skip-existing"]));
+    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png", "o.1003.exr"] {
+        std::fs::write(dir.join(name), b"kept").unwrap();
+    }
+    let run = render(&dir, &args).success();
+    assert_contains(&run.stderr, "frames: 4 done, 2 skipped, 0 failed of 6 in ");
+    assert_contains(&run.stderr, &format!("frame 1002: skipped, {} exists", dir.arg("o.1002.exr")));
+    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"] {
+        assert_eq!(std::fs::read(dir.join(name)).unwrap(), b"kept", "{name}");
+    }
+    // Frame 1003 had its EXR but not its PNG: rendered again, both written.
+    for frame in [1001, 1003, 1004, 1006] {
+        let image = read_exr_rgba(&dir.join(&format!("o.{frame}.exr"))).unwrap();
+        assert_eq!((image.width, image.height), (24, 16));
+        assert!(dir.join(&format!("p.{frame}.png")).exists());
+    }
+    assert_eq!(farm_progress(&run.stderr).len(), 6);
+}
+
+#[test]
+fn a_corrupt_frame_is_named_and_the_others_are_written() {
+    let dir = TestDir::new("sequence_corrupt");
+    let mut args = sequence_args(&dir);
+    std::fs::write(dir.join("c.1003.exr"), b"not an EXR").unwrap();
+    args.extend(s(&["--frames", "1001-1006"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: frame 1003: color: \"{}\" is not an OpenEXR file (it does not start with the EXR magic number)",
+            dir.arg("c.1003.exr")
+        ),
+    );
+    assert_contains(&err, "frames: 5 done, 0 skipped, 1 failed of 6 in ");
+    assert_contains(&err, "error: 1 of 6 frames failed: 1003");
+    for frame in SEQUENCE {
+        assert_eq!(dir.join(&format!("o.{frame}.exr")).exists(), frame != 1003, "frame {frame}");
+    }
+    assert!(temporaries(&dir).is_empty());
+    // --fail-fast: stops at 1003; 1004.. are not rendered.
+    let dir = TestDir::new("sequence_fail_fast");
+    let mut args = sequence_args(&dir);
+    std::fs::write(dir.join("c.1003.exr"), b"not an EXR").unwrap();
+    args.extend(s(&["--frames", "1001-1006", "--fail-fast"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "frames: 2 done, 0 skipped, 1 failed, 3 not run (--fail-fast) of 6 in ");
+    for frame in SEQUENCE {
+        assert_eq!(dir.join(&format!("o.{frame}.exr")).exists(), frame < 1003, "frame {frame}");
+    }
+}
+
+#[test]
+fn an_array_task_renders_its_chunk_of_the_range() {
+    let dir = TestDir::new("sequence_chunk");
+    let mut args = vec!["render".to_string(), "--validate".to_string()];
+    args.extend(sequence_args(&dir));
+    args.extend(s(&["--frames", "1001-1006", "--frames-from-env", "TASK_INDEX", "--chunk-size", "2"]));
+    realcam_env(&dir, &args, &[("TASK_INDEX", "1")]).success();
+    for frame in SEQUENCE {
+        assert_eq!(dir.join(&format!("o.{frame}.exr")).exists(), [1003, 1004].contains(&frame), "frame {frame}");
+    }
+    let err = realcam_env(&dir, &args, &[("TASK_INDEX", "3")]).failure();
+    assert_contains(
+        &err,
+        "error: --frames-from-env: chunk 3 of frame range \"1001-1006\" in chunks of 2: the range has 6 frames, 3 chunk(s) (indices 0 to 2)",
+    );
+    let err = realcam_env(&dir, &args, &[("TASK_INDEX", "one")]).failure();
+    assert_contains(&err, "error: --frames-from-env: TASK_INDEX=\"one\" is not a chunk index (a whole number from 0)");
+    let err = realcam(&dir, &args).failure();
+    assert_contains(&err, "error: --frames-from-env: the environment variable TASK_INDEX is not set");
+}
+
+#[test]
+fn sequence_errors_name_the_flag_before_any_work() {
+    let dir = TestDir::new("sequence_errors");
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1006-1001"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        "error: --frames: frame range \"1006-1001\": \"1006-1001\": the span ends before it starts (1001 < 1006)",
+    );
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("preview.png")]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --png \"{}\" has no frame number (####, %04d): every frame of --frames would write over it",
+            dir.arg("preview.png")
+        ),
+    );
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("p.%4d.png")]));
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "\"%4d\" pads with spaces; write \"%04d\" for a zero-padded frame number");
+    assert!(!err.contains("device:"), "{err}");
+    assert!(dir.listing().iter().all(|name| name.starts_with("c.") || name.starts_with("d.")), "{:?}", dir.listing());
+}
+
+#[test]
+fn a_long_exposure_is_the_average_of_the_frames() {
+    let dir = TestDir::new("long_exposure");
+    let linear = ["--film", "linear", "--float"];
+    let mut args = sequence_args(&dir);
+    for arg in args.iter_mut() {
+        if *arg == dir.arg("o.####.exr") {
+            *arg = dir.arg("exposure.exr");
+        }
+    }
+    args.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
+    args.extend(s(&linear));
+    let run = render(&dir, &args).success();
+    assert_contains(&run.stderr, &format!("wrote {} (a long exposure of 6 frames)", dir.arg("exposure.exr")));
+    assert_eq!(farm_progress(&run.stderr), [16, 33, 50, 66, 83, 100]);
+    // The same frames one by one, averaged here in f64.
+    let mut sequence = sequence_args(&dir);
+    sequence.extend(s(&["--frames", "1001-1006"]));
+    sequence.extend(s(&linear));
+    render(&dir, &sequence).success();
+    let exposure = read_exr_rgba(&dir.join("exposure.exr")).unwrap();
+    let frames: Vec<Image> =
+        SEQUENCE.iter().map(|f| read_exr_rgba(&dir.join(&format!("o.{f}.exr"))).unwrap()).collect();
+    for (i, &value) in exposure.data.iter().enumerate() {
+        let mean = frames.iter().map(|f| f64::from(f.data[i])).sum::<f64>() / 6.0;
+        assert!((f64::from(value) - mean).abs() <= 1e-6 * mean.abs().max(1e-3), "value {i}: {value} against {mean}");
+    }
+    // Frames differ, so the average is none of them.
+    assert!(frames.iter().all(|f| f.data != exposure.data));
+
+    // Refused before any work: a film curve, an output with a frame number.
+    let mut curve = args.clone();
+    curve.truncate(curve.len() - linear.len());
+    let err = render(&dir, &curve).failure();
+    assert_contains(
+        &err,
+        "error: --long-exposure averages the frames' light, which comes before a film curve: give --film linear",
+    );
+    let mut patterned = sequence_args(&dir);
+    patterned.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
+    patterned.extend(s(&linear));
+    let err = render(&dir, &patterned).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --output \"{}\" has a frame number, but --long-exposure writes one exposure of all the frames",
+            dir.arg("o.####.exr")
+        ),
+    );
+    assert!(!err.contains("device:"), "{err}");
+
+    // A frame that fails stops the exposure; the one written before stays as it was.
+    let before = std::fs::read(dir.join("exposure.exr")).unwrap();
+    std::fs::write(dir.join("c.1004.exr"), b"not an EXR").unwrap();
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: frame 1004: color: ");
+    assert_contains(&err, "frames: 3 done, 0 skipped, 1 failed, 2 not run (the exposure stopped) of 6 in ");
+    assert_contains(&err, "error: frame 1004 failed: the long exposure of 6 frames is not written");
+    assert_eq!(std::fs::read(dir.join("exposure.exr")).unwrap(), before);
+    assert!(temporaries(&dir).is_empty());
+}
+
+#[test]
+fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
+    let dir = TestDir::new("long_exposure_state");
+    let mut args = sequence_args(&dir);
+    for arg in args.iter_mut() {
+        if *arg == dir.arg("o.####.exr") {
+            *arg = dir.arg("whole.exr");
+        }
+    }
+    args.extend(s(&["--frames", "1001-1006", "--long-exposure", "--film", "linear", "--float"]));
+    render(&dir, &args).success();
+    // Frame 1004 is broken: the run stops there, the state keeps 1001-1003.
+    let with_state = |out: &str| {
+        let mut a: Vec<String> = args.iter().map(|x| x.replace("whole.exr", out)).collect();
+        a.extend(s(&["--state", &dir.arg("exposure.state")]));
+        a
+    };
+    std::fs::write(dir.join("c.1004.exr"), b"not an EXR").unwrap();
+    let err = render(&dir, &with_state("resumed.exr")).failure();
+    assert_contains(&err, "frames: 3 done, 0 skipped, 1 failed, 2 not run (the exposure stopped) of 6 in ");
+    assert!(!dir.join("resumed.exr").exists());
+    // Repaired and run again: 1001-1003 come from the state, the sums are the same, the bytes too.
+    sequence_args(&dir);
+    let run = render(&dir, &with_state("resumed.exr")).success();
+    assert_contains(&run.stderr, "frame 1002: already in the exposure (--state)");
+    assert_contains(&run.stderr, "frames: 3 done, 3 skipped, 0 failed of 6 in ");
+    assert_contains(&run.stderr, "(a long exposure of 6 frames)");
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert!(read("resumed.exr") == read("whole.exr"), "the resumed exposure differs from the uninterrupted one");
+    // A state from another range, and a state that is not one, are named.
+    let mut other = with_state("other.exr");
+    let frames_at = other.iter().position(|a| a == "1001-1006").unwrap();
+    other[frames_at] = "1004-1006".into();
+    let err = render(&dir, &other).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --state \"{}\": frame 1001 of the exposure is not in --frames \"1004-1006\"",
+            dir.arg("exposure.state")
+        ),
+    );
+    std::fs::write(dir.join("exposure.state"), b"hello").unwrap();
+    let err = render(&dir, &with_state("other.exr")).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --state \"{}\": not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 1\"",
+            dir.arg("exposure.state")
+        ),
+    );
+    assert!(!dir.join("other.exr").exists());
 }

@@ -24,6 +24,7 @@ pub mod lens_file;
 pub mod lensfun;
 pub mod output;
 pub mod png;
+pub mod sequence;
 
 pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
 pub use exr_write::{encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrWriteOptions};

@@ -7,4 +7,5 @@ pub mod aperture;
 pub mod camera;
 pub mod flare;
 pub mod frame;
+pub mod long_exposure;
 pub mod settings;

@@ -10,7 +10,7 @@ use realcam::optics::sensor::SensorFit;
 use std::path::{Path, PathBuf};
 
 /// The lens of a command: a lens file, or a lens of the lensfun database.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct LensChoice {
     /// Lens file (TOML, see lenses/), or a built-in lens: `ideal` (the renderer's thin lens:
     /// any focal length and f-number, no aberration, the renderers' CoC) or `default`; the
@@ -58,7 +58,7 @@ impl From<FitArg> for SensorFit {
     }
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct LensArgs {
     /// Lens file (TOML, see lenses/) or --lens-lensfun MODEL; the built-in default lens when absent.
     #[command(flatten)]
@@ -113,7 +113,7 @@ impl LensArgs {
     }
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct GpuArgs {
     /// Enable the Khronos validation layer with synchronization validation (also REALCAM_VALIDATE=1).
     #[arg(long)]

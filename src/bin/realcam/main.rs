@@ -13,6 +13,7 @@ mod flare;
 mod lens;
 mod motion_args;
 mod render;
+mod sequence;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -91,7 +92,7 @@ fn main() {
 
 /// An error and its causes, each said once: a cause whose text the message already holds
 /// (an error that prints its source, as io and exr errors do) is left out.
-fn error_text(e: &anyhow::Error) -> String {
+pub(crate) fn error_text(e: &anyhow::Error) -> String {
     let mut text = String::new();
     for cause in e.chain() {
         let s = cause.to_string();

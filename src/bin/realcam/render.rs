@@ -5,6 +5,7 @@ use crate::flags::NameFlags;
 use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
+use realcam::gpu::Gpu;
 use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
@@ -73,18 +74,18 @@ impl From<DepthKindArg> for DepthKind {
     }
 }
 
-#[derive(Args)]
+#[derive(Args, Clone)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
     #[arg(long)]
-    color: PathBuf,
+    pub color: PathBuf,
     /// Depth pass EXR (a Z channel); default: look in the color file.
     #[arg(long)]
-    depth: Option<PathBuf>,
+    pub depth: Option<PathBuf>,
     /// Velocity pass EXR; default: use one in the color file if present.
     #[arg(long)]
-    velocity: Option<PathBuf>,
+    pub velocity: Option<PathBuf>,
     #[command(flatten)]
     lens: LensArgs,
     /// Shutter time in seconds, e.g. 0.02 or 1/50.
@@ -174,13 +175,13 @@ pub struct RenderArgs {
     max_pixels: Option<u64>,
     /// Output EXR.
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Write 32-bit float EXR instead of half.
     #[arg(long)]
     float: bool,
     /// Also write an sRGB 8-bit PNG preview here.
     #[arg(long)]
-    png: Option<PathBuf>,
+    pub png: Option<PathBuf>,
     /// Print the planned passes and why each runs or is skipped.
     #[arg(long)]
     explain: bool,
@@ -189,15 +190,17 @@ pub struct RenderArgs {
     profile: bool,
     /// Write the per-pass GPU times as a Chrome trace JSON (opens in Perfetto).
     #[arg(long)]
-    trace: Option<PathBuf>,
+    pub trace: Option<PathBuf>,
     #[command(flatten)]
     motion: MotionArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+    #[command(flatten)]
+    pub sequence: crate::sequence::SequenceArgs,
 }
 
 /// The lens flare's flags.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct FlareArgs {
     /// Record no lens flare (ghosts, starburst, halo) around bright lights.
     #[arg(long = "no-flare")]
@@ -231,7 +234,7 @@ impl FlareArgs {
 
 impl RenderArgs {
     /// The camera these flags ask for.
-    fn camera(&self) -> Result<Camera> {
+    pub fn camera(&self) -> Result<Camera> {
         let lens_file = self.lens.lens.load()?;
         let shutter_s = parse_shutter_s(&self.shutter).with_context(|| format!("--shutter {:?}", self.shutter))?;
         let film = FilmMode::choose(self.film.into(), self.film_file.as_deref())?;
@@ -272,8 +275,13 @@ impl RenderArgs {
         Ok(camera)
     }
 
+    /// The output paths these flags name: the EXR, then the PNG and the trace if asked for.
+    pub fn output_paths(&self) -> Vec<&Path> {
+        [Some(self.output.as_path()), self.png.as_deref(), self.trace.as_deref()].into_iter().flatten().collect()
+    }
+
     /// The outputs, checked against each other and the inputs and reserved, before any work.
-    fn outputs(&self) -> Result<Outputs> {
+    pub fn outputs(&self) -> Result<Outputs> {
         let mut outputs: Vec<(&'static str, &Path)> = vec![("output", &self.output)];
         outputs.extend(self.png.as_deref().map(|p| ("png", p)));
         outputs.extend(self.trace.as_deref().map(|p| ("trace", p)));
@@ -284,6 +292,7 @@ impl RenderArgs {
             ("aperture image", self.aperture_image.as_deref()),
             ("lens file", self.lens.lens.lens.as_deref()),
             ("film file", self.film_file.as_deref()),
+            ("flare light list", self.flare.flare_lights.as_deref()),
         ];
         let inputs: Vec<(&'static str, &Path)> = inputs.into_iter().filter_map(|(w, p)| Some((w, p?))).collect();
         Outputs::new(&outputs, &inputs).name_flags()
@@ -313,12 +322,49 @@ impl RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let mut outputs = args.outputs()?;
+    if args.sequence.frames.is_some() {
+        return crate::sequence::run(args);
+    }
+    let outputs = args.outputs()?;
     let camera = args.camera()?;
+    for path in render_frame(args, &camera, outputs, &mut Session::default())? {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The GPU and the pipelines of a run, opened at the first frame that reaches the GPU and kept
+/// for the frames after it (a later frame's plan creates the pipelines it adds).
+#[derive(Default)]
+pub struct Session {
+    gpu: Option<(Gpu, Renderer)>,
+}
+
+/// One frame rendered, ready to write.
+pub struct RenderedFrame {
+    pub image: Image,
+    pub exr_options: ExrWriteOptions,
+    pub profile: realcam::gpu::Profile,
+}
+
+/// Renders the frame whose passes `args` names into its reserved `outputs` through `camera`;
+/// the paths written.
+pub fn render_frame(
+    args: &RenderArgs,
+    camera: &Camera,
+    outputs: Outputs,
+    session: &mut Session,
+) -> Result<Vec<PathBuf>> {
+    let rendered = render_image(args, camera, session)?;
+    write_outputs(args, outputs, &rendered)
+}
+
+/// Renders the frame whose passes `args` names through `camera`.
+pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
-    let frame = Frame::from_passes(passes, &camera, args.depth_kind.into());
-    let plan = realcam::pipeline::planner::plan(&frame, &camera);
+    let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
+    let plan = realcam::pipeline::planner::plan(&frame, camera);
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         eprintln!("{}", plan.explain());
@@ -328,14 +374,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("warning: {warning}{hint}");
     }
 
-    let gpu = args.gpu.open()?;
-    let renderer = Renderer::new(&gpu, &plan)?;
+    let (gpu, renderer) = match &mut session.gpu {
+        Some(opened) => opened,
+        None => {
+            let gpu = args.gpu.open()?;
+            let renderer = Renderer::new(&gpu, &plan)?;
+            session.gpu.insert((gpu, renderer))
+        }
+    };
+    let messages_before = gpu.validation_message_count();
     let rendered = renderer.render(&frame, &plan, false)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }
-    if gpu.validation_message_count() > 0 {
-        bail!("{} Vulkan validation messages (see above)", gpu.validation_message_count());
+    let messages = gpu.validation_message_count() - messages_before;
+    if messages > 0 {
+        bail!("{messages} Vulkan validation messages (see above)");
     }
 
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
@@ -345,19 +399,28 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         data_origin: frame.data_origin,
         attributes: camera.attributes(),
     };
+    Ok(RenderedFrame { image, exr_options, profile: rendered.profile })
+}
+
+/// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
+pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
+    let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
-    outputs.write("output", &io::encode_exr_rgba(&args.output, &image, &exr_options)?)?;
+    outputs.write("output", &io::encode_exr_rgba(&args.output, image, &rendered.exr_options)?)?;
     if let Some(png) = &args.png {
-        outputs.write("png", &io::encode_png_srgb(png, &image)?)?;
+        outputs.write("png", &io::encode_png_srgb(png, image)?)?;
     }
     if args.trace.is_some() {
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
     }
     outputs.commit()?;
-    for path in [Some(&args.output), args.png.as_ref(), args.trace.as_ref()].into_iter().flatten() {
-        eprintln!("wrote {}", path.display());
-    }
-    Ok(())
+    Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
+}
+
+/// Whether the film is scene-referred linear (--film linear, no --film-file): sensor values,
+/// which a long exposure may average.
+pub fn film_is_linear(args: &RenderArgs) -> bool {
+    matches!(args.film, FilmArg::Linear) && args.film_file.is_none()
 }
 
 fn indent(text: &str) -> String {
