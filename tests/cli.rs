@@ -387,6 +387,24 @@ fn request_outside_the_lens_range_needs_force() {
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr"]);
 }
 
+/// `--lens ideal` is the renderers' lens: any focal length and f-number without --force, the
+/// renderers' CoC model, no natural vignetting, and `--explain` says why the vignette is skipped.
+#[test]
+fn the_ideal_lens_takes_any_focal_length_and_does_not_vignette() {
+    let dir = TestDir::new("ideal_lens");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--lens", "ideal", "--focal-length", "35", "--fstop", "0.9", "--explain"]));
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(&err, "[skip] vignette");
+    assert_contains(&err, "the lens has no natural vignetting (the ideal lens, or natural_vignetting = false)");
+    assert!(!err.contains("--no-vignetting"), "{err}");
+    assert_eq!(attribute(&exr_text_attributes(&dir.join("out.exr")), "realcam/f_number"), "0.9");
+    // The default lens with --no-vignetting names the flag instead.
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--no-vignetting", "--explain"]));
+    assert_contains(&render(&dir, &args).success().stderr, "turned off (--no-vignetting)");
+}
+
 // ---------------------------------------------------------------------------------------------
 // 7: numeric settings
 // ---------------------------------------------------------------------------------------------

@@ -282,6 +282,9 @@ pub struct Camera {
     /// Apply the exposure gain (ISO, shutter, f-number). Off: sensor value = scene value.
     pub exposure: bool,
     pub vignetting: bool,
+    /// The lens has natural vignetting (false for the ideal lens, or `natural_vignetting =
+    /// false` in its file): `vignetting` is off then whatever the request.
+    pub lens_vignettes: bool,
     pub film: FilmMode,
     /// Clamp on |CoC| ([`CocLimit::px`] for a frame's pitch).
     pub max_coc: CocLimit,
@@ -607,6 +610,7 @@ impl Camera {
             nits_per_unit: req.nits_per_unit,
             exposure: req.exposure,
             vignetting: req.vignetting && lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
+            lens_vignettes: lens_file.natural_vignetting.unwrap_or(!lens_file.ideal),
             film: req.film.clone().unwrap_or(FilmMode::Curve(FilmCurve::default_filmic())),
             max_coc: req.max_coc,
             bokeh: req.bokeh,

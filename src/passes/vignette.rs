@@ -109,7 +109,9 @@ impl Pass for Vignette {
             "cos^4 natural vignetting"
         };
         let corner = push.corner_falloff(&table) as f64;
-        if !camera.vignetting {
+        if !camera.lens_vignettes {
+            Decision::skip("the lens has no natural vignetting (the ideal lens, or natural_vignetting = false)")
+        } else if !camera.vignetting {
             Decision::skip("turned off (--no-vignetting)")
         } else if 1.0 - corner <= VISIBLE_FALLOFF {
             Decision::skip(format!("{falloff_name} at the corners is {corner:.6}: invisible"))
