@@ -330,13 +330,34 @@ fn seeded_mutations_neither_panic_nor_abort_nor_overallocate_nor_give_nan() {
     assert!(total >= 16_500);
 }
 
-/// The seed EXRs of testdata/fuzz/: small files that reach every branch of the pass reader.
+/// The seed EXRs of testdata/fuzz/ are what `write_fuzz_seeds` makes: written again into a
+/// temporary folder, each decodes to the same layers, channels, windows and samples as the
+/// committed file (`REALCAM_WRITE_FUZZ_SEEDS=1` writes them into testdata/fuzz/ instead).
+/// huge_tiled_header.exr is a hand-made header, not generated.
 #[test]
-#[ignore = "writes testdata/fuzz/*.exr; run with --ignored to make them again"]
-fn write_fuzz_seeds() {
-    use exr::prelude::*;
-    let dir = repo("testdata/fuzz");
+fn fuzz_seeds_are_what_the_generator_writes() {
+    if std::env::var_os("REALCAM_WRITE_FUZZ_SEEDS").is_some() {
+        write_fuzz_seeds(&repo("testdata/fuzz"));
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("realcam-fuzz-seeds-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    write_fuzz_seeds(&dir);
+    for name in ["blender_layers.exr", "nuke_window.exr", "two_parts.exr", "tiled.exr"] {
+        let read = |path: PathBuf| {
+            exr::prelude::read_all_data_from_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        };
+        let fresh = read(dir.join(name));
+        let committed = read(repo("testdata/fuzz").join(name));
+        assert!(fresh == committed, "testdata/fuzz/{name} is not what write_fuzz_seeds makes");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The seed EXRs: small files that reach every branch of the pass reader.
+fn write_fuzz_seeds(dir: &Path) {
+    use exr::prelude::*;
+    std::fs::create_dir_all(dir).unwrap();
     let (w, h) = (4usize, 3usize);
     let ramp = |base: f32| (0..w * h).map(|i| base + i as f32 * 0.125).collect::<Vec<f32>>();
     let layer = |name: Option<&str>, chans: &[(&str, Vec<f32>)], encoding: Encoding, position: (i32, i32)| {
