@@ -261,6 +261,32 @@ pub fn sa_weight(o: [f32; 2], radius_q: f32, coc_q: f32, p: &ApertureConstants) 
     crate::optics::spherical::intensity(p.sa_strength(coc_q), r_norm as f64) as f32
 }
 
+/// The gather's rule for one tap, shared by the CPU twins of the exact gather
+/// (glsl/include/gather.glsl) and of the pyramid levels' gather (glsl/dof_level_gather.comp):
+/// the weight with which a sample of signed CoC `coc_q` at offset (dx, dy) from a pixel of CoC
+/// `coc_p` reaches it, or 0. A sample behind the pixel spreads no farther than the pixel's own
+/// CoC; the aperture's image is upright behind the focus plane and inverted in front.
+/// `sample_px` is the sample's centre in the gather's pixel units.
+pub fn tap_weight(
+    d: [i32; 2],
+    coc_p: f32,
+    coc_q: f32,
+    p: &ApertureConstants,
+    sample_px: [f32; 2],
+    data: &ApertureData,
+) -> f32 {
+    let radius_p = (0.5 * coc_p.abs()).max(0.5);
+    let radius_q = (0.5 * coc_q.abs()).max(0.5);
+    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+    if ((d[0] * d[0] + d[1] * d[1]) as f32) > (reach + 1.0) * (reach + 1.0) {
+        return 0.0;
+    }
+    let flip = if coc_q < 0.0 { -1 } else { 1 };
+    let o = [-d[0] * flip, -d[1] * flip];
+    aperture_weight_at(o, reach, p, sample_px, flip as f32, 1.0, data)
+        * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, p)
+}
+
 /// The aperture's data on the CPU: the user's aperture image ([`mask_buffer_data`]) and the
 /// shape table ([`ApertureConstants::with_shape_table`]) of a depth-of-field run.
 #[derive(Clone, Debug, PartialEq)]

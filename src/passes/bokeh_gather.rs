@@ -1,7 +1,7 @@
 //! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
-use super::aperture::{aperture_weight_at, sa_weight, shape_radius_for, ApertureConstants, ApertureData};
+use super::aperture::{shape_radius_for, tap_weight, ApertureConstants, ApertureData};
 use super::barriers::{after_compute_write, overwrite};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::finite_or_zero;
@@ -73,7 +73,6 @@ pub fn gather_exact(
 ) -> [f32; 4] {
     let (w, h) = (size[0], size[1]);
     let coc_p = coc_px[(p[1] * w + p[0]) as usize];
-    let radius_p = (0.5 * coc_p.abs()).max(0.5);
     let (mut bg, mut fg) = ([0.0f32; 4], [0.0f32; 4]);
     let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
     for dy in -r..=r {
@@ -82,16 +81,8 @@ pub fn gather_exact(
             let (ux, uy) = (p[0] + dx, p[1] + dy);
             let qi = (uy.clamp(0, h - 1) * w + ux.clamp(0, w - 1)) as usize;
             let coc_q = coc_px[qi];
-            let radius_q = (0.5 * coc_q.abs()).max(0.5);
-            let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-            if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
-                continue;
-            }
-            let flip = if coc_q < 0.0 { -1 } else { 1 };
-            let o = [-dx * flip, -dy * flip];
             let sample_px = [ux as f32 + 0.5, uy as f32 + 0.5];
-            let wgt = aperture_weight_at(o, reach, aperture, sample_px, flip as f32, 1.0, data)
-                * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, aperture);
+            let wgt = tap_weight([dx, dy], coc_p, coc_q, aperture, sample_px, data);
             if wgt <= 0.0 {
                 continue;
             }

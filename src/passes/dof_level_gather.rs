@@ -1,7 +1,7 @@
 //! Tiled depth of field: the gather of one pyramid level's tiles at that level's resolution.
 //! Shader: glsl/dof_level_gather.comp.
 
-use super::aperture::{aperture_weight_at, sa_weight, ApertureConstants, ApertureData};
+use super::aperture::{tap_weight, ApertureConstants, ApertureData};
 use super::barriers::{after_compute_write, overwrite};
 use super::dof_classify::tiles_per_group;
 use super::twin::floats;
@@ -70,7 +70,6 @@ impl Twin for LevelGatherShader {
                     continue;
                 }
                 let coc_p = coc.clamped(p[0], p[1])[0] * to_level;
-                let radius_p = (0.5 * coc_p.abs()).max(0.5);
                 let r = (radii[t] * to_level).ceil() as i32 + 1;
                 let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
                 let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
@@ -87,15 +86,8 @@ impl Twin for LevelGatherShader {
                         }
                         let coc_q = cw[0] * to_level;
                         let radius_q = (0.5 * coc_q.abs()).max(0.5);
-                        let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-                        if ((dx * dx + dy * dy) as f32) > (reach + 1.0) * (reach + 1.0) {
-                            continue;
-                        }
-                        let flip = if coc_q < 0.0 { -1 } else { 1 };
-                        let o = [-dx * flip, -dy * flip];
                         let sample = [(p[0] + dx) as f32 + 0.5, (p[1] + dy) as f32 + 0.5];
-                        let w = aperture_weight_at(o, reach, &pc.aperture, sample, flip as f32, 1.0, &data)
-                            * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, &pc.aperture);
+                        let w = tap_weight([dx, dy], coc_p, coc_q, &pc.aperture, sample, &data);
                         if w <= 0.0 {
                             continue;
                         }
