@@ -59,13 +59,17 @@ float resolved_inverse_depth(ivec2 p) {
         w_near = max(w_near, w[i]);
         w_far = min(w_far, w[i]);
     }
-    // Two layers only matter if their CoCs differ by more than a pixel.
+    // Two layers only matter if their CoCs differ by more than a pixel. The neighbourhood's
+    // loops run over `n` pixels, 0 away from edges: lavapipe runs the code after an early
+    // return anyway, but it leaves a loop that no lane of the SIMD group is still in, so
+    // groups without an edge skip the colour reads.
     if (pc.coc_scale_px_mm * (w_near - w_far) <= 1.0) return w_p;
+    int n = pc.coc_scale_px_mm * (w_near - w_far) > 1.0 ? 9 : 0;
     float w_mid = 0.5 * (w_near + w_far);
     vec3 near_sum = vec3(0.0), far_sum = vec3(0.0);
     float near_n = 0.0, far_n = 0.0, near_w = 0.0, far_w = 0.0;
     vec3 c9[9];
-    for (int i = 0; i < 9; ++i) {
+    for (int i = 0; i < n; ++i) {
         if (i == 4) continue;
         vec3 c = finite_or_zero(imageLoad(color_in, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1))).rgb;
         c9[i] = c;
@@ -89,7 +93,7 @@ float resolved_inverse_depth(ivec2 p) {
     // layer's pixels span a range: a near pixel inside it is explained by its own surface.
     bool own_near = w_p > w_mid;
     float lo = 1.0e30, hi = -1.0e30;
-    for (int i = 0; i < 9; ++i) {
+    for (int i = 0; i < n; ++i) {
         if (i == 4 || (w[i] > w_mid) != own_near) continue;
         float a = dot(c9[i] - c_far, d) / dd;
         lo = min(lo, a);

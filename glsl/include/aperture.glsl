@@ -20,6 +20,15 @@ struct Aperture {
     int shape_radius;      // the shape table covers offsets with |x|, |y| <= this; 0: no table
 };
 
+// Specialization constants (src/passes/aperture.rs `Specialization`): a pass whose lens needs
+// neither sets them false and its pipeline is compiled without those paths. Lavapipe runs both
+// sides of every branch, so a path switched off only at run time would still cost its time.
+// APERTURE_GENERAL: the user's aperture image, the cat's eye, or offsets beyond the shape
+// table may occur (false: every weight comes from the shape table). APERTURE_ABERRATION:
+// spherical aberration may be non-zero (false: uniform discs).
+layout(constant_id = 0) const bool APERTURE_GENERAL = true;
+layout(constant_id = 1) const bool APERTURE_ABERRATION = true;
+
 // The user's aperture image (src/model/aperture.rs): [size, mean, size*size values], size 0 when
 // none. Each shader that includes this file defines APERTURE_MASK_BINDING.
 layout(binding = APERTURE_MASK_BINDING, std430) readonly buffer ApertureMask { float aperture_mask[]; };
@@ -146,9 +155,13 @@ float aperture_weight(vec2 o, float r, Aperture ap, vec2 sample_px, float flip, 
 // aperture_weight for an integer offset o (already flipped) from the shape table: exact for a
 // bladed or round aperture; the aperture image and the cat's eye take the general path.
 float aperture_weight_at(ivec2 o, float r, Aperture ap, vec2 sample_px, float flip, float ramp) {
-    bool table = ap.shape_radius > 0 && ap.cats_eye_per_px <= 0.0 && !(aperture_mask[0] > 0.0 && r > 1.0)
-        && all(lessThanEqual(abs(o), ivec2(ap.shape_radius)));
-    if (!table) return aperture_weight(vec2(o), r, ap, sample_px, flip, ramp);
+    bool in_table = all(lessThanEqual(abs(o), ivec2(ap.shape_radius)));
+    if (APERTURE_GENERAL) {
+        bool table = ap.shape_radius > 0 && ap.cats_eye_per_px <= 0.0 && !(aperture_mask[0] > 0.0 && r > 1.0) && in_table;
+        if (!table) return aperture_weight(vec2(o), r, ap, sample_px, flip, ramp);
+    } else if (!in_table) {
+        return 0.0;  // the pass sized the table to the largest reach: nothing lies beyond it
+    }
     float limit = r + 0.5 * ramp;
     if (float(o.x * o.x + o.y * o.y) >= limit * limit) return 0.0;
     float g = imageLoad(aperture_shape, o + ivec2(ap.shape_radius)).r;
@@ -158,7 +171,7 @@ float aperture_weight_at(ivec2 o, float r, Aperture ap, vec2 sample_px, float fl
 
 // Spherical aberration's intensity for a sample of signed CoC coc_q at offset o (1 without it).
 float sa_weight(vec2 o, float radius_q, float coc_q, Aperture ap) {
-    if (ap.sa_amount == 0.0 && ap.sa_lsa_coc_px == 0.0) return 1.0;
+    if (!APERTURE_ABERRATION || (ap.sa_amount == 0.0 && ap.sa_lsa_coc_px == 0.0)) return 1.0;
     return sa_intensity(length(o) / radius_q, sa_strength(coc_q, ap));
 }
 

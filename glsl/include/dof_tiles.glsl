@@ -15,7 +15,8 @@
 
 // The args buffer of indirect dispatches (x, y, z): per class one workgroup per tile (its x is
 // the class's tile count), per level the level gather's workgroups, the sprite binning's (one
-// invocation per sprite); the sprite counters; the level gathers' tile counts.
+// invocation per sprite); the sprite counters; the level gathers' tile counts; the highlight
+// test's workgroups and candidates.
 #define ARGS_DISPATCH_WORDS 3
 #define ARGS_TILES(c) ((c) * ARGS_DISPATCH_WORDS)
 #define ARGS_LEVEL_GATHER_BASE 18
@@ -27,7 +28,11 @@
 // The number of tiles in each level's gather list (dof_level_lists.comp).
 #define ARGS_LEVEL_TILES_BASE 36
 #define ARGS_LEVEL_TILES(level) (ARGS_LEVEL_TILES_BASE + (level) - 1)
-#define ARGS_WORDS 40
+// The highlight test's dispatch (GROUP_SIZE candidate texels per workgroup) and its count of
+// candidate half-resolution texels (dof_downsample.comp lists them, dof_highlights.comp tests).
+#define ARGS_HIGHLIGHT_DISPATCH 40
+#define ARGS_HIGHLIGHT_COUNT 43
+#define ARGS_WORDS 44
 
 // Invocations per workgroup of the level gathers and of the sprite binning.
 #define GROUP_SIZE 64

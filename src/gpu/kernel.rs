@@ -240,7 +240,7 @@ impl<S: Twin> Kernel<S> {
         let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: S::NAME, message })?;
         let push_bytes = std::mem::size_of::<S::Push>() as u32;
         check_interface(S::NAME, declaration::<S>(), push_bytes, &reflected)?;
-        let pipeline = ComputePipeline::new(gpu, S::NAME, spirv, declaration::<S>(), push_bytes)?;
+        let pipeline = ComputePipeline::new(gpu, S::NAME, spirv, declaration::<S>(), push_bytes, &[])?;
         Ok(Kernel { pipeline, _shader: PhantomData })
     }
 
@@ -266,6 +266,78 @@ impl<S: Twin> Kernel<S> {
     ) -> GpuResult<()> {
         let binds = bindings.binds();
         rec.dispatch_indirect(&self.pipeline, &binds, bytemuck::bytes_of(push), args, offset_bytes, twin_of::<S>())
+    }
+}
+
+/// The pipelines of shader `S` specialised by constants (`layout(constant_id = i) const` in the
+/// GLSL takes `constants[i]`), each compiled on its first dispatch and kept. A pass uses this
+/// where the constants depend on the frame (the lens's aperture paths): the driver then compiles
+/// out the paths the constants switch off. On lavapipe that is the difference that matters, as
+/// it runs both sides of every branch and every loop body at least once; on a GPU with real
+/// branching it saves registers.
+pub struct SpecializedKernel<S: Twin> {
+    gpu: Gpu,
+    variants: std::sync::Mutex<Vec<(Vec<u32>, std::sync::Arc<ComputePipeline>)>>,
+    _shader: PhantomData<S>,
+}
+
+impl<S: Twin> SpecializedKernel<S> {
+    /// Check the SPIR-V's interface against `S` now; pipelines come with the first dispatch of
+    /// each set of constants.
+    pub fn new(gpu: &Gpu) -> GpuResult<Self> {
+        let spirv = shaders::spirv(S::NAME)?;
+        let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: S::NAME, message })?;
+        check_interface(S::NAME, declaration::<S>(), std::mem::size_of::<S::Push>() as u32, &reflected)?;
+        Ok(SpecializedKernel { gpu: gpu.clone(), variants: Default::default(), _shader: PhantomData })
+    }
+
+    fn pipeline(&self, constants: &[u32]) -> GpuResult<std::sync::Arc<ComputePipeline>> {
+        // A poisoned lock only means another thread panicked while holding it; the list of
+        // finished pipelines is still valid.
+        let mut variants = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, p)) = variants.iter().find(|(c, _)| c == constants) {
+            return Ok(p.clone());
+        }
+        let push_bytes = std::mem::size_of::<S::Push>() as u32;
+        let spirv = shaders::spirv(S::NAME)?;
+        let p = std::sync::Arc::new(ComputePipeline::new(
+            &self.gpu,
+            S::NAME,
+            spirv,
+            declaration::<S>(),
+            push_bytes,
+            constants,
+        )?);
+        variants.push((constants.to_vec(), p.clone()));
+        Ok(p)
+    }
+
+    /// [`Kernel::dispatch_indirect`] with the pipeline of `constants`.
+    pub fn dispatch_indirect(
+        &self,
+        rec: &mut Recorder,
+        constants: &[u32],
+        bindings: &S::Bindings<'_>,
+        push: &S::Push,
+        args: &GpuBuffer,
+        offset_bytes: u64,
+    ) -> GpuResult<()> {
+        let pipeline = self.pipeline(constants)?;
+        let binds = bindings.binds();
+        rec.dispatch_indirect(&pipeline, &binds, bytemuck::bytes_of(push), args, offset_bytes, twin_of::<S>())
+    }
+
+    /// [`Kernel::dispatch`] with the pipeline of `constants`.
+    pub fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        constants: &[u32],
+        bindings: &S::Bindings<'_>,
+        push: &S::Push,
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        let pipeline = self.pipeline(constants)?;
+        rec.dispatch(&pipeline, &bindings.binds(), bytemuck::bytes_of(push), groups, twin_of::<S>())
     }
 }
 

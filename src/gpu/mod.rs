@@ -12,7 +12,9 @@ mod resources;
 pub mod shaders;
 
 pub use context::{DeviceInfo, Gpu, GpuOptions};
-pub use kernel::{buffer, declaration, image, Binding, HostData, HostImage, Kernel, Shader, ShaderBindings, Twin};
+pub use kernel::{
+    buffer, declaration, image, Binding, HostData, HostImage, Kernel, Shader, ShaderBindings, SpecializedKernel, Twin,
+};
 pub use pipeline::ComputePipeline;
 pub use profiler::{PassTiming, Profile};
 pub use recorder::{Bind, Download, Recorder, TwinCheck};

@@ -18,14 +18,17 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
-    /// `bindings[i]` is binding `i` of set 0. Passes create theirs through
-    /// [`Kernel::new`](super::Kernel::new), which first checks them against the SPIR-V.
+    /// `bindings[i]` is binding `i` of set 0; `constants[i]` is the shader's specialization
+    /// constant `constant_id = i` (a 32-bit value: bool, int or uint; none: the shader's
+    /// defaults). Passes create theirs through [`Kernel::new`](super::Kernel::new) or
+    /// [`SpecializedKernel`](super::SpecializedKernel), which first check them against the SPIR-V.
     pub fn new(
         gpu: &Gpu,
         name: &'static str,
         spirv: &[u8],
         bindings: &[Binding],
         push_constant_bytes: u32,
+        constants: &[u32],
     ) -> GpuResult<ComputePipeline> {
         let device = gpu.device();
         let code = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|_| GpuError::Spirv(name))?;
@@ -60,10 +63,18 @@ impl ComputePipeline {
             let module = device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
                 .vk("vkCreateShaderModule")?;
-            let stage = vk::PipelineShaderStageCreateInfo::default()
+            let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+                .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
+                .collect();
+            let specialization =
+                vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(constants));
+            let mut stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module)
                 .name(c"main");
+            if !constants.is_empty() {
+                stage = stage.specialization_info(&specialization);
+            }
             let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
             let started = std::time::Instant::now();
             let created = device.create_compute_pipelines(gpu.shared.pipeline_cache, &[info], None);

@@ -308,6 +308,21 @@ impl ApertureData {
         (constants, ApertureData { mask: mask_buffer_data(mask), shape, shape_radius })
     }
 
+    /// The specialization constants of glsl/include/aperture.glsl for this aperture:
+    /// [APERTURE_GENERAL, APERTURE_ABERRATION]. The general path is needed only for the user's
+    /// aperture image, the cat's eye, or without a shape table (the table is sized to the
+    /// largest reach, [`shape_radius_for`], so no weighted offset lies beyond it); the
+    /// aberration only when either model of it is non-zero. A pipeline compiled with a path
+    /// off gives the same weights as the general one for such an aperture.
+    pub fn specialization(&self, constants: &ApertureConstants) -> [u32; 2] {
+        let general = self.mask.first().is_some_and(|&size| size > 0.0)
+            || constants.cats_eye_per_px > 0.0
+            || constants.shape_radius <= 0
+            || self.shape_radius == 0;
+        let aberration = constants.sa_amount != 0.0 || constants.sa_lsa_coc_px != 0.0;
+        [general as u32, aberration as u32]
+    }
+
     /// The data back from a shader's bindings (twins): the mask buffer and the shape image.
     pub fn from_bindings(mask: &crate::gpu::HostData, shape: &crate::gpu::HostData, shape_radius: i32) -> ApertureData {
         ApertureData {
@@ -332,4 +347,35 @@ impl ApertureData {
 /// reaches, plus the anti-aliasing ramp: the shape table's radius.
 pub fn shape_radius_for(max_abs_coc_px: f64) -> u32 {
     (0.5 * max_abs_coc_px).ceil().max(0.0) as u32 + 2
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::aperture::{ApertureMask, ApertureShape, MASK_SIZE};
+
+    fn specialization(shape: ApertureShape, mask: Option<&ApertureMask>, shape_radius: u32) -> [u32; 2] {
+        let constants = ApertureConstants::new(&shape, 40.0, [64.0, 36.0], 128, 72);
+        let (constants, data) = ApertureData::new(constants, mask, shape_radius);
+        data.specialization(&constants)
+    }
+
+    #[test]
+    fn only_a_lens_that_needs_a_path_gets_its_pipeline() {
+        let hexagon = ApertureShape { blades: 6, curvature: 0.0, ..ApertureShape::CIRCLE };
+        // An ideal lens's bladed aperture: every weight from the shape table, no aberration.
+        assert_eq!(specialization(hexagon, None, 22), [0, 0]);
+        // Without a table every weight takes the general path.
+        assert_eq!(specialization(hexagon, None, 0), [1, 0]);
+        // The cat's eye and the user's aperture image are general paths.
+        assert_eq!(specialization(ApertureShape { cats_eye: 0.3, ..hexagon }, None, 22), [1, 0]);
+        let mask = ApertureMask { values: vec![1.0; (MASK_SIZE * MASK_SIZE) as usize], mean: 1.0 };
+        assert_eq!(specialization(hexagon, Some(&mask), 22), [1, 0]);
+        // Either model of spherical aberration keeps its weight.
+        assert_eq!(specialization(ApertureShape { spherical_aberration: 0.4, ..hexagon }, None, 22), [0, 1]);
+        let traced =
+            ApertureConstants { sa_lsa_coc_px: -3.0, ..ApertureConstants::new(&hexagon, 40.0, [0.0; 2], 8, 8) };
+        let (traced, data) = ApertureData::new(traced, None, 22);
+        assert_eq!(data.specialization(&traced), [0, 1]);
+    }
 }

@@ -5,8 +5,8 @@
 use super::barriers::{buffer_after_compute_write, buffer_after_fill};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{
-    ARGS_BIN_DISPATCH, ARGS_DISPATCH_WORDS, ARGS_LEVEL_GATHER_BASE, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL,
-    GROUP_SIZE, LEVELS, LEVEL_RADIUS,
+    ARGS_BIN_DISPATCH, ARGS_DISPATCH_WORDS, ARGS_HIGHLIGHT_DISPATCH, ARGS_LEVEL_GATHER_BASE, CLASS_COPY, CLASS_COUNT,
+    CLASS_LEVEL1, CLASS_SMALL, GROUP_SIZE, LEVELS, LEVEL_RADIUS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
@@ -97,9 +97,10 @@ impl Twin for ClassifyShader {
             args[at + 1] = 1;
             args[at + 2] = 1;
         }
-        let bin = ARGS_BIN_DISPATCH as usize;
-        args[bin + 1] = 1;
-        args[bin + 2] = 1;
+        for at in [ARGS_BIN_DISPATCH as usize, ARGS_HIGHLIGHT_DISPATCH as usize] {
+            args[at + 1] = 1;
+            args[at + 2] = 1;
+        }
         let tile_lists = b[2].words_mut();
         for (class, list) in lists.iter().enumerate() {
             tile_lists[class * tile_count..class * tile_count + list.len()].copy_from_slice(list);

@@ -8,7 +8,7 @@ use super::bokeh_gather::gather_exact;
 use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{ARGS_SPRITE_COUNT, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
-use crate::gpu::{GpuResult, HostData, HostImage, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_composite";
 
@@ -168,7 +168,8 @@ impl Twin for CompositeShader {
 }
 
 pub fn record(
-    kernel: &Kernel<CompositeShader>,
+    kernel: &SpecializedKernel<CompositeShader>,
+    specialization: &[u32],
     rec: &mut Recorder,
     b: &CompositeBindings<'_>,
     push: &CompositePush,
@@ -191,7 +192,7 @@ pub fn record(
     rec.buffer_barriers(&[buffer_after_compute_write(b.bins), buffer_after_compute_write(b.bin_counts)]);
     let class = CLASS_LEVEL1 + push.level as u32 - 1;
     let offset = super::dof_classify::class_tiles_args_word(class) as u64 * 4;
-    kernel.dispatch_indirect(rec, b, push, b.args, offset)?;
+    kernel.dispatch_indirect(rec, specialization, b, push, b.args, offset)?;
     rec.end_pass();
     Ok(())
 }

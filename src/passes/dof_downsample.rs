@@ -1,13 +1,12 @@
 //! Tiled depth of field: level 1 of the pyramid (half resolution, colour and CoC of the pixels
-//! that blur) with highlight extraction into sprites. Shader: glsl/dof_downsample.comp.
+//! that blur), and the list of texels holding highlight candidates for dof_highlights.
+//! Shader: glsl/dof_downsample.comp.
 
 use super::barriers::overwrite;
 use super::groups_for;
 use super::twin::finite_or_zero;
-use crate::gpu::shaders::dof_tiles::{
-    ARGS_BIN_DISPATCH, ARGS_SPRITES_DROPPED, ARGS_SPRITE_COUNT, GROUP_SIZE, SPRITE_WORDS,
-};
-use crate::gpu::{GpuResult, HostData, HostImage, Kernel, Recorder, Shader, Twin};
+use crate::gpu::shaders::dof_tiles::{ARGS_HIGHLIGHT_COUNT, ARGS_HIGHLIGHT_DISPATCH, GROUP_SIZE, SPRITE_WORDS};
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_downsample";
 
@@ -16,15 +15,10 @@ pub const NAME: &str = "dof_downsample";
 pub struct DownsamplePush {
     pub size: [i32; 2],
     pub half_size: [i32; 2],
-    /// Sprites come from pixels of a larger CoC radius (px).
+    /// Highlight candidates are pixels of a larger CoC radius (px) ...
     pub small_radius_px: f32,
-    /// A highlight is at least this bright (luminance) ...
+    /// ... at least this bright (luminance).
     pub highlight_min: f32,
-    /// ... and this many times its background.
-    pub highlight_ratio: f32,
-    pub sprite_capacity: i32,
-    /// Smallest visible excess per pixel, relative to the background.
-    pub sprite_visibility: f32,
 }
 
 crate::shader_bindings! {
@@ -35,7 +29,7 @@ crate::shader_bindings! {
         color_half: image(color_half),
         coc_half: image(coc_half),
         args: buffer(Args),
-        sprites: buffer(Sprites),
+        candidates: buffer(Candidates),
         color_base: image(color_base),
     }
 }
@@ -49,30 +43,14 @@ impl Shader for DownsampleShader {
     type Push = DownsamplePush;
 }
 
-fn luminance(c: &[f32]) -> f32 {
+/// Luminance of linear Rec.709 RGB: the highlight tests' brightness.
+pub fn luminance(c: &[f32]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// The background of a highlight at (x, y): glsl/dof_downsample.comp's `background`.
-fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32) -> f32 {
-    let (mut sum, mut sides) = (0.0f32, 0.0f32);
-    for side in 0..4 {
-        let mut dimmest = 3.0e38f32;
-        for k in -3..3 {
-            let (dx, dy) = [(k, -3), (3, k), (-k, 3), (-3, -k)][side];
-            let (qx, qy) = (x + dx, y + dy);
-            if qx < 0 || qy < 0 || qx >= size[0] || qy >= size[1] {
-                continue;
-            }
-            let q: Vec<f32> = color.clamped(qx, qy).iter().map(|&v| finite_or_zero(v)).collect();
-            dimmest = dimmest.min(luminance(&q));
-        }
-        if dimmest < 3.0e38 {
-            sum += dimmest;
-            sides += 1.0;
-        }
-    }
-    sum / sides.max(1.0)
+/// A half-resolution texel in the candidate list: x | y << 16.
+pub fn pack_texel(x: i32, y: i32) -> u32 {
+    x as u32 | ((y as u32) << 16)
 }
 
 impl Twin for DownsampleShader {
@@ -80,47 +58,19 @@ impl Twin for DownsampleShader {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
         let (mut color_half, mut coc_half, mut base) =
             (b[2].image().clone(), b[3].image().clone(), b[6].image().clone());
-        let mut sprites = Vec::new();
-        let (mut count, mut dropped, mut bin_groups) = (b[4].words()[ARGS_SPRITE_COUNT as usize], 0u32, 0u32);
+        let mut listed = Vec::new();
         for hy in 0..pc.half_size[1] {
             for hx in 0..pc.half_size[0] {
-                let (mut sum, mut coc_sum, mut weight) = ([0.0f32; 4], 0.0f32, 0.0f32);
+                let (mut sum, mut coc_sum, mut weight, mut candidate) = ([0.0f32; 4], 0.0f32, 0.0f32, false);
                 for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let (x, y) = (2 * hx + i, 2 * hy + j);
                     if x >= pc.size[0] || y >= pc.size[1] {
                         continue;
                     }
-                    let mut c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
+                    let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
                     let coc_p = coc.clamped(x, y)[0];
                     let radius = 0.5 * coc_p.abs();
-                    let lum = luminance(&c);
-                    if radius > pc.small_radius_px && lum > pc.highlight_min {
-                        let bg = background(&color, pc.size, x, y);
-                        let reference = pc.highlight_min.max(pc.highlight_ratio * bg);
-                        let area = std::f32::consts::PI * 0.25 * coc_p * coc_p;
-                        let visible =
-                            (lum - reference) / area.max(1.0) > pc.sprite_visibility * bg.max(pc.highlight_min * 0.01);
-                        if lum > reference && visible {
-                            let excess: [f32; 3] = std::array::from_fn(|k| c[k] * (1.0 - bg / lum));
-                            let slot = count;
-                            count += 1;
-                            if (slot as i32) < pc.sprite_capacity {
-                                let centre = [x as f32 + 0.5, y as f32 + 0.5];
-                                sprites.push((
-                                    slot,
-                                    [centre[0], centre[1], coc_p, 0.0, excess[0], excess[1], excess[2], 0.0],
-                                ));
-                                for k in 0..3 {
-                                    c[k] -= excess[k];
-                                }
-                                if slot % GROUP_SIZE == 0 {
-                                    bin_groups += 1;
-                                }
-                            } else {
-                                dropped += 1;
-                            }
-                        }
-                    }
+                    candidate |= radius > pc.small_radius_px && luminance(&c) > pc.highlight_min;
                     base.texel_mut(x as u32, y as u32).copy_from_slice(&c);
                     let w = (radius - 0.5).clamp(0.0, 1.0);
                     for k in 0..4 {
@@ -132,28 +82,29 @@ impl Twin for DownsampleShader {
                 color_half.texel_mut(hx as u32, hy as u32).copy_from_slice(&sum.map(|v| 0.25 * v));
                 let cw = [if weight > 0.0 { coc_sum / weight } else { 0.0 }, 0.25 * weight];
                 coc_half.texel_mut(hx as u32, hy as u32).copy_from_slice(&cw);
+                if candidate {
+                    listed.push(pack_texel(hx, hy));
+                }
             }
         }
         b[2] = HostData::Image(color_half);
         b[3] = HostData::Image(coc_half);
         b[6] = HostData::Image(base);
         let args = b[4].words_mut();
-        args[ARGS_SPRITE_COUNT as usize] = count;
-        args[ARGS_SPRITES_DROPPED as usize] += dropped;
-        args[ARGS_BIN_DISPATCH as usize] += bin_groups;
+        let first = args[ARGS_HIGHLIGHT_COUNT as usize];
+        let groups = (first..first + listed.len() as u32).filter(|slot| slot % GROUP_SIZE == 0).count() as u32;
+        args[ARGS_HIGHLIGHT_COUNT as usize] += listed.len() as u32;
+        args[ARGS_HIGHLIGHT_DISPATCH as usize] += groups;
         let words = b[5].words_mut();
-        for (slot, sprite) in sprites {
-            let at = slot as usize * SPRITE_WORDS as usize;
-            for (k, v) in sprite.iter().enumerate() {
-                words[at + k] = v.to_bits();
-            }
-        }
+        words[first as usize..first as usize + listed.len()].copy_from_slice(&listed);
     }
 
-    /// Sprites take slots with atomics, in any order: sort them by their centre.
-    fn canonical(pc: &DownsamplePush, b: &mut [HostData]) {
-        let count = (b[4].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
-        sort_sprites(b[5].words_mut(), count);
+    /// Texels take slots with atomics, in any order: sort the list.
+    fn canonical(_pc: &DownsamplePush, b: &mut [HostData]) {
+        let count = b[4].words()[ARGS_HIGHLIGHT_COUNT as usize] as usize;
+        let words = b[5].words_mut();
+        let count = count.min(words.len());
+        words[..count].sort_unstable();
     }
 }
 
@@ -175,11 +126,17 @@ pub fn record(
 ) -> GpuResult<()> {
     rec.begin_pass(NAME);
     // color_half, coc_half, color_base: written from scratch. The inputs (colour, CoC) and the
-    // args buffer were made visible to compute by the barriers around dof_classify.
+    // args buffer were made visible to compute by the barriers around dof_classify. The
+    // candidate list is this frame's own buffer, written here first.
     rec.image_barriers(&[overwrite(b.color_half), overwrite(b.coc_half), overwrite(b.color_base)]);
     kernel.dispatch(rec, b, push, groups_for(b.color_half.width, b.color_half.height))?;
     rec.end_pass();
     Ok(())
+}
+
+/// The size of the candidate list of a half-resolution level of `texels` texels, in bytes.
+pub fn candidate_buffer_bytes(texels: u64) -> u64 {
+    texels.max(1) * 4
 }
 
 /// The size of the sprite buffer for `capacity` sprites, in bytes.

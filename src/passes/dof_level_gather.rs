@@ -6,7 +6,7 @@ use super::barriers::{after_compute_write, overwrite};
 use super::dof_classify::tiles_per_group;
 use super::twin::floats;
 use crate::gpu::shaders::dof_tiles::ARGS_LEVEL_TILES_BASE;
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_level_gather";
 
@@ -125,7 +125,8 @@ impl Twin for LevelGatherShader {
 
 /// Record the gather of level `push.level`'s tiles (indirect, over its tile list).
 pub fn record(
-    kernel: &Kernel<LevelGatherShader>,
+    kernel: &SpecializedKernel<LevelGatherShader>,
+    specialization: &[u32],
     rec: &mut Recorder,
     b: &LevelGatherBindings<'_>,
     push: &LevelGatherPush,
@@ -142,7 +143,7 @@ pub fn record(
         overwrite(b.fg_big_level),
     ]);
     let offset = super::dof_classify::level_gather_args_words(push.level as u32) as u64 * 4;
-    kernel.dispatch_indirect(rec, b, push, b.args, offset)?;
+    kernel.dispatch_indirect(rec, specialization, b, push, b.args, offset)?;
     rec.end_pass();
     Ok(())
 }

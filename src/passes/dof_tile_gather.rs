@@ -7,7 +7,7 @@ use super::bokeh_gather::gather_exact;
 use super::twin::{finite_or_zero, floats, listed_tiles};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{CLASS_COPY, CLASS_SMALL};
-use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuBuffer, GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_tile_gather";
 
@@ -74,7 +74,8 @@ impl Twin for TileGatherShader {
 /// Record the copy tiles and the small-CoC tiles (two indirect dispatches over their lists).
 /// The caller made the classification visible (see `tiled_dof`).
 pub fn record(
-    kernel: &Kernel<TileGatherShader>,
+    kernel: &SpecializedKernel<TileGatherShader>,
+    specialization: &[u32],
     rec: &mut Recorder,
     b: &TileGatherBindings<'_>,
     args: &GpuBuffer,
@@ -85,7 +86,7 @@ pub fn record(
         rec.begin_pass(label);
         let p = TileGatherPush { tile_class: class as i32, ..*push };
         let offset = super::dof_classify::class_tiles_args_word(class) as u64 * 4;
-        kernel.dispatch_indirect(rec, b, &p, args, offset)?;
+        kernel.dispatch_indirect(rec, specialization, b, &p, args, offset)?;
         rec.end_pass();
     }
     Ok(())

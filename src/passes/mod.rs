@@ -24,6 +24,7 @@ pub mod dof_bin;
 pub mod dof_classify;
 pub mod dof_composite;
 pub mod dof_downsample;
+pub mod dof_highlights;
 pub mod dof_level_gather;
 pub mod dof_level_lists;
 pub mod dof_pyramid;

@@ -13,7 +13,10 @@ use super::barriers::{buffer_after_compute_write, overwrite};
 use super::dof_bin::{args_for_indirect, BinBindings, BinPush, BinShader};
 use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
-use super::dof_downsample::{sprite_buffer_bytes, DownsampleBindings, DownsamplePush, DownsampleShader};
+use super::dof_downsample::{
+    candidate_buffer_bytes, sprite_buffer_bytes, DownsampleBindings, DownsamplePush, DownsampleShader,
+};
+use super::dof_highlights::{HighlightsBindings, HighlightsPush, HighlightsShader};
 use super::dof_level_gather::{LevelGatherBindings, LevelGatherPush, LevelGatherShader};
 use super::dof_level_lists::{LevelListsBindings, LevelListsShader};
 use super::dof_pyramid::{PyramidBindings, PyramidShader};
@@ -21,10 +24,10 @@ use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShade
 use super::dof_tiles::{TilesPush, TilesShader};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{dof_bin, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid};
-use super::{dof_tile_gather, dof_tiles};
+use super::{dof_highlights, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
-use crate::gpu::{Gpu, GpuImage, GpuResult, Kernel, Recorder};
+use crate::gpu::{Gpu, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::BokehMode;
 use ash::vk;
@@ -98,13 +101,14 @@ impl TiledDofParams {
 pub struct TiledDof {
     tiles: Kernel<TilesShader>,
     classify: Kernel<ClassifyShader>,
-    tile_gather: Kernel<TileGatherShader>,
+    tile_gather: SpecializedKernel<TileGatherShader>,
     downsample: Kernel<DownsampleShader>,
+    highlights: Kernel<HighlightsShader>,
     pyramid: Kernel<PyramidShader>,
     bin: Kernel<BinShader>,
     level_lists: Kernel<LevelListsShader>,
-    level_gather: Kernel<LevelGatherShader>,
-    composite: Kernel<CompositeShader>,
+    level_gather: SpecializedKernel<LevelGatherShader>,
+    composite: SpecializedKernel<CompositeShader>,
 }
 
 /// One level of the pyramid: its colour and CoC, and the layers its gather writes.
@@ -156,13 +160,14 @@ impl Pass for TiledDof {
         Ok(TiledDof {
             tiles: Kernel::new(gpu)?,
             classify: Kernel::new(gpu)?,
-            tile_gather: Kernel::new(gpu)?,
+            tile_gather: SpecializedKernel::new(gpu)?,
             downsample: Kernel::new(gpu)?,
+            highlights: Kernel::new(gpu)?,
             pyramid: Kernel::new(gpu)?,
             bin: Kernel::new(gpu)?,
             level_lists: Kernel::new(gpu)?,
-            level_gather: Kernel::new(gpu)?,
-            composite: Kernel::new(gpu)?,
+            level_gather: SpecializedKernel::new(gpu)?,
+            composite: SpecializedKernel::new(gpu)?,
         })
     }
 
@@ -183,6 +188,12 @@ impl Pass for TiledDof {
         // Per tile: the gather radius, the largest foreground radius reaching it, the class.
         let tile_radius = rec.create_buffer("dof tile radius and class", tile_count * 4 * 3, storage)?;
         let sprites = rec.create_buffer("dof sprites", sprite_buffer_bytes(p.sprite_capacity), storage)?;
+        let [half_w, half_h] = p.level_size(1);
+        let candidates = rec.create_buffer(
+            "dof highlight candidates",
+            candidate_buffer_bytes(half_w as u64 * half_h as u64),
+            storage,
+        )?;
         let bin_counts =
             rec.create_buffer("dof sprite bin counts", tile_count * 4, storage | vk::BufferUsageFlags::TRANSFER_DST)?;
         let bins = rec.create_buffer("dof sprite bins", tile_count * 4 * BIN_CAPACITY as u64, storage)?;
@@ -205,6 +216,8 @@ impl Pass for TiledDof {
         }
         let (aperture_mask, aperture_shape) = p.aperture_data.upload(rec)?;
         let (aperture, size, layer_transition_px) = (p.aperture, [p.width as i32, p.height as i32], 1.0);
+        // The gathers' and sprites' pipelines without the aperture paths this lens never takes.
+        let specialization = p.aperture_data.specialization(&aperture);
 
         dof_tiles::record(&self.tiles, rec, &coc, &tile_coc, &TilesPush { size, tiles })?;
         let search_tiles = (0.5 * p.max_abs_coc_px / TILE_SIZE as f32).ceil() as i32 + 1;
@@ -237,7 +250,7 @@ impl Pass for TiledDof {
             aperture_shape: &aperture_shape,
         };
         let tile_gather = TileGatherPush { size, tiles, tile_class: 0, aperture, layer_transition_px };
-        dof_tile_gather::record(&self.tile_gather, rec, &gather_bindings, &args, &tile_gather)?;
+        dof_tile_gather::record(&self.tile_gather, &specialization, rec, &gather_bindings, &args, &tile_gather)?;
 
         let level1 = &levels[0];
         let downsample = DownsamplePush {
@@ -245,9 +258,6 @@ impl Pass for TiledDof {
             half_size: [level1.color.width as i32, level1.color.height as i32],
             small_radius_px: p.small_radius_px,
             highlight_min: p.highlight_min,
-            highlight_ratio: p.highlight_ratio,
-            sprite_capacity: p.sprite_capacity as i32,
-            sprite_visibility: p.sprite_visibility,
         };
         let downsample_bindings = DownsampleBindings {
             color: &color,
@@ -255,10 +265,28 @@ impl Pass for TiledDof {
             color_half: &level1.color,
             coc_half: &level1.coc,
             args: &args,
-            sprites: &sprites,
+            candidates: &candidates,
             color_base: &color_base,
         };
         dof_downsample::record(&self.downsample, rec, &downsample_bindings, &downsample)?;
+        let highlights = HighlightsPush {
+            size,
+            small_radius_px: p.small_radius_px,
+            highlight_min: p.highlight_min,
+            highlight_ratio: p.highlight_ratio,
+            sprite_capacity: p.sprite_capacity as i32,
+            sprite_visibility: p.sprite_visibility,
+        };
+        let highlights_bindings = HighlightsBindings {
+            color: &color,
+            coc: &coc,
+            color_half: &level1.color,
+            color_base: &color_base,
+            args: &args,
+            candidates: &candidates,
+            sprites: &sprites,
+        };
+        dof_highlights::record(&self.highlights, rec, &highlights_bindings, &highlights)?;
         for (level, pair) in (2..).zip(levels.windows(2)) {
             let b = PyramidBindings {
                 color_fine: &pair[0].color,
@@ -300,7 +328,7 @@ impl Pass for TiledDof {
                 args: &args,
                 aperture_shape: &aperture_shape,
             };
-            dof_level_gather::record(&self.level_gather, rec, &b, &push)?;
+            dof_level_gather::record(&self.level_gather, &specialization, rec, &b, &push)?;
         }
         for (level, l) in (1..).zip(&levels) {
             let push = CompositePush {
@@ -331,7 +359,7 @@ impl Pass for TiledDof {
                 aperture_shape: &aperture_shape,
                 args: &args,
             };
-            dof_composite::record(&self.composite, rec, &b, &push)?;
+            dof_composite::record(&self.composite, &specialization, rec, &b, &push)?;
         }
         images.set_color(p.channel, output);
         Ok(())
