@@ -5,3 +5,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 cargo test --locked "$@"
+bash scripts/test-python.sh "$@"   # the Python package (python/) against the CLI, pytest
