@@ -12,8 +12,8 @@ What the camera gives (README.md, "Blender"):
 - the f-stop, the focus distance or the focus object's distance along the view axis (planar, as
   the Depth pass), the blades and their rotation, as `--fstop`, `--focus`, `--blades`,
   `--blade-rotation`;
-- the shutter (`motion_blur_shutter`, in frames) and the frame rate (fps / fps_base), as
-  `--shutter-angle` (360 x shutter) and `--fps`;
+- the shutter (`motion_blur_shutter`, in frames), its position and the frame rate (fps /
+  fps_base), as `--shutter-angle` (360 x shutter), `--shutter-position` and `--fps`;
 - the scene's unit scale as `--depth-unit` (the Depth pass is in scene units).
 The Vector pass is written by Blender as X,Y = p[f-1] - p[f], Z,W = p[f] - p[f+1] in pixels, y
 up; realcam reads it in that convention (`--velocity-format blender`, chosen from the channel
@@ -45,6 +45,16 @@ FILMS = [
     ("contrast", "Contrast", "A steeper curve with a harder shoulder"),
     ("soft", "Soft", "A flatter curve with a long toe and shoulder"),
 ]
+
+
+# Blender's shutter position (when the shutter opens around the frame time) as realcam's.
+SHUTTER_POSITIONS = {"START": "start", "CENTER": "centred", "END": "end"}
+
+
+def shutter_position(scene):
+    """Cycles' shutter position (Blender 3.x: scene.cycles); other engines centre the shutter."""
+    cycles = getattr(scene, "cycles", None)
+    return SHUTTER_POSITIONS.get(getattr(cycles, "motion_blur_position", "CENTER"), "centred")
 
 
 def repository_binary():
@@ -147,6 +157,7 @@ def camera_flags(scene, settings):
         f"--depth-unit={num(unit_m)}",
         f"--fps={num(scene.render.fps / scene.render.fps_base)}",
         f"--shutter-angle={num(360.0 * scene.render.motion_blur_shutter)}",
+        f"--shutter-position={shutter_position(scene)}",
         f"--iso={num(settings.iso)}",
     ]
     if settings.lens_file:
