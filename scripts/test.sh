@@ -5,3 +5,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 cargo test --locked "$@"
+bash scripts/test-python.sh "$@"   # the Python package (python/) against the CLI, pytest
+bash scripts/test-blender.sh "$@"   # the Blender add-on (addons/) in headless Blender

@@ -111,6 +111,23 @@ impl<T, E: FieldError> NameFlags<T> for Result<T, E> {
     }
 }
 
+/// An error and its causes, each said once: a cause whose text the message already holds
+/// (an error that prints its source, as io and exr errors do) is left out.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let s = cause.to_string();
+        if s.is_empty() || text.contains(&s) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&s);
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,10 +7,11 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::gpu::Gpu;
 use realcam::io::output::Outputs;
-use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources};
+use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources, ScenePasses};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
+use realcam::pipeline::planner::Plan;
 use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
 
@@ -304,7 +305,7 @@ impl RenderArgs {
     }
 
     /// Where the passes are, as these flags say.
-    fn sources(&self) -> PassSources {
+    pub fn sources(&self) -> PassSources {
         self.motion.sources(PassSources {
             color_path: self.color.clone(),
             depth_path: self.depth.clone(),
@@ -340,6 +341,14 @@ pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
 }
 
+impl Session {
+    /// The GPU, once a frame has opened it (the Python package's `Camera.device`).
+    #[allow(dead_code)]
+    pub fn gpu(&self) -> Option<&Gpu> {
+        self.gpu.as_ref().map(|(gpu, _)| gpu)
+    }
+}
+
 /// One frame rendered, ready to write.
 pub struct RenderedFrame {
     pub image: Image,
@@ -362,6 +371,13 @@ pub fn render_frame(
 /// Renders the frame whose passes `args` names through `camera`.
 pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
+    let (frame, plan) = plan_frame(args, camera, passes);
+    render_planned(args, camera, &frame, &plan, session)
+}
+
+/// The frame of loaded `passes` (from files, or the Python package's arrays) and its plan;
+/// `--explain` prints both, and a clamp that changes the picture is warned about.
+pub fn plan_frame(args: &RenderArgs, camera: &Camera, passes: ScenePasses) -> (Frame, Plan) {
     let channel_report = passes.channel_report.clone();
     let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
     let plan = realcam::pipeline::planner::plan(&frame, camera);
@@ -373,17 +389,27 @@ pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -
         let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
         eprintln!("warning: {warning}{hint}");
     }
+    (frame, plan)
+}
 
+/// Renders `frame` by its `plan` through `camera` on the session's GPU (opened at the first call).
+pub fn render_planned(
+    args: &RenderArgs,
+    camera: &Camera,
+    frame: &Frame,
+    plan: &Plan,
+    session: &mut Session,
+) -> Result<RenderedFrame> {
     let (gpu, renderer) = match &mut session.gpu {
         Some(opened) => opened,
         None => {
             let gpu = args.gpu.open()?;
-            let renderer = Renderer::new(&gpu, &plan)?;
+            let renderer = Renderer::new(&gpu, plan)?;
             session.gpu.insert((gpu, renderer))
         }
     };
     let messages_before = gpu.validation_message_count();
-    let rendered = renderer.render(&frame, &plan, false)?;
+    let rendered = renderer.render(frame, plan, false)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }

@@ -1,0 +1,238 @@
+//! `import realcam`: the camera of the command line on NumPy arrays.
+//!
+//! The settings are the flags of `realcam render`, given as keyword arguments
+//! (`Camera(fstop=2, focus=3.5, lens="ideal")` is `--fstop=2 --focus=3.5 --lens=ideal`): they are
+//! parsed by the command line's own parser and turned into a camera by its own code (the modules
+//! below are the command line's files, compiled into this crate), so the defaults, the lens and
+//! film files and every error message are the CLI's. A `Camera` keeps its GPU device and
+//! pipelines across `render` calls.
+
+// The command line's modules, as the `realcam` binary compiles them (src/bin/realcam/); this
+// package uses the parts that parse and render, not the subcommands' `run`.
+#[allow(dead_code)]
+#[path = "../../src/bin/realcam/common.rs"]
+mod common;
+#[allow(dead_code)]
+#[path = "../../src/bin/realcam/flags.rs"]
+mod flags;
+#[allow(dead_code)]
+#[path = "../../src/bin/realcam/motion_args.rs"]
+mod motion_args;
+#[allow(dead_code)]
+#[path = "../../src/bin/realcam/render.rs"]
+mod render;
+#[allow(dead_code)]
+#[path = "../../src/bin/realcam/sequence.rs"]
+mod sequence;
+
+mod arrays;
+
+use clap::Parser;
+use flags::{error_text, NameFlags};
+use numpy::PyReadonlyArrayDyn;
+use pyo3::exceptions::{PyException, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+use render::{RenderArgs, Session};
+
+pyo3::create_exception!(realcam, RealcamError, PyException, "A realcam error; its message is the command line's.");
+
+/// The flags of `realcam render`, parsed as the command line parses them.
+#[derive(Parser)]
+#[command(name = "realcam", no_binary_name = true)]
+struct Flags {
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+/// Flags that name files of one frame: the arguments of `render` and `read_passes`, not settings.
+const FRAME_FLAGS: [&str; 7] = ["color", "output", "png", "trace", "frames", "frames_from_env", "chunk_size"];
+
+/// `--name=value` for each keyword argument: True gives the bare flag, False and None nothing,
+/// a list or tuple the flag once per item.
+fn flag_words(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String>> {
+    let mut words = Vec::new();
+    let Some(kwargs) = kwargs else { return Ok(words) };
+    for (key, value) in kwargs.iter() {
+        let key: String = key.extract()?;
+        if FRAME_FLAGS.contains(&key.as_str()) {
+            return Err(PyTypeError::new_err(format!(
+                "{key} is not a camera setting: Camera.render takes the arrays, realcam.read_passes the file"
+            )));
+        }
+        let flag = format!("--{}", key.replace('_', "-"));
+        let items: Vec<Bound<'_, PyAny>> = if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+            value.try_iter()?.collect::<PyResult<_>>()?
+        } else {
+            vec![value]
+        };
+        for item in items {
+            if item.is_none() {
+                continue;
+            }
+            if let Ok(b) = item.downcast::<pyo3::types::PyBool>() {
+                if b.is_true() {
+                    words.push(flag.clone());
+                }
+                continue;
+            }
+            words.push(format!("{flag}={}", item.str()?));
+        }
+    }
+    Ok(words)
+}
+
+/// The render flags of `words`, with the frame's files named by `color` (and no output written).
+fn parse_flags(color: &str, words: Vec<String>) -> PyResult<RenderArgs> {
+    let argv = ["--color", color, "--output", "realcam-python.exr"].into_iter().map(String::from).chain(words);
+    match Flags::try_parse_from(argv) {
+        Ok(flags) => Ok(flags.render),
+        // clap's first line (`error: unexpected argument '--fstp' found`), without its usage text.
+        Err(e) => {
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or_default().trim_start_matches("error: ").to_string();
+            Err(PyTypeError::new_err(first))
+        }
+    }
+}
+
+/// An error of the library or the command line's code, as a Python exception with the CLI's text.
+fn py_err(e: anyhow::Error) -> PyErr {
+    RealcamError::new_err(error_text(&e))
+}
+
+/// A camera: the settings of `realcam render` as keyword arguments (`fstop=2`, `focus=3.5`,
+/// `lens="lenses/zeiss-planar-50-f1.4.toml"`, `film="linear"`, `no_exposure=True`, ...). It
+/// opens the GPU at its first render and keeps the device and pipelines for the next.
+#[pyclass(unsendable, module = "realcam")]
+struct Camera {
+    args: RenderArgs,
+    camera: realcam::model::camera::Camera,
+    session: Session,
+    gpu_opens: u32,
+    plan: Vec<(String, bool, String)>,
+    explain: String,
+    profile: Vec<(String, f64)>,
+}
+
+#[pymethods]
+impl Camera {
+    #[new]
+    #[pyo3(signature = (**kwargs))]
+    fn new(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Camera> {
+        let args = parse_flags("<arrays>", flag_words(kwargs)?)?;
+        let camera = args.camera().map_err(py_err)?;
+        Ok(Camera {
+            args,
+            camera,
+            session: Session::default(),
+            gpu_opens: 0,
+            plan: Vec::new(),
+            explain: String::new(),
+            profile: Vec::new(),
+        })
+    }
+
+    /// The camera image of one frame: `color` H x W x 4 (or 3) float32 scene-linear RGBA,
+    /// `depth` H x W float32 planar depth in metres (`depth_kind="ray"` converts), `velocity`
+    /// H x W x 2 float32 px per frame toward the next frame, x right, y down, and optionally
+    /// `velocity_prev` toward the previous one (else -velocity). Returns H x W x 4 float32.
+    /// `display_window`, `data_origin` and `channel_report` are read_passes' (so that
+    /// `camera.render(**realcam.read_passes(path))` renders a file as the command line does).
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (color, depth, velocity=None, velocity_prev=None, display_window=None, data_origin=(0, 0), channel_report=None))]
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        color: PyReadonlyArrayDyn<'py, f32>,
+        depth: PyReadonlyArrayDyn<'py, f32>,
+        velocity: Option<PyReadonlyArrayDyn<'py, f32>>,
+        velocity_prev: Option<PyReadonlyArrayDyn<'py, f32>>,
+        display_window: Option<(i32, i32, u32, u32)>,
+        data_origin: (i32, i32),
+        channel_report: Option<String>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let passes = arrays::scene_passes(
+            &color,
+            &depth,
+            velocity.as_ref(),
+            velocity_prev.as_ref(),
+            display_window,
+            data_origin,
+            channel_report,
+        )
+        .map_err(py_err)?;
+        let (frame, plan) = render::plan_frame(&self.args, &self.camera, passes);
+        self.explain = plan.explain();
+        self.plan =
+            plan.passes.iter().filter(|p| p.listed).map(|p| (p.name.to_string(), p.runs(), p.why.clone())).collect();
+        let opened_before = self.session.gpu().is_some();
+        let rendered = render::render_planned(&self.args, &self.camera, &frame, &plan, &mut self.session);
+        if !opened_before && self.session.gpu().is_some() {
+            self.gpu_opens += 1;
+        }
+        let rendered = rendered.map_err(py_err)?;
+        self.profile = rendered.profile.passes.iter().map(|p| (p.name.clone(), p.gpu_ms)).collect();
+        arrays::to_numpy(py, rendered.image)
+    }
+
+    /// The passes of the last render: (name, runs, why), as `--explain` lists them.
+    #[getter]
+    fn plan(&self) -> Vec<(String, bool, String)> {
+        self.plan.clone()
+    }
+
+    /// The last render's plan as `--explain` prints it.
+    #[getter]
+    fn explain(&self) -> String {
+        self.explain.clone()
+    }
+
+    /// GPU milliseconds per pass of the last render (timestamp queries), in order.
+    #[getter]
+    fn profile(&self) -> Vec<(String, f64)> {
+        self.profile.clone()
+    }
+
+    /// The Vulkan device, once a render has opened it.
+    #[getter]
+    fn device(&self) -> Option<String> {
+        self.session.gpu().map(|gpu| gpu.info().to_string())
+    }
+
+    /// How many times this camera opened a GPU device (1 after any number of renders).
+    #[getter]
+    fn gpu_opens(&self) -> u32 {
+        self.gpu_opens
+    }
+}
+
+/// The passes of an EXR as `realcam render --color PATH` reads them: a dict with `color`
+/// (H x W x 4), `depth` (H x W, metres), `velocity` and `velocity_prev` (H x W x 2, px per frame,
+/// x right, y down, or None), `display_window`, `data_origin` and `channel_report`. Keyword
+/// arguments are the reading flags of `render` (`depth="d.exr"`, `layer=`, `depth_unit=`,
+/// `velocity_format=`, ...).
+#[pyfunction]
+#[pyo3(signature = (path, **kwargs))]
+fn read_passes<'py>(py: Python<'py>, path: &str, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyDict>> {
+    let args = parse_flags(path, flag_words(kwargs)?)?;
+    let passes = realcam::io::load_passes(&args.sources()).name_flags().map_err(py_err)?;
+    arrays::passes_dict(py, passes)
+}
+
+/// An EXR's RGBA as H x W x 4 float32 (alpha 1 where the file has none), e.g. `realcam render`'s output.
+#[pyfunction]
+fn read_exr<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, PyAny>> {
+    let image = realcam::io::read_exr_rgba(std::path::Path::new(path)).map_err(|e| py_err(e.into()))?;
+    arrays::to_numpy(py, image)
+}
+
+#[pymodule]
+#[pyo3(name = "realcam")]
+fn realcam_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Camera>()?;
+    m.add_function(wrap_pyfunction!(read_passes, m)?)?;
+    m.add_function(wrap_pyfunction!(read_exr, m)?)?;
+    m.add("RealcamError", m.py().get_type::<RealcamError>())?;
+    Ok(())
+}

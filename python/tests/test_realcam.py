@@ -1,0 +1,161 @@
+"""The Python package against the command line: the same pixels, the same errors, one device.
+
+Run by scripts/test.sh in a virtual environment after `maturin develop --release`; REALCAM_BIN
+names the command line to compare with (default: the repository's target/release or
+target/debug build). Every render runs with the Khronos validation layer and synchronization
+validation (a validation message makes the render raise).
+"""
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import realcam
+
+ROOT = Path(__file__).resolve().parents[2]
+TESTDATA = ROOT / "testdata"
+
+
+def cli_binary():
+    if os.environ.get("REALCAM_BIN"):
+        return os.environ["REALCAM_BIN"]
+    built = [ROOT / "target" / p / "realcam" for p in ("release", "debug")]
+    built = [b for b in built if b.exists()]
+    if not built:
+        pytest.fail("no realcam binary: build it (cargo build --release) or set REALCAM_BIN")
+    return str(max(built, key=lambda b: b.stat().st_mtime))
+
+
+def cli(*args):
+    env = dict(os.environ, REALCAM_VALIDATE="1")
+    return subprocess.run([cli_binary(), *map(str, args)], capture_output=True, text=True, env=env)
+
+
+def cli_error(*args):
+    """The command line's error message (its last stderr line without `error: `)."""
+    run = cli(*args)
+    assert run.returncode == 1, run.stderr
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: "), run.stderr
+    return last[len("error: "):]
+
+
+# Scenes of testdata/: a defocused highlight (depth of field, flare, vignette, film), and a crop
+# of Blender scene A with its Vector pass (motion blur before the depth of field).
+CASES = [
+    ("point_bg", ["--depth", TESTDATA / "point_bg_depth.exr"], dict(fstop=2, focus=2)),
+    ("sceneA_mover", [], dict(lens="ideal", fstop=2.8, focus=2, blades=6, film="linear", fps=24, shutter_angle=180)),
+]
+
+
+@pytest.mark.parametrize("name,inputs,settings", CASES, ids=[c[0] for c in CASES])
+def test_numpy_round_trip_is_bit_identical_to_the_cli(tmp_path, name, inputs, settings):
+    color = TESTDATA / (f"{name}_color.exr" if inputs else f"{name}_passes.exr")
+    out = tmp_path / "cli.exr"
+    flags = []
+    for key, value in settings.items():
+        flags.append(f"--{key.replace('_', '-')}={value}")
+    run = cli("render", "--color", color, *inputs, *flags, "--float", "-o", out)
+    assert run.returncode == 0, run.stderr
+
+    read_flags = {"depth": str(inputs[1])} if inputs else {}
+    passes = realcam.read_passes(str(color), **read_flags)
+    assert passes["color"].dtype == np.float32 and passes["color"].shape[2] == 4
+    assert passes["depth"].shape == passes["color"].shape[:2]
+    if name == "sceneA_mover":
+        # Blender's Vector pass, read as px per frame toward the next frame, x right, y down.
+        assert passes["velocity"].shape == passes["color"].shape[:2] + (2,)
+        assert np.abs(passes["velocity"]).max() > 1.0
+    camera = realcam.Camera(validate=True, **settings)
+    image = camera.render(**passes)
+
+    expected = realcam.read_exr(str(out))
+    assert image.dtype == np.float32 and image.shape == expected.shape
+    assert np.array_equal(image.view(np.uint32), expected.view(np.uint32)), (
+        f"{np.count_nonzero(image != expected)} values differ from the CLI's"
+    )
+
+
+def test_the_plan_and_gpu_times_of_a_render():
+    passes = realcam.read_passes(str(TESTDATA / "point_bg_color.exr"), depth=str(TESTDATA / "point_bg_depth.exr"))
+    camera = realcam.Camera(validate=True, fstop=2, focus=2)
+    camera.render(**passes)
+    plan = {name: (runs, why) for name, runs, why in camera.plan}
+    assert plan["motion_blur"] == (False, "no velocity pass")
+    assert plan["coc"][0] and "at f/2 focused at 2 m" in plan["coc"][1]
+    assert "[run ] coc" in camera.explain
+    times = dict(camera.profile)
+    assert set(times) >= {"upload", "coc", "film", "download"}
+    assert all(ms >= 0.0 for ms in times.values()) and times["coc"] > 0.0
+
+
+def test_the_device_and_pipelines_are_kept_across_renders():
+    passes = realcam.read_passes(str(TESTDATA / "point_fg_color.exr"), depth=str(TESTDATA / "point_fg_depth.exr"))
+    camera = realcam.Camera(validate=True, fstop=2, focus=2)
+    assert camera.device is None and camera.gpu_opens == 0
+    first = camera.render(**passes)
+    device = camera.device
+    # Later frames on the same device, with the same pipelines.
+    for _ in range(2):
+        again = camera.render(**passes)
+    assert camera.gpu_opens == 1 and camera.device == device
+    assert np.array_equal(first, again)
+
+
+def test_bad_inputs_raise_the_cli_messages(tmp_path):
+    missing = tmp_path / "missing.exr"
+    with pytest.raises(realcam.RealcamError) as e:
+        realcam.read_passes(str(missing))
+    assert str(e.value) == cli_error("render", "--color", missing, "-o", tmp_path / "o.exr")
+    assert str(e.value) == f'color: file "{missing}" does not exist'
+
+    # A setting outside the lens file's range: the CLI's message, flag included.
+    with pytest.raises(realcam.RealcamError) as e:
+        realcam.Camera(fstop=1.0)
+    color = TESTDATA / "point_bg_color.exr"
+    assert str(e.value) == cli_error("render", "--color", color, "--fstop", "1.0", "-o", tmp_path / "o.exr")
+    assert str(e.value).endswith("; pass --force to use it anyway")
+
+    with pytest.raises(TypeError, match="unexpected argument '--fstp' found"):
+        realcam.Camera(fstp=2)
+
+
+def test_bad_arrays_are_named():
+    camera = realcam.Camera(fstop=2, focus=2)
+    color = np.zeros((4, 6, 4), np.float32)
+    depth = np.full((4, 6), 2.0, np.float32)
+    depth[2, 3] = np.nan
+    depth[3, 0] = -1.0
+    with pytest.raises(realcam.RealcamError) as e:
+        camera.render(color, depth)
+    assert str(e.value) == (
+        "depth: the array has 2 invalid pixel(s) (NaN or negative depth); the first is pixel (x=3, y=2) with NaN m"
+    )
+    with pytest.raises(realcam.RealcamError) as e:
+        camera.render(color, np.ones((4, 5), np.float32))
+    assert str(e.value) == "size mismatch: color is 6x4 px but depth is 5x4 px (the arrays must have the same size)"
+    with pytest.raises(realcam.RealcamError) as e:
+        camera.render(np.zeros((4, 6), np.float32), depth)
+    assert str(e.value) == "color: an array of shape (H, W, 4) or (H, W, 3) is expected, got shape [4, 6]"
+    assert camera.gpu_opens == 0
+
+
+def test_hdr_and_nan_colour_stay_finite():
+    color = np.zeros((24, 32, 4), np.float32)
+    color[..., 3] = 1.0
+    color[10, 10, :3] = 1e6
+    color[3, 4, 0] = np.nan
+    color[5, 6, 1] = np.inf
+    depth = np.full((24, 32), 0.5, np.float32)
+    depth[:, 16:] = np.inf
+    camera = realcam.Camera(validate=True, fstop=2, focus=2, film="linear", no_exposure=True, no_flare=True)
+    image = camera.render(color, depth)
+    assert np.isfinite(image).all()
+    # The highlight's light is kept (energy within 0.5% over the frame, vignetting off).
+    camera = realcam.Camera(validate=True, fstop=2, focus=2, film="linear", no_exposure=True, no_vignetting=True, no_flare=True)
+    image = camera.render(color, depth)
+    clean = np.nan_to_num(color, nan=0.0, posinf=0.0)
+    assert abs(image[..., :3].sum() / clean[..., :3].sum() - 1.0) < 5e-3

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The Blender add-on (addons/realcam_blender) in Blender itself: Debian's blender, headless,
+# renders a tiny Cycles scene, runs the add-on's operator and checks the defocused disc against
+# eq 5.3 (tests/blender/test_addon.py). Installs blender where it is missing (apt-get); skipped,
+# saying why, only where it cannot be installed. Run by scripts/test.sh after `cargo test`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+profile=debug
+for a in "$@"; do [ "$a" = --release ] && profile=release; done
+if ! command -v blender >/dev/null 2>&1; then
+  echo "installing: blender"
+  if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; else SUDO=; fi
+  if ! { $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends blender; }; then
+    echo "SKIPPED: the Blender add-on test: blender is not installed and apt-get could not install it" >&2
+    exit 0
+  fi
+fi
+cargo build --locked $([ $profile = release ] && echo --release) --bin realcam
+REALCAM_VALIDATE=1 REALCAM_BIN=$PWD/target/$profile/realcam blender -b --factory-startup -noaudio --python-exit-code 1 \
+  -P tests/blender/test_addon.py 2>&1 | grep -v '^Fra:'
