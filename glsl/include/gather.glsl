@@ -14,7 +14,10 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
     vec4 bg = vec4(0.0), fg = vec4(0.0);
     float bg_w = 0.0, fg_w = 0.0;
     for (int dy = -r; dy <= r; ++dy) {
-        for (int dx = -r; dx <= r; ++dx) {
+        // The taps lie in the disc dx^2 + dy^2 <= r^2: its rows are the loop's bounds, as
+        // lavapipe pays for every tap a loop visits, skipped or not.
+        int half_width = int(floor(sqrt(float(r * r - dy * dy))));
+        for (int dx = -half_width; dx <= half_width; ++dx) {
             // Beyond the frame the edge pixels continue (clamp to edge), so pixels near the
             // border see as much light from outside as a uniform scene would send them.
             ivec2 q = clamp(p + ivec2(dx, dy), ivec2(0), size - 1);

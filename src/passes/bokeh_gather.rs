@@ -76,7 +76,9 @@ pub fn gather_exact(
     let (mut bg, mut fg) = ([0.0f32; 4], [0.0f32; 4]);
     let (mut bg_w, mut fg_w) = (0.0f32, 0.0f32);
     for dy in -r..=r {
-        for dx in -r..=r {
+        // The row of the disc dx^2 + dy^2 <= r^2, as the shader's loop bound.
+        let half_width = ((r * r - dy * dy) as f32).sqrt().floor() as i32;
+        for dx in -half_width..=half_width {
             // Clamp to edge, like the shader.
             let (ux, uy) = (p[0] + dx, p[1] + dy);
             let qi = (uy.clamp(0, h - 1) * w + ux.clamp(0, w - 1)) as usize;
