@@ -24,10 +24,16 @@ while data[pos] != 0:  # attributes: name\0 type\0 size value, until an empty na
 print(hashlib.sha256(data[pos + 1:]).hexdigest()[:16])
 PY
 }
-run() {
+render_hash() {
   local name=$1; shift
   "$bin" render "$@" --float -o "$out/$name.exr" >/dev/null 2>"$out/$name.log" || { echo "$name FAILED"; cat "$out/$name.log" >&2; return; }
   echo "$(pixel_hash "$out/$name.exr")  $name"
+}
+# --film-in-exr: the film curve in the EXR as before it became a switch (the EXR is scene-referred
+# by default now), so that every hash but the last covers the film pass as it did.
+run() {
+  local name=$1; shift
+  render_hash "$name" "$@" --film-in-exr
 }
 demo=(--color $t/demo_color.exr --depth $t/demo_depth.exr)
 run demo-tiled "${demo[@]}" --fstop 2 --focus 2
@@ -61,3 +67,5 @@ open(sys.argv[1], "wb").write(png)
 PY
 run demo-aperture-image "${demo[@]}" --fstop 2 --focus 2 --aperture-image "$out/triangle.png"
 run demo-aperture-image-ref "${demo[@]}" --fstop 2 --focus 2 --aperture-image "$out/triangle.png" --bokeh reference
+# The default output: scene-referred (exposure and optics, no film curve).
+render_hash demo-scene-referred "${demo[@]}" --fstop 2 --focus 2

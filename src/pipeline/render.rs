@@ -127,3 +127,14 @@ impl Renderer {
         Ok((Rendered { rgba, coc_px, profile }, checks))
     }
 }
+
+/// The preview of a rendered image (RGBA, `width` px per row) through `camera`: the film's
+/// characteristic curve applied to scene-referred sensor values, or the image itself when the
+/// curve is already in it ([`crate::model::camera::Camera::film_on_output`]).
+pub fn preview_rgba(camera: &crate::model::camera::Camera, rgba: &[f32], width: u32) -> Vec<f32> {
+    if camera.film_on_output {
+        rgba.to_vec()
+    } else {
+        crate::passes::film::film_response_cpu(rgba, width, &camera.film)
+    }
+}
