@@ -1969,3 +1969,64 @@ fn explain_prints_the_camera_and_a_lens_of_another_focal_length_is_warned_about(
     args.extend(s(&["--lens", "ideal", "--focal-length", "85"]));
     assert!(!render(&dir, &args).success().stderr.contains("warning: the lens file"));
 }
+
+/// The colour space (issue 16, part 1): the colour file's chromaticities attribute is read and
+/// written back on the output; --colorspace names one instead; an unknown name lists the known
+/// ones, and chromaticities that are no RGB space are an error naming the file.
+#[test]
+fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
+    use realcam::io::ExrAttribute;
+    use realcam::optics::colour::Chromaticities;
+    let dir = TestDir::new("colour_space");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "3", "--explain"]));
+    let xy = |c: Chromaticities| [c.red, c.green, c.blue, c.white].map(|[x, y]| [x as f32, y as f32]);
+    let written = || {
+        let c = exr_header(&dir.join("out.exr")).shared_attributes.chromaticities.expect("chromaticities");
+        [c.red, c.green, c.blue, c.white].map(|v| [v.0, v.1])
+    };
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: Linear Rec.709 (sRGB) (the colour file's chromaticities, or Rec.709 without them); \
+         luminance = 0.2126 R + 0.7152 G + 0.0722 B",
+    );
+    assert_eq!(written(), xy(Chromaticities::REC709));
+
+    // A file in ACEScg says so.
+    let color = dir.join("scene_color.exr");
+    let image = read_exr_rgba(&color).unwrap();
+    let with = |c: [[f32; 2]; 4]| ExrWriteOptions {
+        attributes: vec![("chromaticities".into(), ExrAttribute::Chromaticities(c))],
+        ..float_opts()
+    };
+    write_exr_rgba(&color, &image, &with(xy(Chromaticities::ACES_AP1))).unwrap();
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(&err, "colour space: ACEScg (the colour file's chromaticities");
+    assert_contains(&err, "luminance = 0.2722 R + 0.6741 G + 0.0537 B");
+    assert_eq!(written(), xy(Chromaticities::ACES_AP1));
+
+    // --colorspace wins.
+    let mut named = args.clone();
+    named.extend(s(&["--colorspace", "ACES2065-1"]));
+    let err = render(&dir, &named).success().stderr;
+    assert_contains(&err, "colour space: ACES2065-1 (--colorspace, not the file's chromaticities)");
+    assert_eq!(written(), xy(Chromaticities::ACES_AP0));
+    let mut unknown = args.clone();
+    unknown.extend(s(&["--colorspace", "sRGB - Texture"]));
+    assert_contains(
+        &render(&dir, &unknown).failure(),
+        "error: --colorspace \"sRGB - Texture\": not a colour space realcam knows; known: Linear Rec.709 (sRGB), \
+         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (OpenColorIO configs are not read yet)",
+    );
+
+    // Green on the line from red to blue (binary fractions, exact in the file): no RGB space.
+    let white = xy(Chromaticities::REC709)[3];
+    write_exr_rgba(&color, &image, &with([[0.625, 0.375], [0.375, 0.25], [0.125, 0.125], white])).unwrap();
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: color: \"{}\": its chromaticities attribute is unusable: chromaticities", color.display()),
+    );
+    assert_contains(&err, "are not an RGB space: the primaries lie on one line");
+}

@@ -74,6 +74,8 @@ struct ExrFile {
     chans: Vec<Chan>,
     /// The focal length (mm) its first part's header gives, with the attribute's name.
     focal_length_mm: Option<(f64, String)>,
+    /// Its `chromaticities` attribute: the colour space of its RGB.
+    chromaticities: Option<crate::optics::colour::Chromaticities>,
 }
 
 /// The focal length a renderer wrote in a header: OpenEXR's lens attributes (floats, mm), else
@@ -161,6 +163,20 @@ impl ExrFile {
         };
         let dw = image.attributes.display_window;
         let focal_length_mm = image.layer_data.first().and_then(|l| header_focal_length_mm(&l.attributes));
+        let chromaticities = match image.attributes.chromaticities {
+            None => None,
+            Some(c) => {
+                let xy = |v: exr::math::Vec2<f32>| [f64::from(v.0), f64::from(v.1)];
+                let checked =
+                    crate::optics::colour::Chromaticities::new(xy(c.red), xy(c.green), xy(c.blue), xy(c.white));
+                Some(checked.map_err(|e| IoError::BadAttribute {
+                    what: what.into(),
+                    path: path.into(),
+                    attribute: "chromaticities",
+                    reason: e.to_string(),
+                })?)
+            }
+        };
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();
         for layer in image.layer_data {
@@ -196,6 +212,7 @@ impl ExrFile {
             display_window: (dw.position.0, dw.position.1, dw.size.0 as u32, dw.size.1 as u32),
             chans,
             focal_length_mm,
+            chromaticities,
         })
     }
 
@@ -928,6 +945,7 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         color_nan_count,
         kept_channels,
         render_focal_length_mm: cf.focal_length_mm.clone(),
+        chromaticities: cf.chromaticities,
     })
 }
 

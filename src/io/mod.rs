@@ -73,6 +73,8 @@ pub enum IoError {
     DataLength { path: PathBuf, channel: String, expected: usize, got: usize },
     #[error("cannot write \"{}\": {reason}", .path.display())]
     InvalidImage { path: PathBuf, reason: String },
+    #[error("{what}: \"{}\": its {attribute} attribute is unusable: {reason}", .path.display())]
+    BadAttribute { what: String, path: PathBuf, attribute: &'static str, reason: String },
     #[error("cannot encode OpenEXR file \"{}\": {source}", .path.display())]
     ExrEncode { path: PathBuf, source: exr::error::Error },
     #[error("cannot encode PNG file \"{}\": {source}", .path.display())]
@@ -360,6 +362,8 @@ pub struct ScenePasses {
     /// `pinholeFocalLength`, `effectiveFocalLength` or `nominalFocalLength`, or Blender's
     /// `Lens` stamp ("50.00 mm"); with the attribute's name.
     pub render_focal_length_mm: Option<(f64, String)>,
+    /// The colour file's `chromaticities` attribute: the colour space of its RGB.
+    pub chromaticities: Option<crate::optics::colour::Chromaticities>,
 }
 
 /// A fresh, empty directory under the system temp dir for one test.

@@ -25,6 +25,8 @@ pub struct DownsamplePush {
     pub sprite_capacity: i32,
     /// Smallest visible excess per pixel, relative to the background.
     pub sprite_visibility: f32,
+    /// Luminance of R, G and B in the frame's colour space.
+    pub luminance_weights: [f32; 3],
 }
 
 crate::shader_bindings! {
@@ -49,12 +51,12 @@ impl Shader for DownsampleShader {
     type Push = DownsamplePush;
 }
 
-fn luminance(c: &[f32]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+fn luminance(c: &[f32], w: [f32; 3]) -> f32 {
+    w[0] * c[0] + w[1] * c[1] + w[2] * c[2]
 }
 
 /// The background of a highlight at (x, y): glsl/dof_downsample.comp's `background`.
-fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32) -> f32 {
+fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32, weights: [f32; 3]) -> f32 {
     let (mut sum, mut sides) = (0.0f32, 0.0f32);
     for side in 0..4 {
         let mut dimmest = 3.0e38f32;
@@ -65,7 +67,7 @@ fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32) -> f32 {
                 continue;
             }
             let q: Vec<f32> = color.clamped(qx, qy).iter().map(|&v| finite_or_zero(v)).collect();
-            dimmest = dimmest.min(luminance(&q));
+            dimmest = dimmest.min(luminance(&q, weights));
         }
         if dimmest < 3.0e38 {
             sum += dimmest;
@@ -93,9 +95,9 @@ impl Twin for DownsampleShader {
                     let mut c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
                     let coc_p = coc.clamped(x, y)[0];
                     let radius = 0.5 * coc_p.abs();
-                    let lum = luminance(&c);
+                    let lum = luminance(&c, pc.luminance_weights);
                     if radius > pc.small_radius_px && lum > pc.highlight_min {
-                        let bg = background(&color, pc.size, x, y);
+                        let bg = background(&color, pc.size, x, y, pc.luminance_weights);
                         let reference = pc.highlight_min.max(pc.highlight_ratio * bg);
                         let area = std::f32::consts::PI * 0.25 * coc_p * coc_p;
                         let visible =

@@ -11,6 +11,7 @@ use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSou
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
+use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPACES};
 use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
 
@@ -134,6 +135,11 @@ pub struct RenderArgs {
     /// goes through the curve.
     #[arg(long = "film-in-exr")]
     film_in_exr: bool,
+    /// The colour space of the input's RGB (and of the output): ACEScg, ACES2065-1,
+    /// "Linear Rec.709 (sRGB)", "Linear Rec.2020", "Linear P3-D65"; default: the colour
+    /// file's chromaticities attribute, else Rec.709.
+    #[arg(long)]
+    colorspace: Option<String>,
     /// Keep the input files' other channels (depth, vectors, AOVs, other view layers) in the
     /// output EXR, as stored; a name the output has already gets its pass as prefix (depth.R).
     #[arg(long = "keep-layers")]
@@ -359,6 +365,8 @@ pub struct RenderedFrame {
     pub preview: Option<Image>,
     /// The input's other channels (--keep-layers), written beside R, G, B, A.
     pub kept_channels: Vec<(String, Vec<f32>)>,
+    /// The colour space of `image`.
+    pub working_space: Chromaticities,
     pub exr_options: ExrWriteOptions,
     pub profile: realcam::gpu::Profile,
 }
@@ -381,7 +389,8 @@ pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -
     let channel_report = passes.channel_report.clone();
     let kept_channels = std::mem::take(&mut passes.kept_channels);
     let render_focal_length = passes.render_focal_length_mm.clone();
-    let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
+    let mut frame = Frame::from_passes(passes, camera, args.depth_kind.into());
+    let space_line = choose_working_space(args, &mut frame)?;
     let plan = realcam::pipeline::planner::plan(&frame, camera);
     // The render's focal length: what the input says, else --focal-length's.
     let render_mm = render_focal_length.as_ref().map_or(camera.lens.focal_length_mm, |(mm, _)| *mm);
@@ -399,6 +408,7 @@ pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -
             "in the PNG preview only; the EXR is scene-referred"
         };
         eprintln!("  film curve: {film}");
+        eprintln!("  {space_line}");
         eprintln!("{}", plan.explain());
     }
     if let Some(warning) = &focal_length_warning {
@@ -429,18 +439,24 @@ pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -
 
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let preview = args.png.as_ref().map(|_| Image {
-        data: realcam::pipeline::render::preview_rgba(camera, &image.data, image.width),
+        data: realcam::pipeline::render::preview_rgba(camera, &frame.working_space, &image.data, image.width),
         ..image.clone()
     });
     let (_, _, w, h) = frame.display_window;
+    let mut attributes = camera.attributes(w, h);
+    // The output is in the input's colour space: its chromaticities, as OpenEXR names them.
+    let c = frame.working_space;
+    let xy = [c.red, c.green, c.blue, c.white].map(|[x, y]| [x as f32, y as f32]);
+    attributes.push(("chromaticities".into(), io::ExrAttribute::Chromaticities(xy)));
     let exr_options = ExrWriteOptions {
         float32: args.float,
         display_window: Some(frame.display_window),
         data_origin: frame.data_origin,
-        attributes: camera.attributes(w, h),
+        attributes,
         float32_channels: Vec::new(),
     };
-    Ok(RenderedFrame { image, preview, kept_channels, exr_options, profile: rendered.profile })
+    let working_space = frame.working_space;
+    Ok(RenderedFrame { image, preview, kept_channels, exr_options, working_space, profile: rendered.profile })
 }
 
 /// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
@@ -472,6 +488,34 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
 /// --film-file): sensor values, which a long exposure may average.
 pub fn film_is_linear(args: &RenderArgs) -> bool {
     !args.film_in_exr || (matches!(args.film, FilmArg::Linear) && args.film_file.is_none())
+}
+
+/// Sets the frame's colour space from --colorspace (else it keeps the colour file's
+/// chromaticities, or Rec.709); the `--explain` line that says which, with its luminance
+/// weights.
+fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> {
+    let from_file = frame.working_space;
+    let (name, how) = match &args.colorspace {
+        Some(text) => {
+            let Some((name, space)) = named_space(text) else {
+                let known: Vec<&str> = NAMED_SPACES.iter().map(|(name, _, _)| *name).collect();
+                bail!(
+                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (OpenColorIO configs are \
+                     not read yet)",
+                    known.join(", ")
+                );
+            };
+            frame.working_space = space;
+            let differs = if space_name(&from_file) != Some(name) { ", not the file's chromaticities" } else { "" };
+            (name.to_string(), format!("--colorspace{differs}"))
+        }
+        None => {
+            let name = space_name(&from_file).unwrap_or("custom primaries");
+            (name.to_string(), "the colour file's chromaticities, or Rec.709 without them".to_string())
+        }
+    };
+    let [r, g, b] = frame.working_space.luminance_weights();
+    Ok(format!("colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B"))
 }
 
 fn indent(text: &str) -> String {
