@@ -27,9 +27,14 @@ layout(push_constant) uniform Push {
     ivec2 half_size;
     float small_radius_px;   // highlights are pixels of a larger CoC radius ...
     float highlight_min;     // ... at least this bright (luminance)
+    // Luminance of R, G, B in the frame's colour space: the Y row of its RGB to XYZ matrix
+    // (three floats: a vec3 would be aligned to 16 bytes).
+    float luminance_r;
+    float luminance_g;
+    float luminance_b;
 } pc;
 
-float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+float luminance(vec3 c) { return dot(c, vec3(pc.luminance_r, pc.luminance_g, pc.luminance_b)); }
 
 void main() {
     ivec2 ph = ivec2(gl_GlobalInvocationID.xy);

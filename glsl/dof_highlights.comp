@@ -25,9 +25,13 @@ layout(push_constant) uniform Push {
     float highlight_ratio;   // ... and this many times its background
     int sprite_capacity;
     float sprite_visibility;  // smallest visible excess per pixel, relative to the background
+    // Luminance of R, G, B in the frame's colour space (as in dof_downsample.comp).
+    float luminance_r;
+    float luminance_g;
+    float luminance_b;
 } pc;
 
-float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+float luminance(vec3 c) { return dot(c, vec3(pc.luminance_r, pc.luminance_g, pc.luminance_b)); }
 
 // The background of a highlight at p: the mean, over the four sides of the ring 3 px away, of
 // each side's dimmest pixel (the other pixels of the same highlight or of a neighbouring one

@@ -9,8 +9,9 @@ bin=${1:-target/release/realcam}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 t=testdata
-# SHA-256 of an EXR after its header: the offset table and the pixel chunks (realcam writes the
-# header's attributes in name order now; older builds did not, so the header is left out).
+# SHA-256 of an EXR's pixel chunks, from the first chunk on: the header (realcam writes its
+# attributes in name order now; older builds did not) and the offset table (its offsets move
+# with the header's length) are left out.
 pixel_hash() {
   python3 - "$1" <<'PY'
 import hashlib, struct, sys
@@ -21,13 +22,21 @@ while data[pos] != 0:  # attributes: name\0 type\0 size value, until an empty na
     type_end = data.index(b"\0", name_end + 1)
     size = struct.unpack_from("<i", data, type_end + 1)[0]
     pos = type_end + 5 + size
-print(hashlib.sha256(data[pos + 1:]).hexdigest()[:16])
+first_chunk = struct.unpack_from("<Q", data, pos + 1)[0]
+print(hashlib.sha256(data[first_chunk:]).hexdigest()[:16])
 PY
 }
-run() {
+render_hash() {
   local name=$1; shift
   "$bin" render "$@" --float -o "$out/$name.exr" >/dev/null 2>"$out/$name.log" || { echo "$name FAILED"; cat "$out/$name.log" >&2; return; }
   echo "$(pixel_hash "$out/$name.exr")  $name"
+}
+# --film-in-exr: the film curve in the EXR as before it became a switch (the EXR is scene-referred
+# by default now), so that every hash but the last covers the film pass as it did.
+film_in_exr=$("$bin" render --help | grep -o -- --film-in-exr | head -1 || true)
+run() {
+  local name=$1; shift
+  render_hash "$name" "$@" $film_in_exr
 }
 demo=(--color $t/demo_color.exr --depth $t/demo_depth.exr)
 run demo-tiled "${demo[@]}" --fstop 2 --focus 2
@@ -61,3 +70,5 @@ open(sys.argv[1], "wb").write(png)
 PY
 run demo-aperture-image "${demo[@]}" --fstop 2 --focus 2 --aperture-image "$out/triangle.png"
 run demo-aperture-image-ref "${demo[@]}" --fstop 2 --focus 2 --aperture-image "$out/triangle.png" --bokeh reference
+# The default output: scene-referred (exposure and optics, no film curve).
+render_hash demo-scene-referred "${demo[@]}" --fstop 2 --focus 2

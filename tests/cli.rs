@@ -176,30 +176,26 @@ fn scene_args(dir: &TestDir, name: &str, scene: &SynthScene) -> Vec<String> {
     vec!["--color".into(), dir.arg(&color), "--depth".into(), dir.arg(&depth), "-o".into(), dir.arg("out.exr")]
 }
 
-/// The text attributes of the first header of an EXR file.
-fn exr_text_attributes(path: &Path) -> Vec<(String, String)> {
-    use exr::meta::attribute::AttributeValue;
+/// The first header of an EXR file.
+fn exr_header(path: &Path) -> exr::meta::header::Header {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .unwrap_or_else(|e| panic!("reading the header of {}: {e}", path.display()));
-    let mut out: Vec<(String, String)> = meta.headers[0]
-        .own_attributes
-        .other
-        .iter()
-        .filter_map(|(k, v)| match v {
-            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
-            _ => None,
-        })
-        .collect();
-    out.sort();
-    out
+    meta.headers.into_iter().next().expect("a header")
 }
 
-fn attribute<'a>(attrs: &'a [(String, String)], key: &str) -> &'a str {
-    attrs
-        .iter()
-        .find(|(k, _)| k == key)
-        .map(|(_, v)| v.as_str())
-        .unwrap_or_else(|| panic!("no attribute {key:?} in {attrs:?}"))
+/// The attribute `key` of the first header's own attributes that the exr crate keeps by name
+/// (the standard ones it has fields for are read from those).
+fn attribute(path: &Path, key: &str) -> exr::meta::attribute::AttributeValue {
+    let header = exr_header(path);
+    let other = &header.own_attributes.other;
+    other
+        .get(&exr::meta::attribute::Text::from(key))
+        .cloned()
+        .unwrap_or_else(|| panic!("no attribute {key:?} in {:?}", other.keys().collect::<Vec<_>>()))
+}
+
+fn text_value(s: &str) -> exr::meta::attribute::AttributeValue {
+    exr::meta::attribute::AttributeValue::Text(exr::meta::attribute::Text::from(s))
 }
 
 /// No temporary or partial files: every entry of the directory is one of `expected`.
@@ -381,8 +377,7 @@ fn request_outside_the_lens_range_needs_force() {
     // With --force the same request renders, at the requested f-number.
     args.push("--force".into());
     render(&dir, &args).success();
-    let attrs = exr_text_attributes(&dir.join("out.exr"));
-    assert_eq!(attribute(&attrs, "realcam/f_number"), "1");
+    assert_eq!(exr_header(&dir.join("out.exr")).own_attributes.aperture, Some(1.0));
     assert_eq!(read_exr_rgba(&dir.join("out.exr")).unwrap().width, 16);
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr"]);
 }
@@ -398,7 +393,7 @@ fn the_ideal_lens_takes_any_focal_length_and_does_not_vignette() {
     assert_contains(&err, "[skip] vignette");
     assert_contains(&err, "the lens has no natural vignetting (the ideal lens, or natural_vignetting = false)");
     assert!(!err.contains("--no-vignetting"), "{err}");
-    assert_eq!(attribute(&exr_text_attributes(&dir.join("out.exr")), "realcam/f_number"), "0.9");
+    assert_eq!(exr_header(&dir.join("out.exr")).own_attributes.aperture, Some(0.9));
     // The default lens with --no-vignetting names the flag instead.
     let mut args = small_scene(&dir);
     args.extend(s(&["--no-vignetting", "--explain"]));
@@ -801,15 +796,24 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     for ch in &meta.headers[0].channels.list {
         assert_eq!(ch.sample_type, exr::meta::attribute::SampleType::F32, "{}", ch.name);
     }
-    let attrs = exr_text_attributes(&dir.join("out.exr"));
-    assert_eq!(attribute(&attrs, "realcam/f_number"), "2");
-    assert_eq!(attribute(&attrs, "realcam/focus_distance_m"), "2");
-    assert_eq!(attribute(&attrs, "realcam/focal_length_mm"), "50");
-    assert_eq!(attribute(&attrs, "realcam/sensor_mm"), "9.6x7.2");
-    assert_eq!(attribute(&attrs, "realcam/shutter_s"), "0.02");
-    assert_eq!(attribute(&attrs, "realcam/iso"), "100");
-    assert_eq!(attribute(&attrs, "realcam/lens"), "realcam standard 50 mm f/1.4");
-    assert_eq!(attribute(&attrs, "realcam/film"), "characteristic curve");
+    // The camera as OpenEXR's typed standard attributes, read back.
+    use exr::meta::attribute::AttributeValue;
+    let out_exr = dir.join("out.exr");
+    let a = exr_header(&out_exr).own_attributes;
+    assert_eq!((a.aperture, a.focus, a.exposure, a.iso_speed), (Some(2.0), Some(2.0), Some(0.02), Some(100.0)));
+    assert_eq!(a.frames_per_second, Some((24, 1)));
+    assert_eq!(attribute(&out_exr, "nominalFocalLength"), AttributeValue::F32(50.0));
+    assert_eq!(attribute(&out_exr, "effectiveFocalLength"), AttributeValue::F32(50.0));
+    assert_eq!(attribute(&out_exr, "sensorOverallDimensions"), AttributeValue::FloatVec2(exr::math::Vec2(9.6, 7.2)));
+    // 9.6 mm over 64 px: 150 um.
+    assert_eq!(attribute(&out_exr, "sensorPhotositePitch"), AttributeValue::F32(150.0));
+    // 0.02 s at 24 fps: 0.48 of a frame, 172.8 degrees.
+    assert_eq!(attribute(&out_exr, "shutterAngle"), AttributeValue::F32(172.8));
+    // T-stop = N / sqrt(T): the default lens transmits 0.92.
+    assert_eq!(attribute(&out_exr, "tStop"), AttributeValue::F32((2.0 / 0.92f64.sqrt()) as f32));
+    assert_eq!(attribute(&out_exr, "lensModel"), text_value("realcam standard 50 mm f/1.4"));
+    assert_eq!(attribute(&out_exr, "realcam/aperture_blades"), AttributeValue::I32(9));
+    assert_eq!(attribute(&out_exr, "realcam/film"), text_value("linear (scene-referred)"));
 
     // The PNG: signature and IHDR size.
     let png = std::fs::read(dir.join("out.png")).unwrap();
@@ -1344,7 +1348,7 @@ fn identical_runs_write_identical_bytes() {
     let first = std::fs::read(dir.join("out.exr")).unwrap();
     render(&dir, &args).success();
     assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), first, "two identical runs wrote different bytes");
-    assert!(exr_text_attributes(&dir.join("out.exr")).len() >= 10);
+    assert!(exr_header(&dir.join("out.exr")).own_attributes.other.len() >= 10);
 }
 
 /// Several view layers in one EXR: the passes come from one layer as a whole (the first, with
@@ -1713,13 +1717,14 @@ fn a_long_exposure_is_the_average_of_the_frames() {
     // Frames differ, so the average is none of them.
     assert!(frames.iter().all(|f| f.data != exposure.data));
 
-    // Refused before any work: a film curve, an output with a frame number.
+    // Refused before any work: a film curve in the EXR, an output with a frame number.
     let mut curve = args.clone();
     curve.truncate(curve.len() - linear.len());
+    curve.push("--film-in-exr".into());
     let err = render(&dir, &curve).failure();
     assert_contains(
         &err,
-        "error: --long-exposure averages the frames' light, which comes before a film curve: give --film linear",
+        "error: --long-exposure averages the frames' light, which comes before a film curve: leave out --film-in-exr",
     );
     let mut patterned = sequence_args(&dir);
     patterned.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
@@ -1796,4 +1801,232 @@ fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
         ),
     );
     assert!(!dir.join("other.exr").exists());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Defaults that fit a compositor (issue 16, part 4)
+// ---------------------------------------------------------------------------------------------
+
+/// The 8-bit samples of a PNG.
+fn png_samples(path: &Path) -> Vec<u8> {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8().into_raw()
+}
+
+/// The EXR is scene-referred by default: a highlight of 1e6 in focus keeps its light times the
+/// exposure gain instead of becoming the film's white, and the PNG preview is the film curve of
+/// those values: the same, within one level of 255, as the GPU's curve with --film-in-exr,
+/// whose EXR stops at the film's white.
+#[test]
+fn the_exr_is_scene_referred_and_the_png_previews_the_film_curve() {
+    let dir = TestDir::new("scene_referred");
+    let mut args = scene_args(&dir, "p", &SynthScene::point_on_plane(16, 12, 2.0, [1.0e6; 3]));
+    args.extend(s(&["--fstop", "2", "--focus", "2", "--float", "--no-flare", "--no-vignetting", "--validate"]));
+    args.extend(s(&["--png", &dir.arg("out.png")]));
+    render(&dir, &args).success();
+    let scene = read_exr_rgba(&dir.join("out.exr")).unwrap();
+    let gain = match attribute(&dir.join("out.exr"), "realcam/exposure_gain") {
+        exr::meta::attribute::AttributeValue::F32(g) => f64::from(g),
+        other => panic!("realcam/exposure_gain is {other:?}"),
+    };
+    // ISO 100, 1/50 s, f/2 focused at 2 m, 160 cd/m^2 per unit: 0.7045 (the demo's plan).
+    assert!((gain - 0.7045).abs() < 1e-4, "gain {gain}");
+    let centre = f64::from(scene.get(8, 6, 0));
+    assert!((centre / (1.0e6 * gain) - 1.0).abs() < 1e-5, "highlight {centre} against {}", 1.0e6 * gain);
+    assert_eq!(attribute(&dir.join("out.exr"), "realcam/film"), text_value("linear (scene-referred)"));
+    let preview = png_samples(&dir.join("out.png"));
+
+    args.push("--film-in-exr".into());
+    render(&dir, &args).success();
+    let display = read_exr_rgba(&dir.join("out.exr")).unwrap();
+    assert!(display.data.iter().all(|&v| (0.0..=1.0).contains(&v)), "the film curve ends at its white");
+    assert!(display.get(8, 6, 0) > 0.95, "the highlight is near the film's white: {}", display.get(8, 6, 0));
+    assert_eq!(attribute(&dir.join("out.exr"), "realcam/film"), text_value("characteristic curve"));
+    let gpu_curve = png_samples(&dir.join("out.png"));
+    assert_eq!(preview.len(), gpu_curve.len());
+    let worst = preview.iter().zip(&gpu_curve).map(|(a, b)| a.abs_diff(*b)).max().unwrap();
+    assert!(worst <= 1, "the preview differs from the GPU's film curve by {worst} levels");
+    // The plane (0.1 x gain ~ 0.07, under the film's middle grey 0.128) is dark but not black.
+    assert!((20..120).contains(&preview[0]), "plane preview {}", preview[0]);
+}
+
+/// --keep-layers: the input's other channels (depth, vectors, AOVs, another view layer) come
+/// out beside the camera's R, G, B, A as stored (float, a sky at 1e10 included, in a half
+/// output too); the colour pass's own channels do not; a name the output already has takes
+/// its pass as prefix. Without the flag only R, G, B, A.
+#[test]
+fn keep_layers_writes_the_inputs_other_channels_as_stored() {
+    let dir = TestDir::new("keep_layers");
+    let (w, h) = (12u32, 8u32);
+    let n = (w * h) as usize;
+    let ramp = |k: f32| (0..n).map(|i| k * i as f32 + 0.25).collect::<Vec<f32>>();
+    let mut depth = vec![3.0f32; n];
+    depth[5] = 1.0e10;
+    let (grey, one, zero) = (vec![0.2f32; n], vec![1.0f32; n], vec![0.0f32; n]);
+    let (ao, crypto) = (ramp(0.01), ramp(-3.5));
+    let channels: Vec<(&str, &[f32])> = vec![
+        ("ViewLayer.Combined.R", &grey),
+        ("ViewLayer.Combined.G", &grey),
+        ("ViewLayer.Combined.B", &grey),
+        ("ViewLayer.Combined.A", &one),
+        ("ViewLayer.Depth.Z", &depth),
+        ("ViewLayer.Vector.X", &zero),
+        ("ViewLayer.Vector.Y", &zero),
+        ("ViewLayer.Vector.Z", &zero),
+        ("ViewLayer.Vector.W", &zero),
+        ("ViewLayer.AO.R", &ao),
+        ("ViewLayer.CryptoObject00.R", &crypto),
+    ];
+    let color = dir.join("passes.exr");
+    write_exr_channels(&color, w, h, &channels, &float_opts()).unwrap();
+    let base = s(&["--color", &dir.arg("passes.exr"), "-o", &dir.arg("out.exr"), "--fstop", "2", "--focus", "3"]);
+    let mut args = base.clone();
+    args.extend(s(&["--keep-layers", "--explain", "--validate"]));
+    let run = render(&dir, &args).success();
+    assert_contains(&run.stderr, "kept for the output: 7 channel(s)");
+    let names = |path: &Path| -> Vec<String> {
+        exr_header(path).channels.list.iter().map(|c| c.name.to_string()).collect::<Vec<String>>()
+    };
+    let mut expected: Vec<&str> = channels[4..].iter().map(|(name, _)| *name).collect();
+    expected.extend(["A", "B", "G", "R"]);
+    expected.sort();
+    assert_eq!(names(&dir.join("out.exr")), expected);
+    for (name, values) in &channels[4..] {
+        let kept = read_exr_channel(&dir.join("out.exr"), name).unwrap();
+        assert_eq!(&kept.data[..], *values, "{name}");
+    }
+    // Without the flag: the camera's image alone.
+    render(&dir, &base).success();
+    assert_eq!(names(&dir.join("out.exr")), ["A", "B", "G", "R"]);
+
+    // Separate files: the depth file's own R would be the output's: it becomes depth.R.
+    let mut args = scene_args(&dir, "p", &SynthScene::point_on_plane(w, h, 2.0, [1.0; 3]));
+    let depth_file = dir.join("p_depth.exr");
+    let stored_depth = read_exr_channel(&depth_file, "Z").unwrap().data;
+    write_exr_channels(&depth_file, w, h, &[("Z", &stored_depth), ("R", &ao)], &float_opts()).unwrap();
+    args.extend(s(&["--fstop", "2", "--focus", "2", "--keep-layers"]));
+    render(&dir, &args).success();
+    assert_eq!(names(&dir.join("out.exr")), ["A", "B", "G", "R", "Z", "depth.R"]);
+    assert_eq!(read_exr_channel(&dir.join("out.exr"), "depth.R").unwrap().data, ao);
+}
+
+/// --explain prints what a user matches against the 3D camera (focal length, sensor and fit,
+/// pixel pitch, field of view, the lens and its aberrations); a lens file made for another
+/// focal length than the render's (--focal-length, or the input's header) is warned about.
+#[test]
+fn explain_prints_the_camera_and_a_lens_of_another_focal_length_is_warned_about() {
+    let dir = TestDir::new("explain_camera");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--sensor", "9.6x7.2", "--fstop", "2", "--focus", "3", "--explain"]));
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(&err, "lens: \"realcam standard 50 mm f/1.4\" (50 mm lens file)");
+    assert_contains(&err, "focal length 50 mm, f/2, focus 3 m, 9 blades rotated 0 deg; shutter 0.02 s, ISO 100");
+    // 9.6 mm across 16 px: 0.6 mm a pixel; the field of view 2 atan(4.8 / 50) by 2 atan(3.6 / 50).
+    let fov = |half_mm: f64| 2.0 * (half_mm / 50.0f64).atan().to_degrees();
+    assert_contains(
+        &err,
+        &format!(
+            "sensor 9.6 x 7.2 mm, fit horizontal: the frame is 9.600 x 7.200 mm, pixel pitch 0.600000 mm \
+             (600.000 um); field of view {:.2} x {:.2} deg",
+            fov(4.8),
+            fov(3.6)
+        ),
+    );
+    assert_contains(&err, "aberrations: spherical aberration 0.3, natural vignetting (cos^4), lens flare");
+    assert_contains(&err, "film curve: in the PNG preview only; the EXR is scene-referred");
+    assert!(!err.contains("warning: the lens file"), "{err}");
+
+    // The default 50 mm lens forced to 35 mm.
+    args.extend(s(&["--focal-length", "35", "--force"]));
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(
+        &err,
+        "warning: the lens file \"realcam standard 50 mm f/1.4\" is for 50 mm but the render was made with 35 mm",
+    );
+
+    // The renderer's focal length from the colour file's header: OpenEXR's pinholeFocalLength,
+    // or Blender's Lens stamp.
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "3"]));
+    let color = dir.join("scene_color.exr");
+    let image = read_exr_rgba(&color).unwrap();
+    let stamps = [
+        ("pinholeFocalLength", realcam::io::ExrAttribute::F32(85.0)),
+        ("Lens", realcam::io::ExrAttribute::Text("85.00 mm".into())),
+    ];
+    for (name, value) in stamps {
+        let opts = ExrWriteOptions { attributes: vec![(name.into(), value)], ..float_opts() };
+        write_exr_rgba(&color, &image, &opts).unwrap();
+        let err = render(&dir, &args).success().stderr;
+        assert_contains(
+            &err,
+            &format!(
+                "warning: the lens file \"realcam standard 50 mm f/1.4\" is for 50 mm but the render was made with \
+                 85 mm: its field of view, tables and aberrations do not match the render's camera (its {name} attribute)"
+            ),
+        );
+    }
+    // The ideal lens takes the render's focal length: nothing to warn about.
+    args.extend(s(&["--lens", "ideal", "--focal-length", "85"]));
+    assert!(!render(&dir, &args).success().stderr.contains("warning: the lens file"));
+}
+
+/// The colour space (issue 16, part 1): the colour file's chromaticities attribute is read and
+/// written back on the output; --colorspace names one instead; an unknown name lists the known
+/// ones, and chromaticities that are no RGB space are an error naming the file.
+#[test]
+fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
+    use realcam::io::ExrAttribute;
+    use realcam::optics::colour::Chromaticities;
+    let dir = TestDir::new("colour_space");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "3", "--explain"]));
+    let xy = |c: Chromaticities| [c.red, c.green, c.blue, c.white].map(|[x, y]| [x as f32, y as f32]);
+    let written = || {
+        let c = exr_header(&dir.join("out.exr")).shared_attributes.chromaticities.expect("chromaticities");
+        [c.red, c.green, c.blue, c.white].map(|v| [v.0, v.1])
+    };
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: Linear Rec.709 (sRGB) (the colour file's chromaticities, or Rec.709 without them); \
+         luminance = 0.2126 R + 0.7152 G + 0.0722 B",
+    );
+    assert_eq!(written(), xy(Chromaticities::REC709));
+
+    // A file in ACEScg says so.
+    let color = dir.join("scene_color.exr");
+    let image = read_exr_rgba(&color).unwrap();
+    let with = |c: [[f32; 2]; 4]| ExrWriteOptions {
+        attributes: vec![("chromaticities".into(), ExrAttribute::Chromaticities(c))],
+        ..float_opts()
+    };
+    write_exr_rgba(&color, &image, &with(xy(Chromaticities::ACES_AP1))).unwrap();
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(&err, "colour space: ACEScg (the colour file's chromaticities");
+    assert_contains(&err, "luminance = 0.2722 R + 0.6741 G + 0.0537 B");
+    assert_eq!(written(), xy(Chromaticities::ACES_AP1));
+
+    // --colorspace wins.
+    let mut named = args.clone();
+    named.extend(s(&["--colorspace", "ACES2065-1"]));
+    let err = render(&dir, &named).success().stderr;
+    assert_contains(&err, "colour space: ACES2065-1 (--colorspace, not the file's chromaticities)");
+    assert_eq!(written(), xy(Chromaticities::ACES_AP0));
+    let mut unknown = args.clone();
+    unknown.extend(s(&["--colorspace", "sRGB - Texture"]));
+    assert_contains(
+        &render(&dir, &unknown).failure(),
+        "error: --colorspace \"sRGB - Texture\": not a colour space realcam knows; known: Linear Rec.709 (sRGB), \
+         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (OpenColorIO configs are not read yet)",
+    );
+
+    // Green on the line from red to blue (binary fractions, exact in the file): no RGB space.
+    let white = xy(Chromaticities::REC709)[3];
+    write_exr_rgba(&color, &image, &with([[0.625, 0.375], [0.375, 0.25], [0.125, 0.125], white])).unwrap();
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: color: \"{}\": its chromaticities attribute is unusable: chromaticities", color.display()),
+    );
+    assert_contains(&err, "are not an RGB space: the primaries lie on one line");
 }

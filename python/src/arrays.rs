@@ -104,6 +104,11 @@ pub fn scene_passes(
         data_origin,
         channel_report: report,
         color_nan_count,
+        // Arrays carry no other layers, no focal length and no colour space of their own: the
+        // Camera's colorspace setting (or Rec.709) is the working space.
+        kept_channels: Vec::new(),
+        render_focal_length_mm: None,
+        chromaticities: None,
     })
 }
 

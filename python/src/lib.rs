@@ -162,12 +162,17 @@ impl Camera {
             channel_report,
         )
         .map_err(py_err)?;
-        let (frame, plan) = render::plan_frame(&self.args, &self.camera, passes);
-        self.explain = plan.explain();
-        self.plan =
-            plan.passes.iter().filter(|p| p.listed).map(|p| (p.name.to_string(), p.runs(), p.why.clone())).collect();
+        let planned = render::plan_frame(&self.args, &self.camera, passes).map_err(py_err)?;
+        self.explain = planned.plan.explain();
+        self.plan = planned
+            .plan
+            .passes
+            .iter()
+            .filter(|p| p.listed)
+            .map(|p| (p.name.to_string(), p.runs(), p.why.clone()))
+            .collect();
         let opened_before = self.session.gpu().is_some();
-        let rendered = render::render_planned(&self.args, &self.camera, &frame, &plan, &mut self.session);
+        let rendered = render::render_planned(&self.args, &self.camera, planned, &mut self.session);
         if !opened_before && self.session.gpu().is_some() {
             self.gpu_opens += 1;
         }

@@ -72,6 +72,32 @@ struct ExrFile {
     path: PathBuf,
     display_window: (i32, i32, u32, u32),
     chans: Vec<Chan>,
+    /// The focal length (mm) its first part's header gives, with the attribute's name.
+    focal_length_mm: Option<(f64, String)>,
+    /// Its `chromaticities` attribute: the colour space of its RGB.
+    chromaticities: Option<crate::optics::colour::Chromaticities>,
+}
+
+/// The focal length a renderer wrote in a header: OpenEXR's lens attributes (floats, mm), else
+/// Blender's `Lens` stamp (a text such as "50.00 mm").
+fn header_focal_length_mm(attributes: &exr::meta::header::LayerAttributes) -> Option<(f64, String)> {
+    use exr::meta::attribute::{AttributeValue, Text};
+    let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
+    for name in ["pinholeFocalLength", "effectiveFocalLength", "nominalFocalLength"] {
+        if let Some(AttributeValue::F32(v)) = attributes.other.get(&Text::from(name)) {
+            if let Some(v) = positive(f64::from(*v)) {
+                return Some((v, name.to_string()));
+            }
+        }
+    }
+    match attributes.other.get(&Text::from("Lens")) {
+        Some(AttributeValue::Text(t)) => {
+            let t = t.to_string();
+            let mm = t.trim().strip_suffix("mm")?.trim().parse::<f64>().ok()?;
+            Some((positive(mm)?, "Lens".to_string()))
+        }
+        _ => None,
+    }
 }
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
@@ -136,6 +162,21 @@ impl ExrFile {
             }
         };
         let dw = image.attributes.display_window;
+        let focal_length_mm = image.layer_data.first().and_then(|l| header_focal_length_mm(&l.attributes));
+        let chromaticities = match image.attributes.chromaticities {
+            None => None,
+            Some(c) => {
+                let xy = |v: exr::math::Vec2<f32>| [f64::from(v.0), f64::from(v.1)];
+                let checked =
+                    crate::optics::colour::Chromaticities::new(xy(c.red), xy(c.green), xy(c.blue), xy(c.white));
+                Some(checked.map_err(|e| IoError::BadAttribute {
+                    what: what.into(),
+                    path: path.into(),
+                    attribute: "chromaticities",
+                    reason: e.to_string(),
+                })?)
+            }
+        };
         let multi_part = image.layer_data.len() > 1;
         let mut chans = Vec::new();
         for layer in image.layer_data {
@@ -170,6 +211,8 @@ impl ExrFile {
             path: path.into(),
             display_window: (dw.position.0, dw.position.1, dw.size.0 as u32, dw.size.1 as u32),
             chans,
+            focal_length_mm,
+            chromaticities,
         })
     }
 
@@ -847,6 +890,49 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         c0.origin.0, c0.origin.1, c0.size.0, c0.size.1, dw.0, dw.1, dw.2, dw.3
     ));
 
+    // The other channels, for the output.
+    let mut kept_channels: Vec<(String, Vec<f32>)> = Vec::new();
+    if src.keep_layers {
+        let used: Vec<&str> = cfound.chans.iter().map(|c| c.name.as_str()).collect();
+        let files = [("color", Some(&cf)), ("depth", df_own.as_ref()), ("velocity", vf_own.as_ref())];
+        let mut left_out = Vec::new();
+        for (what, file) in files.into_iter().filter_map(|(w, f)| Some((w, f?))) {
+            for c in &file.chans {
+                if std::ptr::eq(file, &cf) && used.contains(&c.name.as_str()) {
+                    continue;
+                }
+                if c.size != c0.size {
+                    left_out.push(format!(
+                        "{} ({}x{} px, not the frame's {}x{})",
+                        c.name, c.size.0, c.size.1, c0.size.0, c0.size.1
+                    ));
+                    continue;
+                }
+                let taken = |n: &str| ["R", "G", "B", "A"].contains(&n) || kept_channels.iter().any(|(k, _)| k == n);
+                let name = if taken(&c.name) { format!("{what}.{}", c.name) } else { c.name.clone() };
+                if taken(&name) {
+                    left_out.push(format!("{} (its name is taken)", c.name));
+                    continue;
+                }
+                kept_channels.push((name, c.to_f32()));
+            }
+        }
+        let mut line = format!(
+            "kept for the output: {} channel(s){}",
+            kept_channels.len(),
+            if kept_channels.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", kept_channels.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", "))
+            }
+        );
+        if !left_out.is_empty() {
+            line += &format!("; left out: {}", left_out.join(", "));
+            log::warn!("--keep-layers: channel(s) left out of the output: {}", left_out.join(", "));
+        }
+        report.push(line);
+    }
+
     Ok(ScenePasses {
         color,
         depth_m,
@@ -857,6 +943,9 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         data_origin: c0.origin,
         channel_report: report.join("\n"),
         color_nan_count,
+        kept_channels,
+        render_focal_length_mm: cf.focal_length_mm.clone(),
+        chromaticities: cf.chromaticities,
     })
 }
 

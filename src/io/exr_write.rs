@@ -3,7 +3,7 @@
 use super::{Image, IoError};
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
 use exr::math::Vec2;
-use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
+use exr::meta::attribute::{AttributeValue, Chromaticities, IntegerBounds, Text};
 use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::prelude::WritableImage;
 use std::path::Path;
@@ -20,9 +20,60 @@ pub struct ExrWriteOptions {
     /// Position (px) of pixel (0,0) in the display window's coordinate space (EXR data
     /// window minimum).
     pub data_origin: (i32, i32),
-    /// Text attributes, e.g. ("realcam/focal_length_mm", "50").
-    pub attributes: Vec<(String, String)>,
+    /// Typed header attributes, e.g. ("aperture", F32(2.8)) or ("realcam/lens", Text(..)).
+    /// OpenEXR's standard names (`aperture`, `expTime`, `focus`, `isoSpeed`, `chromaticities`,
+    /// `framesPerSecond`, ...) must have their standard type; [`encode_exr_channels`] refuses
+    /// another.
+    pub attributes: Vec<(String, ExrAttribute)>,
+    /// Channels written as float32 even when `float32` is false (kept input channels such as
+    /// a depth of 1e10, beyond half's range).
+    pub float32_channels: Vec<String>,
 }
+
+/// A typed EXR attribute value (OpenEXR's types `string`, `float`, `int`, `v2f`,
+/// `chromaticities`, `rational`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExrAttribute {
+    Text(String),
+    F32(f32),
+    I32(i32),
+    V2f([f32; 2]),
+    /// Red, green, blue and white CIE xy.
+    Chromaticities([[f32; 2]; 4]),
+    /// numerator / denominator.
+    Rational(i32, u32),
+}
+
+impl ExrAttribute {
+    /// OpenEXR's name of the type.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            ExrAttribute::Text(_) => "string",
+            ExrAttribute::F32(_) => "float",
+            ExrAttribute::I32(_) => "int",
+            ExrAttribute::V2f(_) => "v2f",
+            ExrAttribute::Chromaticities(_) => "chromaticities",
+            ExrAttribute::Rational(..) => "rational",
+        }
+    }
+}
+
+/// OpenEXR's standard attributes that realcam writes, with their types (OpenEXR's
+/// ImfStandardAttributes.h; the lens and camera ones since OpenEXR 3.2).
+const STANDARD_TYPES: [(&str, &str); 12] = [
+    ("aperture", "float"),
+    ("expTime", "float"),
+    ("focus", "float"),
+    ("isoSpeed", "float"),
+    ("chromaticities", "chromaticities"),
+    ("framesPerSecond", "rational"),
+    ("lensModel", "string"),
+    ("nominalFocalLength", "float"),
+    ("effectiveFocalLength", "float"),
+    ("sensorOverallDimensions", "v2f"),
+    ("sensorPhotositePitch", "float"),
+    ("shutterAngle", "float"),
+];
 
 /// Writes a 4-channel image as channels R, G, B, A.
 pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Result<(), IoError> {
@@ -125,7 +176,7 @@ pub fn encode_exr_channels(
         if channels[..i].iter().any(|(other, _)| other == name) {
             return Err(invalid(format!("channel {name} is given twice")));
         }
-        let samples = if opts.float32 {
+        let samples = if opts.float32 || opts.float32_channels.iter().any(|c| c == name) {
             FlatSamples::F32(data.to_vec())
         } else {
             let to_half = |&v: &f32| {
@@ -152,9 +203,40 @@ pub fn encode_exr_channels(
         software_name: Some(Text::from("realcam")),
         ..LayerAttributes::default()
     };
+    let mut chromaticities = None;
     for (k, v) in &opts.attributes {
-        let value = AttributeValue::Text(text(path, "attribute value", v, true)?);
-        attrs.other.insert(text(path, "attribute name", k, false)?, value);
+        if let Some((_, standard)) = STANDARD_TYPES.iter().find(|(name, _)| name == k) {
+            if *standard != v.type_name() {
+                return Err(invalid(format!("attribute {k} is OpenEXR's {standard}, not {}", v.type_name())));
+            }
+        }
+        let value = match v {
+            ExrAttribute::Text(t) => AttributeValue::Text(text(path, "attribute value", t, true)?),
+            ExrAttribute::F32(f) => AttributeValue::F32(*f),
+            ExrAttribute::I32(i) => AttributeValue::I32(*i),
+            ExrAttribute::V2f([x, y]) => AttributeValue::FloatVec2(Vec2(*x, *y)),
+            ExrAttribute::Rational(n, d) => AttributeValue::Rational((*n, *d)),
+            ExrAttribute::Chromaticities([r, g, b, w]) => {
+                chromaticities = Some(Chromaticities {
+                    red: Vec2(r[0], r[1]),
+                    green: Vec2(g[0], g[1]),
+                    blue: Vec2(b[0], b[1]),
+                    white: Vec2(w[0], w[1]),
+                });
+                continue;
+            }
+        };
+        // The exr crate keeps the standard attributes in fields of their own.
+        match (k.as_str(), &value) {
+            ("aperture", AttributeValue::F32(f)) => attrs.aperture = Some(*f),
+            ("expTime", AttributeValue::F32(f)) => attrs.exposure = Some(*f),
+            ("focus", AttributeValue::F32(f)) => attrs.focus = Some(*f),
+            ("isoSpeed", AttributeValue::F32(f)) => attrs.iso_speed = Some(*f),
+            ("framesPerSecond", AttributeValue::Rational(r)) => attrs.frames_per_second = Some(*r),
+            _ => {
+                attrs.other.insert(text(path, "attribute name", k, false)?, value);
+            }
+        }
     }
     let size = Vec2(width as usize, height as usize);
     let display = match opts.display_window {
@@ -165,7 +247,9 @@ pub fn encode_exr_channels(
         None => IntegerBounds::new(attrs.layer_position, size),
     };
     let layer = Layer::new(size, attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
-    let image = exr::image::Image::new(ImageAttributes::new(display), layer);
+    let mut image_attributes = ImageAttributes::new(display);
+    image_attributes.chromaticities = chromaticities;
+    let image = exr::image::Image::new(image_attributes, layer);
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write().to_buffered(&mut bytes).map_err(|source| IoError::ExrEncode { path: path.into(), source })?;
     let mut bytes = bytes.into_inner();
@@ -178,6 +262,8 @@ mod tests {
     use super::*;
     use crate::io::{read_exr_rgba, test_dir};
     use exr::prelude::read_all_flat_layers_from_file;
+
+    const REC709: [[f32; 2]; 4] = [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06], [0.3127, 0.329]];
 
     fn ramp(w: u32, h: u32) -> Image {
         let mut im = Image::new(w, h, 4);
@@ -198,7 +284,19 @@ mod tests {
                 float32,
                 display_window: Some((0, 0, 20, 10)),
                 data_origin: (7, -3),
-                attributes: vec![("realcam/focal_length_mm".into(), "50".into())],
+                float32_channels: Vec::new(),
+                attributes: vec![
+                    ("realcam/lens".into(), ExrAttribute::Text("a 50".into())),
+                    ("aperture".into(), ExrAttribute::F32(2.8)),
+                    ("expTime".into(), ExrAttribute::F32(0.02)),
+                    ("focus".into(), ExrAttribute::F32(3.5)),
+                    ("isoSpeed".into(), ExrAttribute::F32(200.0)),
+                    ("framesPerSecond".into(), ExrAttribute::Rational(24, 1)),
+                    ("nominalFocalLength".into(), ExrAttribute::F32(50.0)),
+                    ("sensorOverallDimensions".into(), ExrAttribute::V2f([36.0, 24.0])),
+                    ("realcam/aperture_blades".into(), ExrAttribute::I32(9)),
+                    ("chromaticities".into(), ExrAttribute::Chromaticities(REC709)),
+                ],
             };
             write_exr_rgba(&path, &im, &opts).unwrap();
             let back = read_exr_rgba(&path).unwrap();
@@ -213,8 +311,17 @@ mod tests {
             let layer = &file.layer_data[0];
             assert_eq!(file.attributes.display_window, IntegerBounds::new(Vec2(0, 0), Vec2(20, 10)));
             assert_eq!(layer.attributes.layer_position, Vec2(7, -3));
-            let value = layer.attributes.other.get(&Text::from("realcam/focal_length_mm"));
-            assert_eq!(value, Some(&AttributeValue::Text(Text::from("50"))));
+            // Read back typed, the standard ones where the exr crate keeps them.
+            let a = &layer.attributes;
+            assert_eq!((a.aperture, a.exposure, a.focus, a.iso_speed), (Some(2.8), Some(0.02), Some(3.5), Some(200.0)));
+            assert_eq!(a.frames_per_second, Some((24, 1)));
+            let other = |k: &str| a.other.get(&Text::from(k)).cloned();
+            assert_eq!(other("realcam/lens"), Some(AttributeValue::Text(Text::from("a 50"))));
+            assert_eq!(other("nominalFocalLength"), Some(AttributeValue::F32(50.0)));
+            assert_eq!(other("sensorOverallDimensions"), Some(AttributeValue::FloatVec2(Vec2(36.0, 24.0))));
+            assert_eq!(other("realcam/aperture_blades"), Some(AttributeValue::I32(9)));
+            let c = file.attributes.chromaticities.expect("chromaticities");
+            assert_eq!([c.red, c.green, c.blue, c.white].map(|v| [v.0, v.1]), REC709);
             let is_f32 = matches!(layer.channel_data.list[0].sample_data, FlatSamples::F32(_));
             assert_eq!(is_f32, float32);
         }
@@ -238,7 +345,8 @@ mod tests {
     #[test]
     fn the_same_image_gives_the_same_bytes() {
         let dir = test_dir("write-deterministic");
-        let attributes: Vec<(String, String)> = (0..12).map(|i| (format!("realcam/k{i}"), format!("{i}"))).collect();
+        let attributes: Vec<(String, ExrAttribute)> =
+            (0..12).map(|i| (format!("realcam/k{i}"), ExrAttribute::Text(format!("{i}")))).collect();
         let opts = ExrWriteOptions { attributes, float32: true, ..Default::default() };
         let path = dir.join("d.exr");
         // Each encoding hashes its attributes with a new random state: without the sorting
@@ -272,9 +380,18 @@ mod tests {
         assert!(err.to_string().contains("has 3 channel(s) per pixel, expected 4 (RGBA)"), "{err}");
         let err = write_exr_channels(&target, 4, 2, &[("Z", &[0.0; 7])], &opts).unwrap_err();
         assert!(err.to_string().contains("channel Z holds 7 values, expected 8"), "{err}");
-        let reserved = ExrWriteOptions { attributes: vec![("channels".into(), "x".into())], ..Default::default() };
+        let reserved = ExrWriteOptions {
+            attributes: vec![("channels".into(), ExrAttribute::Text("x".into()))],
+            ..Default::default()
+        };
         let err = write_exr_rgba(&target, &ramp(4, 2), &reserved).unwrap_err();
         assert!(err.to_string().starts_with("cannot encode OpenEXR file"), "{err}");
+        let mistyped = ExrWriteOptions {
+            attributes: vec![("aperture".into(), ExrAttribute::Text("f/2".into()))],
+            ..Default::default()
+        };
+        let err = write_exr_rgba(&target, &ramp(4, 2), &mistyped).unwrap_err();
+        assert!(err.to_string().ends_with("attribute aperture is OpenEXR's float, not string"), "{err}");
         assert_eq!(std::fs::read(&target).unwrap(), before);
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "temporary files left behind");
 

@@ -27,7 +27,9 @@ pub mod png;
 pub mod sequence;
 
 pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
-pub use exr_write::{encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrWriteOptions};
+pub use exr_write::{
+    encode_exr_channels, encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrAttribute, ExrWriteOptions,
+};
 pub use png::{encode_png_srgb, write_png_srgb};
 
 use std::path::{Path, PathBuf};
@@ -71,6 +73,8 @@ pub enum IoError {
     DataLength { path: PathBuf, channel: String, expected: usize, got: usize },
     #[error("cannot write \"{}\": {reason}", .path.display())]
     InvalidImage { path: PathBuf, reason: String },
+    #[error("{what}: \"{}\": its {attribute} attribute is unusable: {reason}", .path.display())]
+    BadAttribute { what: String, path: PathBuf, attribute: &'static str, reason: String },
     #[error("cannot encode OpenEXR file \"{}\": {source}", .path.display())]
     ExrEncode { path: PathBuf, source: exr::error::Error },
     #[error("cannot encode PNG file \"{}\": {source}", .path.display())]
@@ -167,6 +171,9 @@ pub struct PassSources {
     /// The time (frames) the vectors span, for formats that measure over the renderer's
     /// shutter interval rather than per frame (Arnold's raw `motion_vector`).
     pub velocity_interval_frames: Option<f64>,
+    /// Keep the input files' other channels (depth, vectors, AOVs) for the output
+    /// ([`ScenePasses::kept_channels`]).
+    pub keep_layers: bool,
 }
 
 /// The conventions of the velocity passes renderers write; each becomes pixels per frame, x right,
@@ -229,6 +236,7 @@ impl PassSources {
             velocity_scale: 1.0,
             velocity_flip_y: false,
             velocity_interval_frames: None,
+            keep_layers: false,
         }
     }
 }
@@ -345,6 +353,17 @@ pub struct ScenePasses {
     pub channel_report: String,
     /// Number of NaN/Inf color values replaced by 0.
     pub color_nan_count: u64,
+    /// With [`PassSources::keep_layers`]: every other channel of the input files of the frame's
+    /// size (name, values as stored, row-major), the colour pass's own channels left out; a
+    /// name the output already has (R, G, B, A or an earlier file's) gets its pass as a
+    /// prefix (`depth.R`).
+    pub kept_channels: Vec<(String, Vec<f32>)>,
+    /// The focal length (mm) the colour file says it was rendered with: OpenEXR's
+    /// `pinholeFocalLength`, `effectiveFocalLength` or `nominalFocalLength`, or Blender's
+    /// `Lens` stamp ("50.00 mm"); with the attribute's name.
+    pub render_focal_length_mm: Option<(f64, String)>,
+    /// The colour file's `chromaticities` attribute: the colour space of its RGB.
+    pub chromaticities: Option<crate::optics::colour::Chromaticities>,
 }
 
 /// A fresh, empty directory under the system temp dir for one test.

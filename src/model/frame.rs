@@ -23,6 +23,9 @@ pub struct Frame {
     pub centre_px: [f64; 2],
     pub display_window: (i32, i32, u32, u32),
     pub data_origin: (i32, i32),
+    /// The colour space of `color` (and of the output): the colour file's `chromaticities`,
+    /// else Rec.709 (OpenEXR's default); the caller may set another (`--colorspace`).
+    pub working_space: crate::optics::colour::Chromaticities,
 }
 
 impl Frame {
@@ -56,6 +59,7 @@ impl Frame {
             centre_px,
             display_window: passes.display_window,
             data_origin: passes.data_origin,
+            working_space: passes.chromaticities.unwrap_or(crate::optics::colour::Chromaticities::REC709),
         }
     }
 
@@ -72,6 +76,7 @@ impl Frame {
             centre_px: [width as f64 / 2.0, height as f64 / 2.0],
             display_window: (0, 0, width, height),
             data_origin: (0, 0),
+            working_space: crate::optics::colour::Chromaticities::REC709,
         }
     }
 

@@ -28,6 +28,8 @@ pub enum OpticsError {
     InvalidCocCriterion { text: String, reason: &'static str },
     #[error("invalid film curve: {name} = {value} ({requirement})")]
     InvalidFilmCurve { name: &'static str, value: f64, requirement: &'static str },
+    #[error("chromaticities (red, green, blue, white xy) {chromaticities:?} are not an RGB space: {why}")]
+    InvalidChromaticities { chromaticities: [[f64; 2]; 4], why: String },
 }
 
 pub(crate) fn require_finite(name: &'static str, value: f64) -> Result<f64, OpticsError> {

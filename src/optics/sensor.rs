@@ -20,6 +20,17 @@ pub enum SensorFit {
     Auto,
 }
 
+impl SensorFit {
+    /// The fit as `--sensor-fit` and Blender's sensor fit name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SensorFit::Horizontal => "horizontal",
+            SensorFit::Vertical => "vertical",
+            SensorFit::Auto => "auto",
+        }
+    }
+}
+
 /// Named formats: (aliases, width in mm, height in mm). The first alias is the canonical name.
 const FORMATS: &[(&[&str], f64, f64)] = &[
     (&["full-frame", "ff", "35mm"], 36.0, 24.0),

@@ -19,6 +19,8 @@ pub struct DownsamplePush {
     pub small_radius_px: f32,
     /// ... at least this bright (luminance).
     pub highlight_min: f32,
+    /// Luminance of R, G and B in the frame's colour space.
+    pub luminance_weights: [f32; 3],
 }
 
 crate::shader_bindings! {
@@ -43,9 +45,10 @@ impl Shader for DownsampleShader {
     type Push = DownsamplePush;
 }
 
-/// Luminance of linear Rec.709 RGB: the highlight tests' brightness.
-pub fn luminance(c: &[f32]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+/// Luminance in the frame's colour space (`weights`: the Y row of its RGB to XYZ matrix): the
+/// highlight tests' brightness.
+pub fn luminance(c: &[f32], weights: [f32; 3]) -> f32 {
+    weights[0] * c[0] + weights[1] * c[1] + weights[2] * c[2]
 }
 
 /// A half-resolution texel in the candidate list: x | y << 16.
@@ -70,7 +73,7 @@ impl Twin for DownsampleShader {
                     let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
                     let coc_p = coc.clamped(x, y)[0];
                     let radius = 0.5 * coc_p.abs();
-                    candidate |= radius > pc.small_radius_px && luminance(&c) > pc.highlight_min;
+                    candidate |= radius > pc.small_radius_px && luminance(&c, pc.luminance_weights) > pc.highlight_min;
                     base.texel_mut(x as u32, y as u32).copy_from_slice(&c);
                     let w = (radius - 0.5).clamp(0.0, 1.0);
                     for k in 0..4 {

@@ -27,6 +27,8 @@ pub struct HighlightsPush {
     pub sprite_capacity: i32,
     /// Smallest visible excess per pixel, relative to the background.
     pub sprite_visibility: f32,
+    /// Luminance of R, G and B in the frame's colour space.
+    pub luminance_weights: [f32; 3],
 }
 
 crate::shader_bindings! {
@@ -52,7 +54,7 @@ impl Shader for HighlightsShader {
 }
 
 /// The background of a highlight at (x, y): glsl/dof_highlights.comp's `background`.
-fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32) -> f32 {
+fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32, weights: [f32; 3]) -> f32 {
     let (mut sum, mut sides) = (0.0f32, 0.0f32);
     for side in 0..4 {
         let mut dimmest = 3.0e38f32;
@@ -63,7 +65,7 @@ fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32) -> f32 {
                 continue;
             }
             let q: Vec<f32> = color.clamped(qx, qy).iter().map(|&v| finite_or_zero(v)).collect();
-            dimmest = dimmest.min(luminance(&q));
+            dimmest = dimmest.min(luminance(&q, weights));
         }
         if dimmest < 3.0e38 {
             sum += dimmest;
@@ -92,11 +94,11 @@ impl Twin for HighlightsShader {
                 let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
                 let coc_p = coc.clamped(x, y)[0];
                 let radius = 0.5 * coc_p.abs();
-                let lum = luminance(&c);
+                let lum = luminance(&c, pc.luminance_weights);
                 if radius <= pc.small_radius_px || lum <= pc.highlight_min {
                     continue;
                 }
-                let bg = background(&color, pc.size, x, y);
+                let bg = background(&color, pc.size, x, y, pc.luminance_weights);
                 let reference = pc.highlight_min.max(pc.highlight_ratio * bg);
                 let area = std::f32::consts::PI * 0.25 * coc_p * coc_p;
                 let visible =

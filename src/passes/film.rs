@@ -169,6 +169,36 @@ impl Twin for FilmShader {
     }
 }
 
+/// A film's parametric curve (the table's stand-in when it has a table) and table; none for
+/// the linear film.
+fn curve_and_table(film: &FilmMode) -> (Option<FilmCurve>, Option<std::sync::Arc<crate::optics::film::FilmTable>>) {
+    match film {
+        FilmMode::Curve(c) => (Some(*c), None),
+        FilmMode::Table(t) => (Some(FilmCurve::default_filmic()), Some(t.clone())),
+        FilmMode::Linear => (None, None),
+    }
+}
+
+/// The shader's constants (no noise) and table for `film` after an exposure gain.
+fn response_push(width: u32, height: u32, gain: f64, film: &FilmMode) -> (FilmPush, Vec<f32>) {
+    let (curve, film_table) = curve_and_table(film);
+    let mut push = FilmPush::new(width, height, gain, curve.as_ref());
+    if let Some(t) = &film_table {
+        push = push.with_table(t);
+    }
+    (push, table_data(film_table.as_deref()))
+}
+
+/// `film`'s characteristic curve applied to sensor values (RGBA, `width` px per row), as the
+/// film pass applies it after the exposure: the preview of a scene-referred output. The same
+/// f32 arithmetic as the shader, so a preview of the linear output equals the output rendered
+/// through the curve (up to the GPU's rounding of log and pow).
+pub fn film_response_cpu(rgba: &[f32], width: u32, film: &FilmMode) -> Vec<f32> {
+    let height = (rgba.len() / 4).checked_div(width as usize).unwrap_or(0) as u32;
+    let (push, table) = response_push(width, height, 1.0, film);
+    film_cpu(rgba, &push, &table)
+}
+
 /// The pass's constants and its characteristic-curve table.
 #[derive(Clone, Debug)]
 pub struct FilmParams {
@@ -187,11 +217,8 @@ impl Pass for Film {
     fn plan(input: &PlanInput<'_>) -> Decision<FilmParams> {
         let camera = input.camera;
         let gain = camera.exposure_gain();
-        let (curve, film_table) = match &camera.film {
-            FilmMode::Curve(c) => (Some(*c), None),
-            FilmMode::Table(t) => (Some(FilmCurve::default_filmic()), Some(t.clone())),
-            FilmMode::Linear => (None, None),
-        };
+        let film = if camera.film_on_output { &camera.film } else { &FilmMode::Linear };
+        let (curve, _) = curve_and_table(film);
         let noise_sigma = camera.noise_sigma();
         if curve.is_none() && gain == 1.0 && noise_sigma == 0.0 {
             return Decision::skip("linear film with exposure off and no grain: the sensor value is the scene value");
@@ -207,10 +234,16 @@ impl Pass for Film {
         } else {
             "exposure off".into()
         };
-        let response = match (&curve, &film_table) {
-            (_, Some(t)) => format!("characteristic curve from a table of {} entries", t.log10_sensor_value.len()),
-            (Some(_), None) => "characteristic curve".into(),
-            (None, None) => "linear (scene-referred)".into(),
+        let curve_name = match &camera.film {
+            FilmMode::Table(t) => {
+                format!("characteristic curve from a table of {} entries", t.log10_sensor_value.len())
+            }
+            FilmMode::Curve(_) => "characteristic curve".into(),
+            FilmMode::Linear => "linear (scene-referred)".into(),
+        };
+        let response = match (camera.film_on_output, &camera.film) {
+            (true, _) | (_, FilmMode::Linear) => curve_name,
+            (false, _) => format!("linear (scene-referred; the {curve_name} makes the preview only)"),
         };
         let grain = if noise_sigma > 0.0 {
             format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
@@ -218,13 +251,9 @@ impl Pass for Film {
             String::new()
         };
         let (w, h) = input.size();
-        let mut push = FilmPush::new(w, h, gain, curve.as_ref());
-        if let Some(t) = &film_table {
-            push = push.with_table(t);
-        }
+        let (mut push, table) = response_push(w, h, gain, film);
         push.noise_sigma = noise_sigma as f32;
         push.seed = camera.seed;
-        let table = table_data(film_table.as_deref());
         Decision::run(FilmParams { push, table }, format!("{exposure}, {response}{grain}"))
     }
 

@@ -51,6 +51,9 @@ pub struct TiledDofParams {
     /// A highlight becomes a sprite only if its excess spread over its CoC is at least this
     /// fraction of its surroundings' luminance per pixel.
     pub sprite_visibility: f32,
+    /// Luminance of R, G and B in the frame's colour space (the Y row of its RGB to XYZ
+    /// matrix): what `highlight_min` and the background compare.
+    pub luminance_weights: [f32; 3],
     /// Largest |CoC| diameter in the frame (after the clamp), for the dilation search.
     pub max_abs_coc_px: f32,
     /// The aperture, in full-resolution pixel units.
@@ -80,6 +83,7 @@ impl TiledDofParams {
             highlight_ratio: 2.0,
             sprite_capacity: 16384,
             sprite_visibility: 0.05,
+            luminance_weights: crate::optics::colour::Chromaticities::REC709.luminance_weights().map(|w| w as f32),
             max_abs_coc_px: max_abs_coc_px as f32,
             aperture,
             aperture_data,
@@ -139,6 +143,7 @@ impl Pass for TiledDof {
             f.sa_full_strength_coc_px,
             input.frame.centre_px,
         );
+        base.luminance_weights = input.frame.working_space.luminance_weights().map(|w| w as f32);
         (base.aperture, base.aperture_data) = ApertureData::new(
             base.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),
@@ -258,6 +263,7 @@ impl Pass for TiledDof {
             half_size: [level1.color.width as i32, level1.color.height as i32],
             small_radius_px: p.small_radius_px,
             highlight_min: p.highlight_min,
+            luminance_weights: p.luminance_weights,
         };
         let downsample_bindings = DownsampleBindings {
             color: &color,
@@ -276,6 +282,7 @@ impl Pass for TiledDof {
             highlight_ratio: p.highlight_ratio,
             sprite_capacity: p.sprite_capacity as i32,
             sprite_visibility: p.sprite_visibility,
+            luminance_weights: p.luminance_weights,
         };
         let highlights_bindings = HighlightsBindings {
             color: &color,

@@ -127,3 +127,30 @@ impl Renderer {
         Ok((Rendered { rgba, coc_px, profile }, checks))
     }
 }
+
+/// The preview of a rendered image (RGBA in the colour space `space`, `width` px per row)
+/// through `camera`, in linear Rec.709 for an sRGB display: the image converted to Rec.709
+/// (the same XYZ), then the film's characteristic curve applied to those sensor values, or
+/// nothing more when the curve is already in the image
+/// ([`crate::model::camera::Camera::film_on_output`]).
+pub fn preview_rgba(
+    camera: &crate::model::camera::Camera,
+    space: &crate::optics::colour::Chromaticities,
+    rgba: &[f32],
+    width: u32,
+) -> Vec<f32> {
+    use crate::optics::colour::{mul_vec, Chromaticities};
+    let mut rec709 = rgba.to_vec();
+    if *space != Chromaticities::REC709 {
+        let m = space.rgb_to(&Chromaticities::REC709);
+        for px in rec709.chunks_exact_mut(4) {
+            let c = mul_vec(&m, [px[0], px[1], px[2]].map(f64::from));
+            px[..3].copy_from_slice(&c.map(|v| v as f32));
+        }
+    }
+    if camera.film_on_output {
+        rec709
+    } else {
+        crate::passes::film::film_response_cpu(&rec709, width, &camera.film)
+    }
+}

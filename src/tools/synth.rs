@@ -51,11 +51,11 @@ pub struct SynthHighlight {
 }
 
 impl SynthPlane {
-    fn flat(x0: u32, y0: u32, x1: u32, y1: u32, depth_m: f64, rgb: [f32; 3]) -> SynthPlane {
+    pub fn flat(x0: u32, y0: u32, x1: u32, y1: u32, depth_m: f64, rgb: [f32; 3]) -> SynthPlane {
         SynthPlane { x0, y0, x1, y1, depth_m, rgb, checker_px: 0, checker_rgb: rgb }
     }
 
-    fn checker(mut self, checker_px: u32, checker_rgb: [f32; 3]) -> SynthPlane {
+    pub fn checker(mut self, checker_px: u32, checker_rgb: [f32; 3]) -> SynthPlane {
         self.checker_px = checker_px;
         self.checker_rgb = checker_rgb;
         self

@@ -11,6 +11,7 @@ use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSou
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
+use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPACES};
 use realcam::pipeline::planner::Plan;
 use realcam::pipeline::render::Renderer;
 use std::path::{Path, PathBuf};
@@ -126,9 +127,24 @@ pub struct RenderArgs {
     /// Depth-of-field method.
     #[arg(long, value_enum, default_value = "tiled")]
     bokeh: BokehArg,
-    /// Film response.
+    /// Film response of the PNG preview; of the EXR too with --film-in-exr (the EXR is
+    /// scene-referred by default).
     #[arg(long, value_enum, default_value = "filmic")]
     film: FilmArg,
+    /// Apply the film curve to the EXR too (display-referred, clipped at the film's white);
+    /// by default the EXR keeps scene-referred linear sensor values and only the PNG preview
+    /// goes through the curve.
+    #[arg(long = "film-in-exr")]
+    film_in_exr: bool,
+    /// The colour space of the input's RGB (and of the output): ACEScg, ACES2065-1,
+    /// "Linear Rec.709 (sRGB)", "Linear Rec.2020", "Linear P3-D65"; default: the colour
+    /// file's chromaticities attribute, else Rec.709.
+    #[arg(long)]
+    colorspace: Option<String>,
+    /// Keep the input files' other channels (depth, vectors, AOVs, other view layers) in the
+    /// output EXR, as stored; a name the output has already gets its pass as prefix (depth.R).
+    #[arg(long = "keep-layers")]
+    keep_layers: bool,
     /// A film file (TOML, see films/): its characteristic curve, parametric or tabled,
     /// instead of --film.
     #[arg(long = "film-file", value_name = "FILE")]
@@ -259,6 +275,7 @@ impl RenderArgs {
             exposure: !self.no_exposure,
             vignetting: !self.no_vignetting,
             film: Some(film),
+            film_on_output: self.film_in_exr,
             max_coc,
             bokeh: self.bokeh.into(),
             grain: self.grain,
@@ -317,6 +334,7 @@ impl RenderArgs {
             depth_unit_m: self.depth_unit_m,
             require_velocity: self.velocity.is_some(),
             budget: self.budget(),
+            keep_layers: self.keep_layers,
             ..PassSources::default()
         })
     }
@@ -352,6 +370,12 @@ impl Session {
 /// One frame rendered, ready to write.
 pub struct RenderedFrame {
     pub image: Image,
+    /// The PNG preview's image (through the film curve), when a PNG is asked for.
+    pub preview: Option<Image>,
+    /// The input's other channels (--keep-layers), written beside R, G, B, A.
+    pub kept_channels: Vec<(String, Vec<f32>)>,
+    /// The colour space of `image`.
+    pub working_space: Chromaticities,
     pub exr_options: ExrWriteOptions,
     pub profile: realcam::gpu::Profile,
 }
@@ -371,45 +395,75 @@ pub fn render_frame(
 /// Renders the frame whose passes `args` names through `camera`.
 pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
-    let (frame, plan) = plan_frame(args, camera, passes);
-    render_planned(args, camera, &frame, &plan, session)
+    let planned = plan_frame(args, camera, passes)?;
+    render_planned(args, camera, planned, session)
 }
 
-/// The frame of loaded `passes` (from files, or the Python package's arrays) and its plan;
-/// `--explain` prints both, and a clamp that changes the picture is warned about.
-pub fn plan_frame(args: &RenderArgs, camera: &Camera, passes: ScenePasses) -> (Frame, Plan) {
+/// A frame of loaded passes with its working colour space and plan, ready to render.
+pub struct PlannedFrame {
+    pub frame: Frame,
+    pub plan: Plan,
+    /// The input's other channels (--keep-layers), written beside R, G, B, A.
+    pub kept_channels: Vec<(String, Vec<f32>)>,
+}
+
+/// The frame of loaded `passes` (from files, or the Python package's arrays), its working
+/// colour space and its plan; `--explain` prints them, and a lens file made for another focal
+/// length or a clamp that changes the picture is warned about.
+pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -> Result<PlannedFrame> {
     let channel_report = passes.channel_report.clone();
-    let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
+    let kept_channels = std::mem::take(&mut passes.kept_channels);
+    let render_focal_length = passes.render_focal_length_mm.clone();
+    let mut frame = Frame::from_passes(passes, camera, args.depth_kind.into());
+    let space_line = choose_working_space(args, &mut frame)?;
     let plan = realcam::pipeline::planner::plan(&frame, camera);
+    // The render's focal length: what the input says, else --focal-length's.
+    let render_mm = render_focal_length.as_ref().map_or(camera.lens.focal_length_mm, |(mm, _)| *mm);
+    let focal_length_warning = camera.focal_length_warning(Some(render_mm)).map(|w| match &render_focal_length {
+        Some((_, attribute)) => format!("{w} (its {attribute} attribute)"),
+        None => w,
+    });
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
+        let (_, _, w, h) = frame.display_window;
+        eprintln!("{}", camera.explain_camera(w, h));
+        let film = if args.film_in_exr {
+            "in the EXR and the PNG (--film-in-exr)"
+        } else {
+            "in the PNG preview only; the EXR is scene-referred"
+        };
+        eprintln!("  film curve: {film}");
+        eprintln!("  {space_line}");
         eprintln!("{}", plan.explain());
+    }
+    if let Some(warning) = &focal_length_warning {
+        eprintln!("warning: {warning}");
     }
     if let Some(warning) = &plan.coc_clamp_warning {
         let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
         eprintln!("warning: {warning}{hint}");
     }
-    (frame, plan)
+    Ok(PlannedFrame { frame, plan, kept_channels })
 }
 
-/// Renders `frame` by its `plan` through `camera` on the session's GPU (opened at the first call).
+/// Renders a planned frame through `camera` on the session's GPU (opened at the first call).
 pub fn render_planned(
     args: &RenderArgs,
     camera: &Camera,
-    frame: &Frame,
-    plan: &Plan,
+    planned: PlannedFrame,
     session: &mut Session,
 ) -> Result<RenderedFrame> {
+    let PlannedFrame { frame, plan, kept_channels } = planned;
     let (gpu, renderer) = match &mut session.gpu {
         Some(opened) => opened,
         None => {
             let gpu = args.gpu.open()?;
-            let renderer = Renderer::new(&gpu, plan)?;
+            let renderer = Renderer::new(&gpu, &plan)?;
             session.gpu.insert((gpu, renderer))
         }
     };
     let messages_before = gpu.validation_message_count();
-    let rendered = renderer.render(frame, plan, false)?;
+    let rendered = renderer.render(&frame, &plan, false)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }
@@ -419,22 +473,44 @@ pub fn render_planned(
     }
 
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
+    let preview = args.png.as_ref().map(|_| Image {
+        data: realcam::pipeline::render::preview_rgba(camera, &frame.working_space, &image.data, image.width),
+        ..image.clone()
+    });
+    let (_, _, w, h) = frame.display_window;
+    let mut attributes = camera.attributes(w, h);
+    // The output is in the input's colour space: its chromaticities, as OpenEXR names them.
+    let c = frame.working_space;
+    let xy = [c.red, c.green, c.blue, c.white].map(|[x, y]| [x as f32, y as f32]);
+    attributes.push(("chromaticities".into(), io::ExrAttribute::Chromaticities(xy)));
     let exr_options = ExrWriteOptions {
         float32: args.float,
         display_window: Some(frame.display_window),
         data_origin: frame.data_origin,
-        attributes: camera.attributes(),
+        attributes,
+        float32_channels: Vec::new(),
     };
-    Ok(RenderedFrame { image, exr_options, profile: rendered.profile })
+    let working_space = frame.working_space;
+    Ok(RenderedFrame { image, preview, kept_channels, exr_options, working_space, profile: rendered.profile })
 }
 
 /// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
 pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
     let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
-    outputs.write("output", &io::encode_exr_rgba(&args.output, image, &rendered.exr_options)?)?;
+    let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
+    let mut channels: Vec<(&str, &[f32])> =
+        ["R", "G", "B", "A"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
+    channels.extend(rendered.kept_channels.iter().map(|(name, data)| (name.as_str(), data.as_slice())));
+    // Kept channels as float32: a depth of 1e10 stays 1e10 (half ends at 65504).
+    let exr_options = ExrWriteOptions {
+        float32_channels: rendered.kept_channels.iter().map(|(name, _)| name.clone()).collect(),
+        ..rendered.exr_options.clone()
+    };
+    let exr = io::encode_exr_channels(&args.output, image.width, image.height, &channels, &exr_options)?;
+    outputs.write("output", &exr)?;
     if let Some(png) = &args.png {
-        outputs.write("png", &io::encode_png_srgb(png, image)?)?;
+        outputs.write("png", &io::encode_png_srgb(png, rendered.preview.as_ref().unwrap_or(image))?)?;
     }
     if args.trace.is_some() {
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
@@ -443,10 +519,38 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
 }
 
-/// Whether the film is scene-referred linear (--film linear, no --film-file): sensor values,
-/// which a long exposure may average.
+/// Whether the EXR is scene-referred linear (no --film-in-exr, or --film linear without
+/// --film-file): sensor values, which a long exposure may average.
 pub fn film_is_linear(args: &RenderArgs) -> bool {
-    matches!(args.film, FilmArg::Linear) && args.film_file.is_none()
+    !args.film_in_exr || (matches!(args.film, FilmArg::Linear) && args.film_file.is_none())
+}
+
+/// Sets the frame's colour space from --colorspace (else it keeps the colour file's
+/// chromaticities, or Rec.709); the `--explain` line that says which, with its luminance
+/// weights.
+fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> {
+    let from_file = frame.working_space;
+    let (name, how) = match &args.colorspace {
+        Some(text) => {
+            let Some((name, space)) = named_space(text) else {
+                let known: Vec<&str> = NAMED_SPACES.iter().map(|(name, _, _)| *name).collect();
+                bail!(
+                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (OpenColorIO configs are \
+                     not read yet)",
+                    known.join(", ")
+                );
+            };
+            frame.working_space = space;
+            let differs = if space_name(&from_file) != Some(name) { ", not the file's chromaticities" } else { "" };
+            (name.to_string(), format!("--colorspace{differs}"))
+        }
+        None => {
+            let name = space_name(&from_file).unwrap_or("custom primaries");
+            (name.to_string(), "the colour file's chromaticities, or Rec.709 without them".to_string())
+        }
+    };
+    let [r, g, b] = frame.working_space.luminance_weights();
+    Ok(format!("colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B"))
 }
 
 fn indent(text: &str) -> String {

@@ -238,8 +238,8 @@ fn summary(done: usize, skipped: usize, failed: usize, total: usize, started: In
 fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, camera: &Camera) -> Result<()> {
     if !film_is_linear(args) {
         bail!(
-            "--long-exposure averages the frames' light, which comes before a film curve: give --film linear \
-             (scene-referred sensor values) and apply the curve to the exposure"
+            "--long-exposure averages the frames' light, which comes before a film curve: leave out --film-in-exr \
+             (the EXR keeps scene-referred sensor values; the PNG preview applies the curve to the exposure)"
         );
     }
     if args.trace.is_some() {
@@ -256,6 +256,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let mut progress = Progress::new(total);
     let mut session = Session::default();
     let mut exr_options = None;
+    let mut working_space = realcam::optics::colour::Chromaticities::REC709;
     let mut failed = None;
     let mut skipped = 0;
     for &frame in &range.frames {
@@ -269,6 +270,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
         let added = render_image(&one, camera, &mut session).and_then(|rendered| {
             exposure.add(frame, &rendered.image)?;
             exr_options = Some(rendered.exr_options);
+            working_space = rendered.working_space;
             if let Some(path) = state {
                 realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
             }
@@ -290,7 +292,20 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
         bail!("frame {frame} failed: the long exposure of {total} frames is not written");
     }
     let exr_options = exr_options.unwrap_or_default();
-    let rendered = RenderedFrame { image: exposure.image()?, exr_options, profile: Default::default() };
+    let image = exposure.image()?;
+    // The preview: the film curve on the averaged light.
+    let preview = args.png.as_ref().map(|_| realcam::io::Image {
+        data: realcam::pipeline::render::preview_rgba(camera, &working_space, &image.data, image.width),
+        ..image.clone()
+    });
+    let rendered = RenderedFrame {
+        image,
+        preview,
+        kept_channels: Vec::new(),
+        exr_options,
+        working_space,
+        profile: Default::default(),
+    };
     for path in write_outputs(args, outputs, &rendered)? {
         eprintln!("wrote {} (a long exposure of {} frames)", path.display(), exposure.frames());
     }
