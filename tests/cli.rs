@@ -1655,6 +1655,73 @@ fn an_array_task_renders_its_chunk_of_the_range() {
     assert_contains(&err, "error: --frames-from-env: the environment variable TASK_INDEX is not set");
 }
 
+/// The `openjd` command of openjd-cli: `$REALCAM_OPENJD`, else the virtual environment
+/// scripts/test.sh installs it into, else `openjd` on the PATH; None when there is none and
+/// `$REALCAM_REQUIRE_OPENJD` is not set (scripts/test.sh sets it, so CI never skips).
+fn openjd() -> Option<PathBuf> {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/openjd-venv/bin/openjd");
+    let found =
+        std::env::var_os("REALCAM_OPENJD").map(PathBuf::from).or_else(|| venv.exists().then_some(venv)).or_else(|| {
+            Command::new("openjd").arg("--version").output().is_ok_and(|o| o.status.success()).then(|| "openjd".into())
+        });
+    if found.is_none() {
+        assert!(
+            std::env::var_os("REALCAM_REQUIRE_OPENJD").is_none(),
+            "REALCAM_REQUIRE_OPENJD is set but openjd-cli is not installed (scripts/test.sh installs it)"
+        );
+        eprintln!("skipped: openjd-cli is not installed (scripts/test.sh installs it into target/openjd-venv)");
+    }
+    found
+}
+
+#[test]
+fn the_open_job_description_template_renders_the_range_in_chunks() {
+    let Some(openjd) = openjd() else { return };
+    let dir = TestDir::new("openjd");
+    let args = sequence_args(&dir);
+    let flag = |name: &str| args[args.iter().position(|a| a == name).unwrap() + 1].clone();
+    let template = Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/realcam.yaml");
+    let check = Command::new(&openjd).arg("check").arg(&template).output().unwrap();
+    assert!(check.status.success(), "openjd check: {}", String::from_utf8_lossy(&check.stderr));
+    let params = [
+        format!("Realcam={}", env!("CARGO_BIN_EXE_realcam")),
+        format!("Color={}", flag("--color")),
+        format!("Depth={}", flag("--depth")),
+        format!("Output={}", flag("-o")),
+        "Frames=1001-1006".to_string(),
+        "ChunkSize=2".to_string(),
+        "ExtraArgs=--fstop 1.4 --focus 2 --validate".to_string(),
+    ];
+    let mut run = Command::new(&openjd);
+    run.arg("run").arg(&template).env("REALCAM_CACHE_DIR", &dir.cache).env_remove("REALCAM_VALIDATE");
+    for p in &params {
+        run.arg("-p").arg(p);
+    }
+    let out = run.output().unwrap();
+    let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "openjd run failed:\n{log}");
+    // Three tasks of two frames, each one GPU session rendering its chunk as a sequence.
+    assert_contains(&log, "Chunks run: 3");
+    for chunk in ["1001,1002", "1003,1004", "1005,1006"] {
+        assert_contains(&log, &format!("Frame(CHUNK[INT]) = {chunk}"));
+    }
+    assert_eq!(log.matches("device: ").count(), 3, "{log}");
+    assert_eq!(log.matches("frames: 2 done, 0 skipped, 0 failed of 2 in ").count(), 3, "{log}");
+    assert_eq!(log.matches("openjd_progress: 100").count(), 3, "{log}");
+    // Every frame as a single run of realcam writes it.
+    for frame in SEQUENCE {
+        let single: Vec<String> = args
+            .iter()
+            .map(|a| a.replace("####", &frame.to_string()).replace("%04d", &frame.to_string()))
+            .map(|a| if a == dir.arg(&format!("o.{frame}.exr")) { dir.arg("single.exr") } else { a })
+            .collect();
+        render(&dir, &single).success();
+        let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+        assert!(read(&format!("o.{frame}.exr")) == read("single.exr"), "frame {frame}: differs from a single run");
+    }
+    assert!(temporaries(&dir).is_empty());
+}
+
 #[test]
 fn sequence_errors_name_the_flag_before_any_work() {
     let dir = TestDir::new("sequence_errors");

@@ -15,7 +15,8 @@ use std::time::Instant;
 
 #[derive(Args, Clone, Default)]
 pub struct SequenceArgs {
-    /// Render a frame sequence: 1001-1100, 1001-1100x2 (every 2nd), 1001,1005,1010-1020, -5--1.
+    /// Render a frame sequence: 1001-1100, 1001-1100x2 (every 2nd; 1001-1100:2 alike),
+    /// 1001,1005,1010-1020, -5--1.
     /// The paths of --color, --depth, --velocity, --output, --png and --trace carry the frame
     /// number as #### (one digit per #; @ alike) or %04d; an input without one is every frame's.
     #[arg(long, value_name = "RANGE", allow_hyphen_values = true)]
