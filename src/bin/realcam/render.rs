@@ -361,10 +361,34 @@ pub fn render_frame(
 
 /// Renders the frame whose passes `args` names through `camera`.
 pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
+    render_loaded(args, camera, load_frame(args, camera)?, session)
+}
+
+/// A frame's passes read and planned: the work before the GPU, which a sequence does for the
+/// next frame while the GPU renders this one.
+pub struct LoadedFrame {
+    frame: Frame,
+    plan: realcam::pipeline::planner::Plan,
+    channel_report: String,
+}
+
+/// Reads the passes `args` names and plans the frame through `camera`.
+pub fn load_frame(args: &RenderArgs, camera: &Camera) -> Result<LoadedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
     let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
     let plan = realcam::pipeline::planner::plan(&frame, camera);
+    Ok(LoadedFrame { frame, plan, channel_report })
+}
+
+/// Renders the `loaded` frame through `camera` on the session's GPU.
+pub fn render_loaded(
+    args: &RenderArgs,
+    camera: &Camera,
+    loaded: LoadedFrame,
+    session: &mut Session,
+) -> Result<RenderedFrame> {
+    let LoadedFrame { frame, plan, channel_report } = loaded;
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         eprintln!("{}", plan.explain());
