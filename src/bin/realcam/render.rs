@@ -11,7 +11,8 @@ use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSou
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
-use realcam::pipeline::render::Renderer;
+use realcam::pipeline::planner::{self, Plan};
+use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -340,6 +341,44 @@ pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
 }
 
+impl Session {
+    /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
+    /// Vulkan validation messages are an error.
+    fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
+        let (gpu, renderer) = match &mut self.gpu {
+            Some(opened) => opened,
+            None => {
+                let gpu = args.gpu.open()?;
+                let renderer = Renderer::new(&gpu, plan)?;
+                self.gpu.insert((gpu, renderer))
+            }
+        };
+        let messages_before = gpu.validation_message_count();
+        let rendered = renderer.render(frame, plan, false)?;
+        let messages = gpu.validation_message_count() - messages_before;
+        if messages > 0 {
+            bail!("{messages} Vulkan validation messages (see above)");
+        }
+        Ok(rendered)
+    }
+
+    /// Exposes a long exposure's `average` of sensor values on `camera`'s film (its grain and
+    /// curve; nothing when the film is linear without grain), on the session's GPU.
+    pub fn expose_on_film(&mut self, args: &RenderArgs, camera: &Camera, average: Image) -> Result<Image> {
+        if !planner::film_changes_sensor_values(camera) {
+            return Ok(average);
+        }
+        let Image { width, height, data, .. } = average;
+        let frame = Frame::new(width, height, data, vec![f32::INFINITY; width as usize * height as usize]);
+        let plan = planner::film_plan(&frame, camera);
+        if args.explain {
+            eprintln!("the long exposure's {}", plan.explain());
+        }
+        let rendered = self.render(args, &frame, &plan)?;
+        Ok(Image { width, height, channels: 4, data: rendered.rgba })
+    }
+}
+
 /// One frame rendered, ready to write.
 pub struct RenderedFrame {
     pub image: Image,
@@ -368,7 +407,7 @@ pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -
 /// next frame while the GPU renders this one.
 pub struct LoadedFrame {
     frame: Frame,
-    plan: realcam::pipeline::planner::Plan,
+    plan: Plan,
     channel_report: String,
 }
 
@@ -377,7 +416,7 @@ pub fn load_frame(args: &RenderArgs, camera: &Camera) -> Result<LoadedFrame> {
     let passes = io::load_passes(&args.sources()).name_flags()?;
     let channel_report = passes.channel_report.clone();
     let frame = Frame::from_passes(passes, camera, args.depth_kind.into());
-    let plan = realcam::pipeline::planner::plan(&frame, camera);
+    let plan = planner::plan(&frame, camera);
     Ok(LoadedFrame { frame, plan, channel_report })
 }
 
@@ -398,24 +437,10 @@ pub fn render_loaded(
         eprintln!("warning: {warning}{hint}");
     }
 
-    let (gpu, renderer) = match &mut session.gpu {
-        Some(opened) => opened,
-        None => {
-            let gpu = args.gpu.open()?;
-            let renderer = Renderer::new(&gpu, &plan)?;
-            session.gpu.insert((gpu, renderer))
-        }
-    };
-    let messages_before = gpu.validation_message_count();
-    let rendered = renderer.render(&frame, &plan, false)?;
+    let rendered = session.render(args, &frame, &plan)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }
-    let messages = gpu.validation_message_count() - messages_before;
-    if messages > 0 {
-        bail!("{messages} Vulkan validation messages (see above)");
-    }
-
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let exr_options = ExrWriteOptions {
         float32: args.float,
@@ -439,12 +464,6 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
     }
     outputs.commit()?;
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
-}
-
-/// Whether the film is scene-referred linear (--film linear, no --film-file): sensor values,
-/// which a long exposure may average.
-pub fn film_is_linear(args: &RenderArgs) -> bool {
-    matches!(args.film, FilmArg::Linear) && args.film_file.is_none()
 }
 
 fn indent(text: &str) -> String {

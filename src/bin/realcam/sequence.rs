@@ -3,13 +3,12 @@
 //! render farms.
 
 use crate::common::progress_bar;
-use crate::render::{
-    film_is_linear, load_frame, render_loaded, write_outputs, LoadedFrame, RenderArgs, RenderedFrame, Session,
-};
+use crate::render::{load_frame, render_loaded, write_outputs, LoadedFrame, RenderArgs, RenderedFrame, Session};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use realcam::io::output::Outputs;
 use realcam::io::sequence::{FramePattern, FrameRange};
+use realcam::io::ExrWriteOptions;
 use realcam::model::camera::Camera;
 use realcam::model::long_exposure::LongExposure;
 use std::io::IsTerminal;
@@ -40,7 +39,8 @@ pub struct SequenceArgs {
     #[arg(long = "fail-fast", requires = "frames")]
     pub fail_fast: bool,
     /// Accumulate the frames of --frames into one exposure, the average of their light (Kyaw
-    /// 2013 sec. 7.4), written to --output (a path without a frame number); needs --film linear.
+    /// 2013 sec. 7.4) as sensor values, then exposed on the film once (its grain and curve),
+    /// written to --output (a path without a frame number).
     #[arg(long = "long-exposure", requires = "frames", conflicts_with = "skip_existing")]
     pub long_exposure: bool,
     /// The long exposure's state: written (atomically) after every frame, read at the start,
@@ -350,12 +350,6 @@ fn summary(done: usize, skipped: usize, failed: usize, total: usize, started: In
 /// `--long-exposure`: the frames of `range` rendered and accumulated into one exposure, written
 /// only when every frame was.
 fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, camera: &Camera) -> Result<()> {
-    if !film_is_linear(args) {
-        bail!(
-            "--long-exposure averages the frames' light, which comes before a film curve: give --film linear \
-             (scene-referred sensor values) and apply the curve to the exposure"
-        );
-    }
     if args.trace.is_some() {
         bail!("--trace: GPU times are per frame; --long-exposure writes no trace");
     }
@@ -373,10 +367,12 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let mut skipped = 0;
     let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
     let stop = AtomicBool::new(false);
+    // The frames are rendered up to the sensor and averaged; the film comes once, after.
+    let sensor = realcam::pipeline::planner::sensor_camera(camera);
+    let mut session = Session::default();
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
-        let read = read_ahead(scope, jobs, camera, &stop);
-        let mut session = Session::default();
+        let read = read_ahead(scope, jobs, &sensor, &stop);
         for ReadFrame { frame, args: one, loaded } in read {
             let Some(loaded) = loaded else {
                 skipped += 1;
@@ -385,7 +381,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
                 continue;
             };
             let added =
-                loaded.and_then(|loaded| render_loaded(&one, camera, loaded, &mut session)).and_then(|rendered| {
+                loaded.and_then(|loaded| render_loaded(&one, &sensor, loaded, &mut session)).and_then(|rendered| {
                     exposure.add(frame, &rendered.image)?;
                     exr_options = Some(rendered.exr_options);
                     if let Some(path) = state {
@@ -410,8 +406,10 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     if let Some(frame) = failed {
         bail!("frame {frame} failed: the long exposure of {total} frames is not written");
     }
-    let exr_options = exr_options.unwrap_or_default();
-    let rendered = RenderedFrame { image: exposure.image()?, exr_options, profile: Default::default() };
+    // The header names the camera's film, not the sensor values the frames were rendered to.
+    let exr_options = ExrWriteOptions { attributes: camera.attributes(), ..exr_options.unwrap_or_default() };
+    let image = session.expose_on_film(args, camera, exposure.image()?)?;
+    let rendered = RenderedFrame { image, exr_options, profile: Default::default() };
     for path in write_outputs(args, outputs, &rendered)? {
         eprintln!("wrote {} (a long exposure of {} frames)", path.display(), exposure.frames());
     }
