@@ -4,6 +4,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+# openjd-cli (Open Job Description) in target/openjd-venv, for the test that runs
+# jobs/realcam.yaml with `openjd run`; Debian's python3 needs python3-venv for `python3 -m venv`.
+OPENJD_VENV=target/openjd-venv
+if [ ! -x "$OPENJD_VENV/bin/openjd" ]; then
+  if ! python3 -c 'import ensurepip, venv' 2>/dev/null; then
+    if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; else SUDO=; fi
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends python3 python3-venv
+  fi
+  rm -rf "$OPENJD_VENV"
+  python3 -m venv "$OPENJD_VENV"
+  "$OPENJD_VENV/bin/pip" install -q 'openjd-cli==0.8.0'
+fi
+export REALCAM_OPENJD="$PWD/$OPENJD_VENV/bin/openjd" REALCAM_REQUIRE_OPENJD=1
 cargo test --locked "$@"
 bash scripts/test-python.sh "$@"   # the Python package (python/) against the CLI, pytest
 bash scripts/test-blender.sh "$@"   # the Blender add-on (addons/) in headless Blender

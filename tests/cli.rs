@@ -1659,6 +1659,73 @@ fn an_array_task_renders_its_chunk_of_the_range() {
     assert_contains(&err, "error: --frames-from-env: the environment variable TASK_INDEX is not set");
 }
 
+/// The `openjd` command of openjd-cli: `$REALCAM_OPENJD`, else the virtual environment
+/// scripts/test.sh installs it into, else `openjd` on the PATH; None when there is none and
+/// `$REALCAM_REQUIRE_OPENJD` is not set (scripts/test.sh sets it, so CI never skips).
+fn openjd() -> Option<PathBuf> {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/openjd-venv/bin/openjd");
+    let found =
+        std::env::var_os("REALCAM_OPENJD").map(PathBuf::from).or_else(|| venv.exists().then_some(venv)).or_else(|| {
+            Command::new("openjd").arg("--version").output().is_ok_and(|o| o.status.success()).then(|| "openjd".into())
+        });
+    if found.is_none() {
+        assert!(
+            std::env::var_os("REALCAM_REQUIRE_OPENJD").is_none(),
+            "REALCAM_REQUIRE_OPENJD is set but openjd-cli is not installed (scripts/test.sh installs it)"
+        );
+        eprintln!("skipped: openjd-cli is not installed (scripts/test.sh installs it into target/openjd-venv)");
+    }
+    found
+}
+
+#[test]
+fn the_open_job_description_template_renders_the_range_in_chunks() {
+    let Some(openjd) = openjd() else { return };
+    let dir = TestDir::new("openjd");
+    let args = sequence_args(&dir);
+    let flag = |name: &str| args[args.iter().position(|a| a == name).unwrap() + 1].clone();
+    let template = Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/realcam.yaml");
+    let check = Command::new(&openjd).arg("check").arg(&template).output().unwrap();
+    assert!(check.status.success(), "openjd check: {}", String::from_utf8_lossy(&check.stderr));
+    let params = [
+        format!("Realcam={}", env!("CARGO_BIN_EXE_realcam")),
+        format!("Color={}", flag("--color")),
+        format!("Depth={}", flag("--depth")),
+        format!("Output={}", flag("-o")),
+        "Frames=1001-1006".to_string(),
+        "ChunkSize=2".to_string(),
+        "ExtraArgs=--fstop 1.4 --focus 2 --validate".to_string(),
+    ];
+    let mut run = Command::new(&openjd);
+    run.arg("run").arg(&template).env("REALCAM_CACHE_DIR", &dir.cache).env_remove("REALCAM_VALIDATE");
+    for p in &params {
+        run.arg("-p").arg(p);
+    }
+    let out = run.output().unwrap();
+    let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "openjd run failed:\n{log}");
+    // Three tasks of two frames, each one GPU session rendering its chunk as a sequence.
+    assert_contains(&log, "Chunks run: 3");
+    for chunk in ["1001,1002", "1003,1004", "1005,1006"] {
+        assert_contains(&log, &format!("Frame(CHUNK[INT]) = {chunk}"));
+    }
+    assert_eq!(log.matches("device: ").count(), 3, "{log}");
+    assert_eq!(log.matches("frames: 2 done, 0 skipped, 0 failed of 2 in ").count(), 3, "{log}");
+    assert_eq!(log.matches("openjd_progress: 100").count(), 3, "{log}");
+    // Every frame as a single run of realcam writes it.
+    for frame in SEQUENCE {
+        let single: Vec<String> = args
+            .iter()
+            .map(|a| a.replace("####", &frame.to_string()).replace("%04d", &frame.to_string()))
+            .map(|a| if a == dir.arg(&format!("o.{frame}.exr")) { dir.arg("single.exr") } else { a })
+            .collect();
+        render(&dir, &single).success();
+        let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+        assert!(read(&format!("o.{frame}.exr")) == read("single.exr"), "frame {frame}: differs from a single run");
+    }
+    assert!(temporaries(&dir).is_empty());
+}
+
 #[test]
 fn sequence_errors_name_the_flag_before_any_work() {
     let dir = TestDir::new("sequence_errors");
@@ -1717,15 +1784,7 @@ fn a_long_exposure_is_the_average_of_the_frames() {
     // Frames differ, so the average is none of them.
     assert!(frames.iter().all(|f| f.data != exposure.data));
 
-    // Refused before any work: a film curve in the EXR, an output with a frame number.
-    let mut curve = args.clone();
-    curve.truncate(curve.len() - linear.len());
-    curve.push("--film-in-exr".into());
-    let err = render(&dir, &curve).failure();
-    assert_contains(
-        &err,
-        "error: --long-exposure averages the frames' light, which comes before a film curve: leave out --film-in-exr",
-    );
+    // Refused before any work: an output with a frame number.
     let mut patterned = sequence_args(&dir);
     patterned.extend(s(&["--frames", "1001-1006", "--long-exposure"]));
     patterned.extend(s(&linear));
@@ -1748,6 +1807,144 @@ fn a_long_exposure_is_the_average_of_the_frames() {
     assert_contains(&err, "error: frame 1004 failed: the long exposure of 6 frames is not written");
     assert_eq!(std::fs::read(dir.join("exposure.exr")).unwrap(), before);
     assert!(temporaries(&dir).is_empty());
+}
+
+/// Column sums of channel R of `image`.
+fn column_sums(image: &Image) -> Vec<f64> {
+    (0..image.width).map(|x| (0..image.height).map(|y| f64::from(image.get(x, y, 0))).sum()).collect()
+}
+
+/// Where `profile` crosses `level` going up (first) and down (last), interpolated between
+/// pixel centres.
+fn crossings(profile: &[f64], level: f64) -> (f64, f64) {
+    let cross = |i: usize| i as f64 + (level - profile[i]) / (profile[i + 1] - profile[i]);
+    let up = (0..profile.len() - 1).find(|&i| profile[i] < level && profile[i + 1] >= level).unwrap();
+    let down = (0..profile.len() - 1).rev().find(|&i| profile[i] >= level && profile[i + 1] < level).unwrap();
+    (cross(up), cross(down))
+}
+
+#[test]
+fn a_moving_highlight_leaves_a_trail_as_long_as_its_motion() {
+    // A 3x3 px square of value 50 at 2 m moving 6 px per frame to the right over 8 frames in
+    // front of black at 10 m (Nuke forward.u = 6 px toward the next frame), each frame motion-blurred over a 360
+    // degree shutter so that the frames' blurs join: the exposure is the square swept over
+    // 8 x 6 = 48 px, a trapezoid whose half-maximum width is the motion (box 3 px convolved
+    // with box 48 px), with the square's energy (Kyaw 2013 sec. 7.4: the average of the frames).
+    let dir = TestDir::new("long_exposure_trail");
+    let (w, h, side, step_px, frames, value) = (72u32, 16u32, 3u32, 6u32, 8u32, 50.0f32);
+    let (x0, y0) = (10u32, 6u32);
+    let n = (w * h) as usize;
+    for i in 0..frames {
+        let mut rgb = vec![0.0f32; n];
+        let alpha = vec![1.0f32; n];
+        let mut u = vec![0.0f32; n];
+        let mut z = vec![10.0f32; n];
+        for y in y0..y0 + side {
+            for x in x0 + i * step_px..x0 + i * step_px + side {
+                let at = (y * w + x) as usize;
+                (rgb[at], u[at], z[at]) = (value, step_px as f32, 2.0);
+            }
+        }
+        let v = vec![0.0f32; n];
+        let channels: Vec<(&str, &[f32])> =
+            vec![("R", &rgb), ("G", &rgb), ("B", &rgb), ("A", &alpha), ("Z", &z), ("forward.u", &u), ("forward.v", &v)];
+        write_exr_channels(&dir.join(&format!("m.{}.exr", 1001 + i)), w, h, &channels, &float_opts()).unwrap();
+    }
+    // The fast gather and the reference (every pixel scattered along its path).
+    for (mode, pass) in [("fast", "motion_blur"), ("reference", "motion_blur_reference")] {
+        let camera: Vec<String> =
+            "--lens ideal --fstop 8 --focus 2 --no-exposure --no-vignetting --no-flare --grain 0 \
+            --film linear --float --fps 24 --shutter-angle 360 --frames 1001-1008 --motion-blur"
+                .split_whitespace()
+                .map(String::from)
+                .chain([mode.to_string()])
+                .collect();
+        let mut exposure =
+            s(&["--color", &dir.arg("m.####.exr"), "-o", &dir.arg(&format!("exposure-{mode}.exr")), "--long-exposure"]);
+        exposure.extend(camera.iter().cloned());
+        render(&dir, &exposure).success();
+        let mut each =
+            s(&["--color", &dir.arg("m.####.exr"), "-o", &dir.arg(&format!("o-{mode}.####.exr")), "--explain"]);
+        each.extend(camera.iter().cloned());
+        let run = render(&dir, &each).success();
+        assert_contains(&run.stderr, &format!("[run ] {pass} "));
+        let image = read_exr_rgba(&dir.join(&format!("exposure-{mode}.exr"))).unwrap();
+        assert!(image.data.iter().all(|v| v.is_finite()));
+
+        // Energy: the exposure's is the mean of the frames' (1e-4), which is the square's (1 %).
+        let energy = |im: &Image| column_sums(im).iter().sum::<f64>();
+        let frame_energies: Vec<f64> =
+            (1001..=1008).map(|f| energy(&read_exr_rgba(&dir.join(&format!("o-{mode}.{f}.exr"))).unwrap())).collect();
+        let mean = frame_energies.iter().sum::<f64>() / f64::from(frames);
+        let total = energy(&image);
+        assert!((total - mean).abs() <= 1e-4 * mean, "{mode}: exposure energy {total} against the frames' mean {mean}");
+        let square = f64::from(value) * f64::from(side * side);
+        assert!(
+            (total - square).abs() <= 0.01 * square,
+            "{mode}: exposure energy {total} against the square's {square}"
+        );
+
+        // Length: at half the plateau (the square's column sum spread over the motion), the trail
+        // is as long as the motion, 48 px.
+        let profile = column_sums(&image);
+        let plateau = square / f64::from(frames * step_px);
+        let middle = &profile[(x0 + 12) as usize..(x0 + 36) as usize];
+        assert!(
+            middle.iter().all(|&c| (c - plateau).abs() <= 0.1 * plateau),
+            "{mode}: {profile:?} against plateau {plateau}"
+        );
+        let (start, end) = crossings(&profile, plateau / 2.0);
+        let length = end - start;
+        assert!(
+            (length - f64::from(frames * step_px)).abs() <= 1.5,
+            "{mode}: trail {length} px, {start}..{end}: {profile:?}"
+        );
+        // Each frame alone is a blur of one frame's motion, 6 px, not a trail.
+        let one = column_sums(&read_exr_rgba(&dir.join(&format!("o-{mode}.1004.exr"))).unwrap());
+        let peak = one.iter().cloned().fold(0.0, f64::max);
+        let (a, b) = crossings(&one, peak / 2.0);
+        assert!((b - a - f64::from(step_px)).abs() <= 1.5, "{mode}: frame 1004's blur {} px: {one:?}", b - a);
+    }
+}
+
+#[test]
+fn a_long_exposure_of_identical_frames_on_film_is_the_single_frame_on_that_film() {
+    // The frames are averaged as sensor values and the film's curve and grain come once, after:
+    // 3 identical frames through a non-linear film with grain give the single frame's bytes (a
+    // curve applied per frame and averaged would too, but grain averaged over frames would not,
+    // and neither would the contrast film's curve of an average of different frames).
+    let dir = TestDir::new("long_exposure_film");
+    let mut args = sequence_args(&dir);
+    for frame in [1002, 1003] {
+        std::fs::copy(dir.join("c.1001.exr"), dir.join(&format!("c.{frame}.exr"))).unwrap();
+        std::fs::copy(dir.join("d.1001.exr"), dir.join(&format!("d.{frame}.exr"))).unwrap();
+    }
+    let film = ["--film", "contrast", "--grain", "0.05", "--iso", "800"];
+    let mut single = args.clone();
+    for arg in args.iter_mut() {
+        if *arg == dir.arg("o.####.exr") {
+            *arg = dir.arg("exposure.exr");
+        }
+    }
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--explain"]));
+    args.extend(s(&film));
+    let run = render(&dir, &args).success();
+    assert_contains(&run.stderr, "the long exposure's pass plan:\n");
+    assert_contains(&run.stderr, "[run ] film          exposure off, characteristic curve, sensor noise sigma");
+    for arg in single.iter_mut() {
+        *arg = arg.replace("####", "1001").replace("%04d", "1001");
+    }
+    single.extend(s(&film));
+    render(&dir, &single).success();
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert!(read("exposure.exr") == read("o.1001.exr"), "the exposure of 3 identical frames differs from one frame");
+    // The grain is there (the linear film without grain differs), once.
+    let mut linear = single.clone();
+    linear.truncate(linear.len() - film.len());
+    linear.extend(s(&["--film", "contrast", "--iso", "800"]));
+    linear = linear.into_iter().map(|a| a.replace("o.1001.exr", "plain.exr")).collect();
+    render(&dir, &linear).success();
+    assert!(read("plain.exr") != read("o.1001.exr"), "the grain changed nothing");
 }
 
 #[test]

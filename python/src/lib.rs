@@ -172,7 +172,7 @@ impl Camera {
             .map(|p| (p.name.to_string(), p.runs(), p.why.clone()))
             .collect();
         let opened_before = self.session.gpu().is_some();
-        let rendered = render::render_planned(&self.args, &self.camera, planned, &mut self.session);
+        let rendered = render::render_loaded(&self.args, &self.camera, planned, &mut self.session);
         if !opened_before && self.session.gpu().is_some() {
             self.gpu_opens += 1;
         }

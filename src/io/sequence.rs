@@ -6,8 +6,9 @@
 //! sign counts in the width (`%04d` and `####` of -5 give `-005`), as Nuke writes them.
 //!
 //! Ranges ([`FrameRange`]): comma-separated items, each a frame `1001`, a span `1001-1100`
-//! (both ends included) or a stepped span `1001-1100x2`; negative frames as `-10--5` or
-//! `-3-3`. Frames are kept in the order given; a frame listed twice is refused.
+//! (both ends included) or a stepped span `1001-1100x2` (or `1001-1100:2`, Open Job
+//! Description's range expressions, which its chunks of a stepped range are written in);
+//! negative frames as `-10--5` or `-3-3`. Frames are kept in the order given; a frame listed twice is refused.
 
 use std::path::{Path, PathBuf};
 
@@ -131,7 +132,7 @@ impl FrameRange {
             if item.is_empty() {
                 return Err(refuse("an empty item; write frames as 1001, 1001-1100 or 1001-1100x2".into()));
             }
-            let (span, step) = match item.split_once('x') {
+            let (span, step) = match item.split_once(['x', ':']) {
                 Some((span, step)) => {
                     let step: i64 = step
                         .trim()
@@ -302,6 +303,9 @@ mod tests {
         assert_eq!(frames(" 1, 3-4 "), [1, 3, 4]);
         assert_eq!(frames("1001-1100").len(), 100);
         assert_eq!(frames("1-1"), [1]);
+        // Open Job Description's step: its chunks of a stepped range come as "1003-1009:2".
+        assert_eq!(frames("1003-1009:2"), [1003, 1005, 1007, 1009]);
+        assert_eq!(frames("-3--1,1001"), [-3, -2, -1, 1001]);
     }
 
     #[test]
@@ -331,9 +335,10 @@ mod tests {
             range_error("a-b"),
             "frame range \"a-b\": \"a-b\" is not a frame, a span A-B or a stepped span A-BxN"
         );
+        assert_eq!(range_error("1:10"), "frame range \"1:10\": \"1:10\": a step needs a span A-B");
         assert_eq!(
-            range_error("1:10"),
-            "frame range \"1:10\": \"1:10\" is not a frame, a span A-B or a stepped span A-BxN"
+            range_error("1-9:2x2"),
+            "frame range \"1-9:2x2\": \"1-9:2x2\": the step \"2x2\" is not a whole number"
         );
         assert_eq!(range_error("5x2"), "frame range \"5x2\": \"5x2\": a step needs a span A-B");
         assert_eq!(range_error("1-5,3"), "frame range \"1-5,3\": frame 3 is listed twice");

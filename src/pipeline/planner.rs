@@ -2,7 +2,7 @@
 //! order and asks every pass to plan itself. A pass whose effect would be invisible is not
 //! recorded and its pipeline is never created.
 
-use crate::model::camera::Camera;
+use crate::model::camera::{Camera, FilmMode};
 use crate::model::frame::Frame;
 use crate::passes::{Input, Pass, PlanInput, PlannedPass, SceneFacts, PASS_ORDER};
 
@@ -29,6 +29,36 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
     let coc_clamp_warning = if input.facts.dof_visible() { input.facts.coc_clamp_note(camera) } else { None };
     Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning }
+}
+
+/// The camera of a long exposure's frames (Kyaw 2013 sec. 7.4): `camera` up to the sensor. The
+/// frames' light is averaged as sensor values (after the exposure gain, before the grain and
+/// the film curve, which only the film pass applies), and [`film_plan`] then exposes the average
+/// on the film once, as a real long exposure is read out once.
+pub fn sensor_camera(camera: &Camera) -> Camera {
+    Camera { film: FilmMode::Linear, grain: 0.0, ..camera.clone() }
+}
+
+/// Whether `camera`'s film changes sensor values (a curve or grain): a long exposure through it
+/// needs [`film_plan`] after the average.
+pub fn film_changes_sensor_values(camera: &Camera) -> bool {
+    !matches!(camera.film, FilmMode::Linear) || camera.noise_sigma() > 0.0
+}
+
+/// The plan that exposes `average`, a long exposure's average of sensor values from
+/// [`sensor_camera`], on `camera`'s film: only the film pass runs, with its grain and curve and
+/// without the exposure gain (the frames had it).
+pub fn film_plan(average: &Frame, camera: &Camera) -> Plan {
+    let film_camera = Camera { exposure: false, ..camera.clone() };
+    let input = PlanInput::new(average, &film_camera);
+    let passes = PASS_ORDER
+        .iter()
+        .map(|entry| match entry.name == crate::passes::film::NAME {
+            true => entry.plan(&input),
+            false => PlannedPass::not_built(entry.name, "the frames of the long exposure had it".into()),
+        })
+        .collect();
+    Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning: None }
 }
 
 impl Plan {

@@ -7,6 +7,7 @@ pub mod accuracy_flare;
 pub mod bench;
 pub mod bench_flare;
 pub mod bench_motion;
+pub mod bench_sequence;
 pub mod error_budget;
 pub mod fuzz;
 pub mod metrics;

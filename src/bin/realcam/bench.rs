@@ -1,5 +1,6 @@
 //! `realcam bench`: GPU time per pass of the depth-of-field methods against the CoC radius (or
-//! of the motion blur, `--motion-blur`, or of the lens flare, `--flare`).
+//! of the motion blur, `--motion-blur`, or of the lens flare, `--flare`), or a frame sequence's
+//! throughput against one process per frame (`--sequence`).
 
 use crate::common::{command_line, progress_bar, write_text, GpuArgs};
 use anyhow::{Context, Result};
@@ -38,6 +39,13 @@ pub struct BenchArgs {
     /// Numbers of lights in the frame (with --flare).
     #[arg(long = "lights", default_value = "1,4,16", value_delimiter = ',')]
     light_counts: Vec<usize>,
+    /// Benchmark a frame sequence instead: --frames frames of the first of --resolutions as one
+    /// `render --frames` process against one process per frame (wall time, frames per second).
+    #[arg(long, conflicts_with_all = ["motion_blur", "flare"])]
+    sequence: bool,
+    /// Frames of the sequence (with --sequence).
+    #[arg(long, default_value_t = 24)]
+    frames: usize,
     /// Also write the Markdown table here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -49,7 +57,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let resolutions =
         args.resolutions.iter().map(|r| parse_size_px(r).context("--resolutions")).collect::<Result<Vec<_>>>()?;
     let gpu = args.gpu.open()?;
-    let table = if args.flare {
+    let table = if args.sequence {
+        use realcam::tools::bench_sequence::{markdown, run, SequenceBenchOptions};
+        let &(width, height) = resolutions.first().context("--resolutions: none given")?;
+        let dir = std::env::temp_dir().join(format!("realcam-bench-sequence-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let realcam = std::env::current_exe().context("the realcam executable")?;
+        let options = SequenceBenchOptions { width, height, frames: args.frames, runs: args.runs, realcam, dir };
+        let steps = 2 * (args.runs.max(1) + 1) + 2;
+        let row = with_progress(steps.div_ceil(2), |step| run(&gpu, &options, step));
+        let _ = std::fs::remove_dir_all(&options.dir);
+        markdown(&gpu.info().to_string(), &command_line(), &row?)
+    } else if args.flare {
         use realcam::tools::bench_flare::{markdown, run, FlareBenchOptions};
         let options = FlareBenchOptions { resolutions, light_counts: args.light_counts.clone(), runs: args.runs };
         // Two progress steps per configuration: the bare pass and each light count are one each.
@@ -86,9 +105,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 }
 
 /// Run a benchmark of `configurations` (two steps each) with a progress bar.
-fn with_progress<T>(
+fn with_progress<T, E: std::error::Error + Send + Sync + 'static>(
     configurations: usize,
-    bench: impl FnOnce(&mut dyn FnMut(&str)) -> realcam::gpu::GpuResult<T>,
+    bench: impl FnOnce(&mut dyn FnMut(&str)) -> Result<T, E>,
 ) -> Result<T> {
     let bar = progress_bar(configurations as u64 * 2);
     let rows = bench(&mut |step: &str| {

@@ -12,8 +12,8 @@ use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPre
 use realcam::model::frame::Frame;
 use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
 use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPACES};
-use realcam::pipeline::planner::Plan;
-use realcam::pipeline::render::Renderer;
+use realcam::pipeline::planner::{self, Plan};
+use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -365,6 +365,42 @@ impl Session {
     pub fn gpu(&self) -> Option<&Gpu> {
         self.gpu.as_ref().map(|(gpu, _)| gpu)
     }
+
+    /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
+    /// Vulkan validation messages are an error.
+    fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
+        let (gpu, renderer) = match &mut self.gpu {
+            Some(opened) => opened,
+            None => {
+                let gpu = args.gpu.open()?;
+                let renderer = Renderer::new(&gpu, plan)?;
+                self.gpu.insert((gpu, renderer))
+            }
+        };
+        let messages_before = gpu.validation_message_count();
+        let rendered = renderer.render(frame, plan, false)?;
+        let messages = gpu.validation_message_count() - messages_before;
+        if messages > 0 {
+            bail!("{messages} Vulkan validation messages (see above)");
+        }
+        Ok(rendered)
+    }
+
+    /// Exposes a long exposure's `average` of sensor values on `camera`'s film (its grain and
+    /// curve; nothing when the film is linear without grain), on the session's GPU.
+    pub fn expose_on_film(&mut self, args: &RenderArgs, camera: &Camera, average: Image) -> Result<Image> {
+        if !planner::film_changes_sensor_values(camera) {
+            return Ok(average);
+        }
+        let Image { width, height, data, .. } = average;
+        let frame = Frame::new(width, height, data, vec![f32::INFINITY; width as usize * height as usize]);
+        let plan = planner::film_plan(&frame, camera);
+        if args.explain {
+            eprintln!("the long exposure's {}", plan.explain());
+        }
+        let rendered = self.render(args, &frame, &plan)?;
+        Ok(Image { width, height, channels: 4, data: rendered.rgba })
+    }
 }
 
 /// One frame rendered, ready to write.
@@ -394,35 +430,55 @@ pub fn render_frame(
 
 /// Renders the frame whose passes `args` names through `camera`.
 pub fn render_image(args: &RenderArgs, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
-    let passes = io::load_passes(&args.sources()).name_flags()?;
-    let planned = plan_frame(args, camera, passes)?;
-    render_planned(args, camera, planned, session)
+    render_loaded(args, camera, load_frame(args, camera)?, session)
 }
 
-/// A frame of loaded passes with its working colour space and plan, ready to render.
-pub struct PlannedFrame {
+/// A frame's passes read, in their working colour space, and planned: the work before the GPU,
+/// which a sequence does for the next frame while the GPU renders this one.
+pub struct LoadedFrame {
     pub frame: Frame,
     pub plan: Plan,
     /// The input's other channels (--keep-layers), written beside R, G, B, A.
     pub kept_channels: Vec<(String, Vec<f32>)>,
+    channel_report: String,
+    space_line: String,
+    focal_length_warning: Option<String>,
 }
 
-/// The frame of loaded `passes` (from files, or the Python package's arrays), its working
-/// colour space and its plan; `--explain` prints them, and a lens file made for another focal
-/// length or a clamp that changes the picture is warned about.
-pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -> Result<PlannedFrame> {
+/// Reads the passes `args` names and plans the frame through `camera`.
+pub fn load_frame(args: &RenderArgs, camera: &Camera) -> Result<LoadedFrame> {
+    let passes = io::load_passes(&args.sources()).name_flags()?;
+    plan_frame(args, camera, passes)
+}
+
+/// The frame of loaded `passes` (from files, or the Python package's arrays) in its working
+/// colour space, its plan, and whether the lens file was made for another focal length than
+/// the render's.
+pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -> Result<LoadedFrame> {
     let channel_report = passes.channel_report.clone();
     let kept_channels = std::mem::take(&mut passes.kept_channels);
     let render_focal_length = passes.render_focal_length_mm.clone();
     let mut frame = Frame::from_passes(passes, camera, args.depth_kind.into());
     let space_line = choose_working_space(args, &mut frame)?;
-    let plan = realcam::pipeline::planner::plan(&frame, camera);
+    let plan = planner::plan(&frame, camera);
     // The render's focal length: what the input says, else --focal-length's.
     let render_mm = render_focal_length.as_ref().map_or(camera.lens.focal_length_mm, |(mm, _)| *mm);
     let focal_length_warning = camera.focal_length_warning(Some(render_mm)).map(|w| match &render_focal_length {
         Some((_, attribute)) => format!("{w} (its {attribute} attribute)"),
         None => w,
     });
+    Ok(LoadedFrame { frame, plan, kept_channels, channel_report, space_line, focal_length_warning })
+}
+
+/// Renders the `loaded` frame through `camera` on the session's GPU; `--explain` and the
+/// warnings are printed here, in frame order.
+pub fn render_loaded(
+    args: &RenderArgs,
+    camera: &Camera,
+    loaded: LoadedFrame,
+    session: &mut Session,
+) -> Result<RenderedFrame> {
+    let LoadedFrame { frame, plan, kept_channels, channel_report, space_line, focal_length_warning } = loaded;
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         let (_, _, w, h) = frame.display_window;
@@ -443,46 +499,18 @@ pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -
         let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
         eprintln!("warning: {warning}{hint}");
     }
-    Ok(PlannedFrame { frame, plan, kept_channels })
-}
 
-/// Renders a planned frame through `camera` on the session's GPU (opened at the first call).
-pub fn render_planned(
-    args: &RenderArgs,
-    camera: &Camera,
-    planned: PlannedFrame,
-    session: &mut Session,
-) -> Result<RenderedFrame> {
-    let PlannedFrame { frame, plan, kept_channels } = planned;
-    let (gpu, renderer) = match &mut session.gpu {
-        Some(opened) => opened,
-        None => {
-            let gpu = args.gpu.open()?;
-            let renderer = Renderer::new(&gpu, &plan)?;
-            session.gpu.insert((gpu, renderer))
-        }
-    };
-    let messages_before = gpu.validation_message_count();
-    let rendered = renderer.render(&frame, &plan, false)?;
+    let rendered = session.render(args, &frame, &plan)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
     }
-    let messages = gpu.validation_message_count() - messages_before;
-    if messages > 0 {
-        bail!("{messages} Vulkan validation messages (see above)");
-    }
-
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let preview = args.png.as_ref().map(|_| Image {
         data: realcam::pipeline::render::preview_rgba(camera, &frame.working_space, &image.data, image.width),
         ..image.clone()
     });
     let (_, _, w, h) = frame.display_window;
-    let mut attributes = camera.attributes(w, h);
-    // The output is in the input's colour space: its chromaticities, as OpenEXR names them.
-    let c = frame.working_space;
-    let xy = [c.red, c.green, c.blue, c.white].map(|[x, y]| [x as f32, y as f32]);
-    attributes.push(("chromaticities".into(), io::ExrAttribute::Chromaticities(xy)));
+    let attributes = output_attributes(camera, w, h, &frame.working_space);
     let exr_options = ExrWriteOptions {
         float32: args.float,
         display_window: Some(frame.display_window),
@@ -492,6 +520,20 @@ pub fn render_planned(
     };
     let working_space = frame.working_space;
     Ok(RenderedFrame { image, preview, kept_channels, exr_options, working_space, profile: rendered.profile })
+}
+
+/// The output's EXR attributes: the camera's for a `width` x `height` frame, and the colour
+/// space the output is in (the input's) as OpenEXR's chromaticities.
+pub fn output_attributes(
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    space: &Chromaticities,
+) -> Vec<(String, io::ExrAttribute)> {
+    let mut attributes = camera.attributes(width, height);
+    let xy = [space.red, space.green, space.blue, space.white].map(|[x, y]| [x as f32, y as f32]);
+    attributes.push(("chromaticities".into(), io::ExrAttribute::Chromaticities(xy)));
+    attributes
 }
 
 /// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
@@ -517,12 +559,6 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
     }
     outputs.commit()?;
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
-}
-
-/// Whether the EXR is scene-referred linear (no --film-in-exr, or --film linear without
-/// --film-file): sensor values, which a long exposure may average.
-pub fn film_is_linear(args: &RenderArgs) -> bool {
-    !args.film_in_exr || (matches!(args.film, FilmArg::Linear) && args.film_file.is_none())
 }
 
 /// Sets the frame's colour space from --colorspace (else it keeps the colour file's

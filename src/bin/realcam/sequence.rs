@@ -3,19 +3,26 @@
 //! render farms.
 
 use crate::common::progress_bar;
-use crate::render::{film_is_linear, render_frame, render_image, write_outputs, RenderArgs, RenderedFrame, Session};
+use crate::render::{
+    load_frame, output_attributes, render_loaded, write_outputs, LoadedFrame, RenderArgs, RenderedFrame, Session,
+};
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use realcam::io::output::Outputs;
 use realcam::io::sequence::{FramePattern, FrameRange};
+use realcam::io::ExrWriteOptions;
 use realcam::model::camera::Camera;
 use realcam::model::long_exposure::LongExposure;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{sync_channel, Receiver};
 use std::time::Instant;
 
 #[derive(Args, Clone, Default)]
 pub struct SequenceArgs {
-    /// Render a frame sequence: 1001-1100, 1001-1100x2 (every 2nd), 1001,1005,1010-1020, -5--1.
+    /// Render a frame sequence: 1001-1100, 1001-1100x2 (every 2nd; 1001-1100:2 alike),
+    /// 1001,1005,1010-1020, -5--1.
     /// The paths of --color, --depth, --velocity, --output, --png and --trace carry the frame
     /// number as #### (one digit per #; @ alike) or %04d; an input without one is every frame's.
     #[arg(long, value_name = "RANGE", allow_hyphen_values = true)]
@@ -34,7 +41,8 @@ pub struct SequenceArgs {
     #[arg(long = "fail-fast", requires = "frames")]
     pub fail_fast: bool,
     /// Accumulate the frames of --frames into one exposure, the average of their light (Kyaw
-    /// 2013 sec. 7.4), written to --output (a path without a frame number); needs --film linear.
+    /// 2013 sec. 7.4) as sensor values, then exposed on the film once (its grain and curve),
+    /// written to --output (a path without a frame number).
     #[arg(long = "long-exposure", requires = "frames", conflicts_with = "skip_existing")]
     pub long_exposure: bool,
     /// The long exposure's state: written (atomically) after every frame, read at the start,
@@ -173,6 +181,100 @@ fn farm_percent(finished: usize, total: usize) -> usize {
     (finished * 100).checked_div(total).unwrap_or(100)
 }
 
+/// A frame of the sequence as the reader thread hands it on: its arguments and its passes read
+/// and planned, or None for a frame it was told to skip.
+struct ReadFrame {
+    frame: i64,
+    args: RenderArgs,
+    loaded: Option<Result<LoadedFrame>>,
+}
+
+/// Reads the frames of `jobs` (frame, its arguments, whether to skip it) in order on a thread of
+/// `scope`, at most two frames ahead of the receiver (one in the channel, one being read), so
+/// that the next frame's EXRs are read while the GPU renders this one. Stops when `stop` is set
+/// or the receiver is gone.
+fn read_ahead<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    jobs: Vec<(i64, RenderArgs, bool)>,
+    camera: &'scope Camera,
+    stop: &'scope AtomicBool,
+) -> Receiver<ReadFrame> {
+    let (send, receive) = sync_channel(1);
+    scope.spawn(move || {
+        for (frame, args, skip) in jobs {
+            if stop.load(Ordering::Relaxed) {
+                break;
+            }
+            let loaded = (!skip).then(|| load_frame(&args, camera));
+            if send.send(ReadFrame { frame, args, loaded }).is_err() {
+                break;
+            }
+        }
+    });
+    receive
+}
+
+/// What the render loop hands the writer thread, in frame order.
+enum Finished {
+    Skipped { frame: i64, output: PathBuf },
+    Failed { frame: i64, error: anyhow::Error },
+    Rendered { frame: i64, args: Box<RenderArgs>, outputs: Outputs, rendered: RenderedFrame },
+}
+
+/// The frames the writer thread counted.
+#[derive(Default)]
+struct Tally {
+    done: usize,
+    skipped: usize,
+    failed: Vec<i64>,
+}
+
+/// The writer thread: writes each rendered frame's outputs (atomically, as a single frame's)
+/// while the GPU renders the next, and reports every frame in order: its line, then the
+/// progress. With `fail_fast`, the first failure sets `stop` and the frames after it are
+/// dropped unwritten (their temporaries removed).
+fn write_behind(finished: Receiver<Finished>, total: usize, fail_fast: bool, stop: &AtomicBool) -> Tally {
+    let mut progress = Progress::new(total);
+    let mut tally = Tally::default();
+    for item in finished {
+        if fail_fast && !tally.failed.is_empty() {
+            continue;
+        }
+        let frame = match item {
+            Finished::Skipped { frame, output } => {
+                tally.skipped += 1;
+                progress.say(&format!("frame {frame}: skipped, {} exists", output.display()));
+                frame
+            }
+            Finished::Failed { frame, error } => {
+                tally.failed.push(frame);
+                progress.say(&format!("error: frame {frame}: {}", crate::error_text(&error)));
+                frame
+            }
+            Finished::Rendered { frame, args, outputs, rendered } => {
+                match write_outputs(&args, outputs, &rendered) {
+                    Ok(paths) => {
+                        tally.done += 1;
+                        let paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+                        progress.say(&format!("frame {frame}: wrote {}", paths.join(", ")));
+                    }
+                    Err(error) => {
+                        tally.failed.push(frame);
+                        progress.say(&format!("error: frame {frame}: {}", crate::error_text(&error)));
+                    }
+                }
+                frame
+            }
+        };
+        progress.frame_finished(frame);
+        if fail_fast && !tally.failed.is_empty() {
+            stop.store(true, Ordering::Relaxed);
+        }
+    }
+    progress.finish();
+    tally
+}
+
 pub fn run(args: &RenderArgs) -> Result<()> {
     let range = frames(&args.sequence)?;
     let patterns = Patterns::new(args)?;
@@ -186,38 +288,52 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let started = Instant::now();
     let total = range.frames.len();
-    let mut progress = Progress::new(total);
-    let mut session = Session::default();
-    let (mut done, mut skipped, mut failed) = (0usize, 0usize, Vec::new());
-    for &frame in &range.frames {
-        let one = patterns.frame_args(args, frame);
-        if args.sequence.skip_existing && one.output_paths().iter().all(|p| p.exists()) {
-            skipped += 1;
-            progress.say(&format!("frame {frame}: skipped, {} exists", one.output.display()));
-            progress.frame_finished(frame);
-            continue;
-        }
-        match one.outputs().and_then(|outputs| render_frame(&one, &camera, outputs, &mut session)) {
-            Ok(paths) => {
-                done += 1;
-                let paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
-                progress.say(&format!("frame {frame}: wrote {}", paths.join(", ")));
+    let jobs: Vec<(i64, RenderArgs, bool)> = range
+        .frames
+        .iter()
+        .map(|&frame| {
+            let one = patterns.frame_args(args, frame);
+            let skip = args.sequence.skip_existing && one.output_paths().iter().all(|p| p.exists());
+            (frame, one, skip)
+        })
+        .collect();
+    let fail_fast = args.sequence.fail_fast;
+    let stop = AtomicBool::new(false);
+    let tally = std::thread::scope(|scope| {
+        let read = read_ahead(scope, jobs, &camera, &stop);
+        let (finish, finished) = sync_channel(1);
+        let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop));
+        let mut session = Session::default();
+        for ReadFrame { frame, args: one, loaded } in read {
+            if stop.load(Ordering::Relaxed) {
+                break;
             }
-            Err(e) => {
-                failed.push(frame);
-                progress.say(&format!("error: frame {frame}: {}", crate::error_text(&e)));
+            let item = match loaded {
+                None => Finished::Skipped { frame, output: one.output.clone() },
+                Some(loaded) => {
+                    let rendered = loaded.and_then(|loaded| {
+                        let outputs = one.outputs()?;
+                        Ok((outputs, render_loaded(&one, &camera, loaded, &mut session)?))
+                    });
+                    match rendered {
+                        Ok((outputs, rendered)) => Finished::Rendered { frame, args: Box::new(one), outputs, rendered },
+                        Err(error) => Finished::Failed { frame, error },
+                    }
+                }
+            };
+            let failed = matches!(item, Finished::Failed { .. });
+            if finish.send(item).is_err() || (fail_fast && failed) {
+                stop.store(true, Ordering::Relaxed);
+                break;
             }
         }
-        progress.frame_finished(frame);
-        if args.sequence.fail_fast && !failed.is_empty() {
-            break;
-        }
-    }
-    progress.finish();
-    summary(done, skipped, failed.len(), total, started, "(--fail-fast)");
-    if !failed.is_empty() {
-        let list: Vec<String> = failed.iter().map(i64::to_string).collect();
-        bail!("{} of {total} frames failed: {}", failed.len(), list.join(", "));
+        drop(finish);
+        writer.join().map_err(|_| anyhow::anyhow!("the thread writing the frames' outputs panicked"))
+    })?;
+    summary(tally.done, tally.skipped, tally.failed.len(), total, started, "(--fail-fast)");
+    if !tally.failed.is_empty() {
+        let list: Vec<String> = tally.failed.iter().map(i64::to_string).collect();
+        bail!("{} of {total} frames failed: {}", tally.failed.len(), list.join(", "));
     }
     Ok(())
 }
@@ -236,12 +352,6 @@ fn summary(done: usize, skipped: usize, failed: usize, total: usize, started: In
 /// `--long-exposure`: the frames of `range` rendered and accumulated into one exposure, written
 /// only when every frame was.
 fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, camera: &Camera) -> Result<()> {
-    if !film_is_linear(args) {
-        bail!(
-            "--long-exposure averages the frames' light, which comes before a film curve: leave out --film-in-exr \
-             (the EXR keeps scene-referred sensor values; the PNG preview applies the curve to the exposure)"
-        );
-    }
     if args.trace.is_some() {
         bail!("--trace: GPU times are per frame; --long-exposure writes no trace");
     }
@@ -254,50 +364,63 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let started = Instant::now();
     let total = range.frames.len();
     let mut progress = Progress::new(total);
-    let mut session = Session::default();
     let mut exr_options = None;
     let mut working_space = realcam::optics::colour::Chromaticities::REC709;
     let mut failed = None;
     let mut skipped = 0;
-    for &frame in &range.frames {
-        let one = patterns.frame_args(args, frame);
-        if exposure.has(frame) {
-            skipped += 1;
-            progress.say(&format!("frame {frame}: already in the exposure (--state)"));
-            progress.frame_finished(frame);
-            continue;
-        }
-        let added = render_image(&one, camera, &mut session).and_then(|rendered| {
-            exposure.add(frame, &rendered.image)?;
-            exr_options = Some(rendered.exr_options);
-            working_space = rendered.working_space;
-            if let Some(path) = state {
-                realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
+    let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
+    let stop = AtomicBool::new(false);
+    // The frames are rendered up to the sensor and averaged; the film comes once, after.
+    let sensor = realcam::pipeline::planner::sensor_camera(camera);
+    let mut session = Session::default();
+    std::thread::scope(|scope| {
+        // The next frame is read while this one renders; accumulating is quick beside both.
+        let read = read_ahead(scope, jobs, &sensor, &stop);
+        for ReadFrame { frame, args: one, loaded } in read {
+            let Some(loaded) = loaded else {
+                skipped += 1;
+                progress.say(&format!("frame {frame}: already in the exposure (--state)"));
+                progress.frame_finished(frame);
+                continue;
+            };
+            let added =
+                loaded.and_then(|loaded| render_loaded(&one, &sensor, loaded, &mut session)).and_then(|rendered| {
+                    exposure.add(frame, &rendered.image)?;
+                    exr_options = Some(rendered.exr_options);
+                    working_space = rendered.working_space;
+                    if let Some(path) = state {
+                        realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
+                    }
+                    Ok(())
+                });
+            if let Err(e) = added {
+                progress.say(&format!("error: frame {frame}: {}", crate::error_text(&e)));
+                failed = Some(frame);
             }
-            Ok(())
-        });
-        if let Err(e) = added {
-            progress.say(&format!("error: frame {frame}: {}", crate::error_text(&e)));
-            failed = Some(frame);
+            progress.frame_finished(frame);
+            if failed.is_some() {
+                stop.store(true, Ordering::Relaxed);
+                break;
+            }
         }
-        progress.frame_finished(frame);
-        if failed.is_some() {
-            break;
-        }
-    }
+    });
     progress.finish();
     let done = exposure.frames() as usize - skipped;
     summary(done, skipped, usize::from(failed.is_some()), total, started, "(the exposure stopped)");
     if let Some(frame) = failed {
         bail!("frame {frame} failed: the long exposure of {total} frames is not written");
     }
-    let exr_options = exr_options.unwrap_or_default();
-    let image = exposure.image()?;
-    // The preview: the film curve on the averaged light.
+    // The frames were rendered to sensor values and averaged; the film comes once, now: on
+    // the GPU into the EXR with --film-in-exr, else only into the PNG preview (the EXR stays
+    // scene-referred). The header names the camera's film, not the sensor's.
+    let average = exposure.image()?;
+    let image = if camera.film_on_output { session.expose_on_film(args, camera, average)? } else { average };
     let preview = args.png.as_ref().map(|_| realcam::io::Image {
         data: realcam::pipeline::render::preview_rgba(camera, &working_space, &image.data, image.width),
         ..image.clone()
     });
+    let attributes = output_attributes(camera, image.width, image.height, &working_space);
+    let exr_options = ExrWriteOptions { attributes, ..exr_options.unwrap_or_default() };
     let rendered = RenderedFrame {
         image,
         preview,
