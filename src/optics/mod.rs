@@ -15,6 +15,7 @@
 //! positive |m| = v/S; the circle of confusion from [`ThinLens::coc_mm`] is signed
 //! (positive behind the focus plane, negative in front).
 
+pub mod bezier_ghost;
 pub mod diffraction;
 pub mod distortion;
 pub mod dof;
