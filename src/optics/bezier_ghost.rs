@@ -315,6 +315,99 @@ pub fn real_roots(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
     roots
 }
 
+/// A least-squares polynomial of the given order through the points (x_i, y_i) (Walch sec.
+/// 7.3 and ch. 8): the coefficients c_0..c_order of sum c_k x^k. Fewer points than
+/// coefficients lower the order (one point: a constant). The normal equations are solved in x
+/// scaled to [-1, 1] about the points' middle, then expanded back.
+pub fn polyfit(xs: &[f64], ys: &[f64], order: usize) -> Vec<f64> {
+    let n = xs.len().min(ys.len());
+    if n == 0 {
+        return vec![0.0];
+    }
+    let order = order.min(n - 1);
+    let (lo, hi) = xs[..n].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    let mid = 0.5 * (lo + hi);
+    let half = (0.5 * (hi - lo)).max(1e-12);
+    let m = order + 1;
+    let mut a = vec![vec![0.0; m + 1]; m];
+    for i in 0..n {
+        let u = (xs[i] - mid) / half;
+        let powers: Vec<f64> = (0..m).map(|k| u.powi(k as i32)).collect();
+        for r in 0..m {
+            for c in 0..m {
+                a[r][c] += powers[r] * powers[c];
+            }
+            a[r][m] += powers[r] * ys[i];
+        }
+    }
+    // Gauss-Jordan with partial pivoting.
+    for col in 0..m {
+        let pivot = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs())).unwrap_or(col);
+        a.swap(col, pivot);
+        let p = a[col][col];
+        if p.abs() < 1e-300 {
+            continue;
+        }
+        for r in 0..m {
+            if r != col {
+                let f = a[r][col] / p;
+                for c in col..=m {
+                    a[r][c] -= f * a[col][c];
+                }
+            }
+        }
+    }
+    let scaled: Vec<f64> = (0..m).map(|k| if a[k][k] != 0.0 { a[k][m] / a[k][k] } else { 0.0 }).collect();
+    // sum b_k ((x - mid) / half)^k expanded into powers of x.
+    let mut out = vec![0.0; m];
+    for (k, b) in scaled.iter().enumerate() {
+        // (x - mid)^k by the binomial theorem.
+        let mut binom = 1.0;
+        for j in 0..=k {
+            out[j] += b / half.powi(k as i32) * binom * (-mid).powi((k - j) as i32);
+            binom = binom * (k - j) as f64 / (j + 1) as f64;
+        }
+    }
+    out
+}
+
+/// sum c_k x^k.
+pub fn poly_eval(c: &[f64], x: f64) -> f64 {
+    poly_at(c, x)
+}
+
+/// A ghost as polynomials of the constellation angle (Walch ch. 8, the angle of eq 8.1): one
+/// per parameter of [`PARAM_NAMES`], each valid over `angles_deg`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GhostPolynomials {
+    /// The fitted range of angles (degrees).
+    pub angles_deg: [f64; 2],
+    /// Coefficients c_0.. of each parameter, in [`PARAM_NAMES`] order.
+    pub coefficients: Vec<Vec<f64>>,
+}
+
+impl GhostPolynomials {
+    /// Each parameter's least-squares polynomial of `order` over the fitted samples.
+    pub fn fit(angles_deg: &[f64], ghosts: &[BezierGhost], order: usize) -> GhostPolynomials {
+        let params: Vec<[f64; PARAMS]> = ghosts.iter().map(BezierGhost::to_params).collect();
+        let coefficients =
+            (0..PARAMS).map(|k| polyfit(angles_deg, &params.iter().map(|p| p[k]).collect::<Vec<_>>(), order)).collect();
+        let lo = angles_deg.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = angles_deg.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        GhostPolynomials { angles_deg: [lo, hi], coefficients }
+    }
+
+    /// The primitive at `angle_deg` (clamped to the fitted range: no extrapolation).
+    pub fn at(&self, angle_deg: f64) -> BezierGhost {
+        let a = angle_deg.clamp(self.angles_deg[0], self.angles_deg[1]);
+        let mut p = [0.0; PARAMS];
+        for (k, c) in self.coefficients.iter().enumerate().take(PARAMS) {
+            p[k] = poly_eval(c, a);
+        }
+        BezierGhost::from_params(&p)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,5 +532,45 @@ mod tests {
         for (t, r) in roots.iter().zip([0.1, 0.3, 0.5, 0.7]) {
             assert!((t - r).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn an_order_2_polynomial_reproduces_a_quadratic_drift_over_13_samples() {
+        // Walch ch. 10 figure 10.8: a ghost's centre over 13 samples drifts left, faster with
+        // the angle (x = 812 - 31 a - 0.9 a^2 px at a = 10..22 degrees); order 2 gives it back
+        // to 1e-9; order 1 leaves the curvature: 0.9 ((a - 16)^2 - 14) misses by 19.8 px at
+        // the ends.
+        let angles: Vec<f64> = (0..13).map(|i| 10.0 + i as f64).collect();
+        let drift = |a: f64| 812.0 - 31.0 * a - 0.9 * a * a;
+        let xs: Vec<f64> = angles.iter().map(|&a| drift(a)).collect();
+        let c = polyfit(&angles, &xs, 2);
+        assert!((c[0] - 812.0).abs() < 1e-6 && (c[1] + 31.0).abs() < 1e-7 && (c[2] + 0.9).abs() < 1e-9, "{c:?}");
+        for a in [10.0, 13.7, 22.0] {
+            assert!((poly_eval(&c, a) - drift(a)).abs() < 1e-9);
+        }
+        // Order 1 cannot: the residual of a line through a parabola over 12 degrees.
+        let line = polyfit(&angles, &xs, 1);
+        let worst = angles.iter().map(|&a| (poly_eval(&line, a) - drift(a)).abs()).fold(0.0, f64::max);
+        assert!((worst - 19.8).abs() < 1e-6, "{worst}");
+        // Through the ghost's parameters: the polynomials give every sample back.
+        let ghosts: Vec<BezierGhost> = angles
+            .iter()
+            .map(|&a| BezierGhost {
+                centre_px: [drift(a), 300.0 + 0.1 * a],
+                height_px: 20.0 + 0.02 * a * a,
+                ..circle(10.0)
+            })
+            .collect();
+        let p = GhostPolynomials::fit(&angles, &ghosts, 2);
+        for (a, g) in angles.iter().zip(&ghosts) {
+            let back = p.at(*a);
+            for (x, y) in back.to_params().iter().zip(g.to_params()) {
+                assert!((x - y).abs() < 1e-8 * y.abs().max(1.0), "{a}: {x} vs {y}");
+            }
+        }
+        // Fewer samples than coefficients: a constant from one, a line from two (sec. 7.3).
+        assert_eq!(polyfit(&[3.0], &[7.0], 2), vec![7.0]);
+        let two = polyfit(&[1.0, 3.0], &[2.0, 6.0], 2);
+        assert!(two.len() == 2 && (poly_eval(&two, 5.0) - 10.0).abs() < 1e-12);
     }
 }

@@ -23,6 +23,7 @@ pub mod exposure;
 pub mod film;
 pub mod flare;
 pub mod focus_processor;
+pub mod ghost_prediction;
 pub mod lens;
 pub mod prescription;
 pub mod sensor;

@@ -8,6 +8,7 @@ pub mod bench;
 pub mod bench_flare;
 pub mod bench_motion;
 pub mod error_budget;
+pub mod flare_fit;
 pub mod fuzz;
 pub mod metrics;
 pub mod synth;

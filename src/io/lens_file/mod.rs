@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 mod write;
 
+mod fitted_ghosts;
+pub use fitted_ghosts::FittedGhostSpec;
 pub use write::{number_text, rounded, with_derived_tables, LensFileWriter};
 
 #[derive(Debug, thiserror::Error)]
@@ -122,6 +124,9 @@ pub struct LensFile {
     /// Lens flare: the coatings (for the ghosts of the prescription) and the halo.
     #[serde(default)]
     pub flare: FlareSpec,
+    /// Walch's measured ghosts as polynomials of the angle (src/io/lens_file/fitted_ghosts.rs).
+    #[serde(default, rename = "fitted_ghost")]
+    pub fitted_ghosts: Vec<FittedGhostSpec>,
 }
 
 /// `[flare]`: what the lens's flare depends on besides its prescription and aperture.
@@ -395,6 +400,7 @@ impl LensFile {
             LensFileError::Parse { path: path.to_path_buf(), line, message }
         })?;
         lens.validate(path, text)?;
+        FittedGhostSpec::validate(&lens.fitted_ghosts, path, text)?;
         Ok(lens)
     }
 
