@@ -348,11 +348,12 @@ pub fn polyfit(xs: &[f64], ys: &[f64], order: usize) -> Vec<f64> {
         if p.abs() < 1e-300 {
             continue;
         }
-        for r in 0..m {
+        let pivot_row = a[col].clone();
+        for (r, row) in a.iter_mut().enumerate() {
             if r != col {
-                let f = a[r][col] / p;
-                for c in col..=m {
-                    a[r][c] -= f * a[col][c];
+                let f = row[col] / p;
+                for (v, q) in row.iter_mut().zip(&pivot_row).skip(col) {
+                    *v -= f * q;
                 }
             }
         }
@@ -363,8 +364,8 @@ pub fn polyfit(xs: &[f64], ys: &[f64], order: usize) -> Vec<f64> {
     for (k, b) in scaled.iter().enumerate() {
         // (x - mid)^k by the binomial theorem.
         let mut binom = 1.0;
-        for j in 0..=k {
-            out[j] += b / half.powi(k as i32) * binom * (-mid).powi((k - j) as i32);
+        for (j, o) in out.iter_mut().enumerate().take(k + 1) {
+            *o += b / half.powi(k as i32) * binom * (-mid).powi((k - j) as i32);
             binom = binom * (k - j) as f64 / (j + 1) as f64;
         }
     }
