@@ -62,6 +62,7 @@ impl GreyImage {
 /// light's own image, summed in the cell it lands in, over the box of the ghost's rays plus
 /// `margin_px`, in cells of whole pixels at most `max_cells` across. None where no light of it
 /// reaches the sensor.
+#[allow(clippy::too_many_arguments)]
 pub fn traced_ghost_image(
     lens: &crate::optics::flare::FlareLens,
     path: crate::optics::flare::ghosts::GhostPath,
@@ -75,7 +76,7 @@ pub fn traced_ghost_image(
     use crate::optics::flare::traced::{display_px, optical_slope, TracedImage};
     let direct = TracedImage::trace(lens, None, optical_slope(u), c, rays_across).energy();
     let ghost = TracedImage::trace(lens, Some(path), optical_slope(u), c, rays_across);
-    if !(direct > 0.0) || ghost.hits.is_empty() {
+    if direct.is_nan() || direct <= 0.0 || ghost.hits.is_empty() {
         return None;
     }
     let px: Vec<([f64; 2], f64)> = ghost
