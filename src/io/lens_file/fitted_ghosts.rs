@@ -63,12 +63,7 @@ impl FittedGhostSpec {
     /// channel, a range of angles; errors name the line of the entry's header.
     pub fn validate(specs: &[FittedGhostSpec], path: &Path, text: &str) -> Result<(), LensFileError> {
         for (i, g) in specs.iter().enumerate() {
-            let line = text
-                .lines()
-                .enumerate()
-                .filter(|(_, l)| l.trim_start().starts_with("[[fitted_ghost]]"))
-                .nth(i)
-                .map_or(0, |(n, _)| n + 1);
+            let line = super::header_line(text, "[[fitted_ghost]]", i);
             let err = |message: String| Err(LensFileError::Parse { path: path.to_path_buf(), line, message });
             if g.channel > 2 {
                 return err(format!(

@@ -71,6 +71,11 @@ impl ApertureSpec {
     }
 }
 
+/// The line (from 1; 0 if absent) of the `i`-th `header` (`[[tables.vignetting]]`) of `text`.
+fn header_line(text: &str, header: &str, i: usize) -> usize {
+    text.lines().enumerate().filter(|(_, l)| l.trim_start().starts_with(header)).nth(i).map_or(0, |(n, _)| n + 1)
+}
+
 /// A lens as a lens file describes it.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -464,13 +469,7 @@ impl LensFile {
                 );
             }
             for (i, e) in t.vignetting.iter().enumerate() {
-                // The line of the i-th [[tables.vignetting]] header.
-                let line = text
-                    .lines()
-                    .enumerate()
-                    .filter(|(_, l)| l.trim_start().starts_with("[[tables.vignetting]]"))
-                    .nth(i)
-                    .map_or(0, |(n, _)| n + 1);
+                let line = header_line(text, "[[tables.vignetting]]", i);
                 let err = |message: String| Err(LensFileError::Parse { path: path.to_path_buf(), line, message });
                 if !(e.f_number.is_finite() && e.f_number > 0.0) {
                     return err(format!("tables.vignetting f_number = {} must be a positive number", e.f_number));
