@@ -174,6 +174,42 @@ fn flare_camera(blades: u32) -> Camera {
     Camera::new(&lens, &request).expect("flare camera")
 }
 
+/// Two of Walch's primitives on a 40x28 frame: a rounded one and a rolled diamond-like one.
+fn bezier_case() -> Vec<realcam::passes::bezier_ghosts::DrawnGhost> {
+    use realcam::optics::bezier_ghost::{BezierGhost, Transfer};
+    let ghost = BezierGhost {
+        centre_px: [14.3, 12.6],
+        height_px: 9.0,
+        left_px: 6.0,
+        right_px: 11.0,
+        left_control: 0.55,
+        right_control: 0.8,
+        transfer: Transfer {
+            border: 3.0,
+            inner: 0.5,
+            inner_falloff_px: 4.0,
+            outer_falloff_px: 2.5,
+            inner_exponent: 0.7,
+            outer_exponent: 2.0,
+        },
+    };
+    let turned = BezierGhost { centre_px: [33.0, 20.0], left_control: 0.1, right_control: 0.3, ..ghost };
+    vec![
+        realcam::passes::bezier_ghosts::DrawnGhost {
+            ghost,
+            colour: [1.0, 0.5, 0.2],
+            roll_rad: 0.0,
+            pivot_px: [20.0, 14.0],
+        },
+        realcam::passes::bezier_ghosts::DrawnGhost {
+            ghost: turned,
+            colour: [0.1, 0.6, 1.0],
+            roll_rad: 0.7,
+            pivot_px: [20.0, 14.0],
+        },
+    ]
+}
+
 #[test]
 fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     // Every dispatch of the plan is checked against its shader's CPU twin on the GPU's own
@@ -188,6 +224,19 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
         checked.insert(c.shader);
         if let Err(e) = c.result {
             failures.push(format!("bare pass: {e}"));
+        }
+    }
+    // Walch's measured ghosts are drawn by `realcam flare`, not a render: two primitives, one
+    // turned by eq 8.2's roll, overlapping a tile edge and the frame's edge.
+    let bezier = realcam::gpu::Kernel::new(&gpu).expect("bezier_ghosts pipeline");
+    let (_, _, checks) =
+        realcam::passes::bezier_ghosts::draw(&bezier, "bezier twin", &gpu, 40, 28, &bezier_case(), true)
+            .expect("bezier ghosts");
+    assert_validation_clean(&gpu);
+    for c in checks {
+        checked.insert(c.shader);
+        if let Err(e) = c.result {
+            failures.push(format!("bezier ghosts: {e}"));
         }
     }
     for (name, frame, camera) in twin_cases() {

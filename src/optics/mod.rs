@@ -15,6 +15,7 @@
 //! positive |m| = v/S; the circle of confusion from [`ThinLens::coc_mm`] is signed
 //! (positive behind the focus plane, negative in front).
 
+pub mod bezier_ghost;
 pub mod colour;
 pub mod diffraction;
 pub mod distortion;
@@ -23,6 +24,7 @@ pub mod exposure;
 pub mod film;
 pub mod flare;
 pub mod focus_processor;
+pub mod ghost_prediction;
 pub mod lens;
 pub mod prescription;
 pub mod sensor;

@@ -14,6 +14,7 @@
 pub mod aperture;
 pub mod astigmatism;
 pub mod barriers;
+pub mod bezier_ghosts;
 pub mod bokeh_gather;
 pub mod coc;
 pub mod coma;

@@ -9,6 +9,7 @@ pub mod bench_flare;
 pub mod bench_motion;
 pub mod bench_sequence;
 pub mod error_budget;
+pub mod flare_fit;
 pub mod fuzz;
 pub mod metrics;
 pub mod synth;

@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 mod write;
 
+mod fitted_ghosts;
+pub use fitted_ghosts::FittedGhostSpec;
 pub use write::{number_text, rounded, with_derived_tables, LensFileWriter};
 
 #[derive(Debug, thiserror::Error)]
@@ -69,6 +71,11 @@ impl ApertureSpec {
     }
 }
 
+/// The line (from 1; 0 if absent) of the `i`-th `header` (`[[tables.vignetting]]`) of `text`.
+fn header_line(text: &str, header: &str, i: usize) -> usize {
+    text.lines().enumerate().filter(|(_, l)| l.trim_start().starts_with(header)).nth(i).map_or(0, |(n, _)| n + 1)
+}
+
 /// A lens as a lens file describes it.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -122,6 +129,9 @@ pub struct LensFile {
     /// Lens flare: the coatings (for the ghosts of the prescription) and the halo.
     #[serde(default)]
     pub flare: FlareSpec,
+    /// Walch's measured ghosts as polynomials of the angle (src/io/lens_file/fitted_ghosts.rs).
+    #[serde(default, rename = "fitted_ghost")]
+    pub fitted_ghosts: Vec<FittedGhostSpec>,
 }
 
 /// `[flare]`: what the lens's flare depends on besides its prescription and aperture.
@@ -395,6 +405,7 @@ impl LensFile {
             LensFileError::Parse { path: path.to_path_buf(), line, message }
         })?;
         lens.validate(path, text)?;
+        FittedGhostSpec::validate(&lens.fitted_ghosts, path, text)?;
         Ok(lens)
     }
 
@@ -458,13 +469,7 @@ impl LensFile {
                 );
             }
             for (i, e) in t.vignetting.iter().enumerate() {
-                // The line of the i-th [[tables.vignetting]] header.
-                let line = text
-                    .lines()
-                    .enumerate()
-                    .filter(|(_, l)| l.trim_start().starts_with("[[tables.vignetting]]"))
-                    .nth(i)
-                    .map_or(0, |(n, _)| n + 1);
+                let line = header_line(text, "[[tables.vignetting]]", i);
                 let err = |message: String| Err(LensFileError::Parse { path: path.to_path_buf(), line, message });
                 if !(e.f_number.is_finite() && e.f_number > 0.0) {
                     return err(format!("tables.vignetting f_number = {} must be a positive number", e.f_number));

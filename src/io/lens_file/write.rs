@@ -129,6 +129,14 @@ impl LensFileWriter {
         self
     }
 
+    /// Replaces the array of tables `name` by `entries`, after everything else.
+    pub(super) fn array_section(&mut self, name: &'static str, entries: ArrayOfTables) -> &mut Self {
+        self.doc.remove(name);
+        self.doc.insert(name, Item::ArrayOfTables(entries));
+        self.appended.push(name);
+        self
+    }
+
     /// `[tables]`, with its `[[tables.vignetting]]` entries.
     pub fn tables(&mut self, tables: &LensTables, note: Option<&str>) -> &mut Self {
         let mut table = Table::new();
