@@ -1919,7 +1919,8 @@ fn a_long_exposure_of_identical_frames_on_film_is_the_single_frame_on_that_film(
         std::fs::copy(dir.join("c.1001.exr"), dir.join(&format!("c.{frame}.exr"))).unwrap();
         std::fs::copy(dir.join("d.1001.exr"), dir.join(&format!("d.{frame}.exr"))).unwrap();
     }
-    let film = ["--film", "contrast", "--grain", "0.05", "--iso", "800"];
+    // The film in the EXR (by default it is only in the PNG preview).
+    let film = ["--film", "contrast", "--grain", "0.05", "--iso", "800", "--film-in-exr"];
     let mut single = args.clone();
     for arg in args.iter_mut() {
         if *arg == dir.arg("o.####.exr") {
@@ -1941,7 +1942,7 @@ fn a_long_exposure_of_identical_frames_on_film_is_the_single_frame_on_that_film(
     // The grain is there (the linear film without grain differs), once.
     let mut linear = single.clone();
     linear.truncate(linear.len() - film.len());
-    linear.extend(s(&["--film", "contrast", "--iso", "800"]));
+    linear.extend(s(&["--film", "contrast", "--iso", "800", "--film-in-exr"]));
     linear = linear.into_iter().map(|a| a.replace("o.1001.exr", "plain.exr")).collect();
     render(&dir, &linear).success();
     assert!(read("plain.exr") != read("o.1001.exr"), "the grain changed nothing");
