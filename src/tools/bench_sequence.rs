@@ -28,6 +28,8 @@ pub struct SequenceBenchOptions {
     pub runs: usize,
     /// The realcam executable that renders.
     pub realcam: PathBuf,
+    /// More `render` flags for both (after the camera's `--fstop 2 --focus 2`), e.g. `--no-flare`.
+    pub render_flags: Vec<String>,
     /// Where the frames and outputs go (a temporary folder).
     pub dir: PathBuf,
 }
@@ -122,7 +124,8 @@ pub fn run(
     progress("the bare pass");
     let bare_ms = bare_pass_ms(gpu, w, h, options.runs)?;
     let path = |name: String| dir.join(name).to_string_lossy().into_owned();
-    let camera = ["--fstop", "2", "--focus", "2"].map(String::from);
+    let mut camera: Vec<String> = ["--fstop", "2", "--focus", "2"].map(String::from).into();
+    camera.extend(options.render_flags.iter().cloned());
     let mut sequence: Vec<String> = ["render", "--color"].map(String::from).into();
     sequence.extend([path("f####_color.exr".into()), "--depth".into(), path("f####_depth.exr".into())]);
     sequence.extend(["-o".into(), path("seq.####.exr".into()), "--trace".into(), path("seq.####.json".into())]);

@@ -46,6 +46,9 @@ pub struct BenchArgs {
     /// Frames of the sequence (with --sequence).
     #[arg(long, default_value_t = 24)]
     frames: usize,
+    /// More `render` flags for both sides of --sequence, in one argument (e.g. "--no-flare").
+    #[arg(long, requires = "sequence", allow_hyphen_values = true)]
+    render_flags: Option<String>,
     /// Also write the Markdown table here.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -63,7 +66,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let dir = std::env::temp_dir().join(format!("realcam-bench-sequence-{}", std::process::id()));
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
         let realcam = std::env::current_exe().context("the realcam executable")?;
-        let options = SequenceBenchOptions { width, height, frames: args.frames, runs: args.runs, realcam, dir };
+        let render_flags = args.render_flags.iter().flat_map(|f| f.split_whitespace()).map(String::from).collect();
+        let options =
+            SequenceBenchOptions { width, height, frames: args.frames, runs: args.runs, realcam, dir, render_flags };
         let steps = 2 * (args.runs.max(1) + 1) + 2;
         let row = with_progress(steps.div_ceil(2), |step| run(&gpu, &options, step));
         let _ = std::fs::remove_dir_all(&options.dir);
