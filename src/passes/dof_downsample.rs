@@ -6,7 +6,7 @@ use super::barriers::overwrite;
 use super::groups_for;
 use super::twin::finite_or_zero;
 use crate::gpu::shaders::dof_tiles::{ARGS_HIGHLIGHT_COUNT, ARGS_HIGHLIGHT_DISPATCH, GROUP_SIZE, SPRITE_WORDS};
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, HostImage, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_downsample";
 
@@ -51,6 +51,25 @@ pub fn luminance(c: &[f32], weights: [f32; 3]) -> f32 {
     weights[0] * c[0] + weights[1] * c[1] + weights[2] * c[2]
 }
 
+/// The pixels of half-resolution texel (hx, hy) inside a frame of `size`: each position, its
+/// colour (non-finite values as 0, as the shaders read it) and its signed CoC.
+pub fn texel_pixels<'a>(
+    color: &'a HostImage,
+    coc: &'a HostImage,
+    size: [i32; 2],
+    hx: i32,
+    hy: i32,
+) -> impl Iterator<Item = (i32, i32, [f32; 4], f32)> + 'a {
+    [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().filter_map(move |(i, j)| {
+        let (x, y) = (2 * hx + i, 2 * hy + j);
+        if x >= size[0] || y >= size[1] {
+            return None;
+        }
+        let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
+        Some((x, y, c, coc.clamped(x, y)[0]))
+    })
+}
+
 /// A half-resolution texel in the candidate list: x | y << 16.
 pub fn pack_texel(x: i32, y: i32) -> u32 {
     x as u32 | ((y as u32) << 16)
@@ -65,13 +84,7 @@ impl Twin for DownsampleShader {
         for hy in 0..pc.half_size[1] {
             for hx in 0..pc.half_size[0] {
                 let (mut sum, mut coc_sum, mut weight, mut candidate) = ([0.0f32; 4], 0.0f32, 0.0f32, false);
-                for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                    let (x, y) = (2 * hx + i, 2 * hy + j);
-                    if x >= pc.size[0] || y >= pc.size[1] {
-                        continue;
-                    }
-                    let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
-                    let coc_p = coc.clamped(x, y)[0];
+                for (x, y, c, coc_p) in texel_pixels(&color, &coc, pc.size, hx, hy) {
                     let radius = 0.5 * coc_p.abs();
                     candidate |= radius > pc.small_radius_px && luminance(&c, pc.luminance_weights) > pc.highlight_min;
                     base.texel_mut(x as u32, y as u32).copy_from_slice(&c);

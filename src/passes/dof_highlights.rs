@@ -4,7 +4,7 @@
 
 use super::barriers::{buffer_after_compute_write, write_after_write};
 use super::dof_bin::args_for_indirect;
-use super::dof_downsample::luminance;
+use super::dof_downsample::{luminance, texel_pixels};
 use super::twin::finite_or_zero;
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_HIGHLIGHT_COUNT, ARGS_HIGHLIGHT_DISPATCH, ARGS_SPRITES_DROPPED, ARGS_SPRITE_COUNT,
@@ -86,13 +86,7 @@ impl Twin for HighlightsShader {
         for &packed in &candidates[..listed] {
             let (hx, hy) = ((packed & 0xffff) as i32, (packed >> 16) as i32);
             let mut removed = [0.0f32; 3];
-            for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let (x, y) = (2 * hx + i, 2 * hy + j);
-                if x >= pc.size[0] || y >= pc.size[1] {
-                    continue;
-                }
-                let c: [f32; 4] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
-                let coc_p = coc.clamped(x, y)[0];
+            for (x, y, c, coc_p) in texel_pixels(&color, &coc, pc.size, hx, hy) {
                 let radius = 0.5 * coc_p.abs();
                 let lum = luminance(&c, pc.luminance_weights);
                 if radius <= pc.small_radius_px || lum <= pc.highlight_min {
