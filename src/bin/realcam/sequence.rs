@@ -218,7 +218,7 @@ fn read_ahead<'scope>(
 enum Finished {
     Skipped { frame: i64, output: PathBuf },
     Failed { frame: i64, error: anyhow::Error },
-    Rendered { frame: i64, args: Box<RenderArgs>, outputs: Outputs, rendered: RenderedFrame },
+    Rendered { frame: i64, args: Box<RenderArgs>, outputs: Outputs, rendered: Box<RenderedFrame> },
 }
 
 /// The frames the writer thread counted.
@@ -316,7 +316,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                         Ok((outputs, render_loaded(&one, &camera, loaded, &mut session)?))
                     });
                     match rendered {
-                        Ok((outputs, rendered)) => Finished::Rendered { frame, args: Box::new(one), outputs, rendered },
+                        Ok((outputs, rendered)) => {
+                            Finished::Rendered { frame, args: Box::new(one), outputs, rendered: Box::new(rendered) }
+                        }
                         Err(error) => Finished::Failed { frame, error },
                     }
                 }
