@@ -62,7 +62,7 @@ realcam_cmd() { # realcam_cmd N OUT [EXTRA...]: a thin lens at the pinhole, stra
   cmd=("$realcam" render --color "$color" --depth "$depth" -o "$2" --lens ideal --coc-model renderer
     --focal-length "$focal" --sensor "${sensor_w}x24" --sensor-fit horizontal --fstop "$1" --focus "$focus"
     --blades "$blades" --blade-rotation 0 --blade-curvature 0 --bokeh tiled
-    --no-exposure --no-vignetting --no-flare --film linear --float "${@:3}")
+    --no-exposure --no-vignetting --no-flare --film linear --float --compression none "${@:3}")
 }
 blender_cmd() { # blender_cmd N OUT BLUR_MAX
   cmd=("$blender" -b --factory-startup -noaudio --python-exit-code 1 --python "$repo/scripts/blender/defocus.py" --

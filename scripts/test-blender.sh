@@ -16,5 +16,5 @@ if ! command -v blender >/dev/null 2>&1; then
   fi
 fi
 cargo build --locked $([ $profile = release ] && echo --release) --bin realcam
-REALCAM_VALIDATE=1 REALCAM_BIN=$PWD/target/$profile/realcam blender -b --factory-startup -noaudio --python-exit-code 1 \
+REALCAM_VALIDATE=1 REALCAM_BIN=${CARGO_TARGET_DIR:-$PWD/target}/$profile/realcam blender -b --factory-startup -noaudio --python-exit-code 1 \
   -P tests/blender/test_addon.py 2>&1 | grep -v '^Fra:'

@@ -13,10 +13,12 @@ if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends python3-venv
 fi
-venv=$PWD/target/python-venv
+# Cargo's target folder: CARGO_TARGET_DIR where it is set, as cargo itself does.
+target=${CARGO_TARGET_DIR:-$PWD/target}
+venv=$target/python-venv
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/python" -m pip install -q --disable-pip-version-check 'maturin>=1.5,<2' numpy pytest
 cargo build --locked $([ $profile = release ] && echo --release) --bin realcam
 # The extension shares target/ with the repository's build (same dependency versions).
-(cd python && VIRTUAL_ENV=$venv PATH="$venv/bin:$PATH" CARGO_TARGET_DIR=../target maturin develop --release --locked -q)
-REALCAM_BIN=$PWD/target/$profile/realcam "$venv/bin/python" -m pytest -q python/tests
+(cd python && VIRTUAL_ENV=$venv PATH="$venv/bin:$PATH" CARGO_TARGET_DIR=$target maturin develop --release --locked -q)
+REALCAM_BIN=$target/$profile/realcam "$venv/bin/python" -m pytest -q python/tests

@@ -16,6 +16,28 @@ use realcam::pipeline::planner::{self, Plan};
 use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
 
+/// `--compression`: the EXR codecs, by the names compositors use.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum CompressionArg {
+    Zip,
+    Zips,
+    Piz,
+    Rle,
+    None,
+}
+
+impl From<CompressionArg> for io::ExrCompression {
+    fn from(c: CompressionArg) -> Self {
+        match c {
+            CompressionArg::Zip => io::ExrCompression::Zip,
+            CompressionArg::Zips => io::ExrCompression::Zips,
+            CompressionArg::Piz => io::ExrCompression::Piz,
+            CompressionArg::Rle => io::ExrCompression::Rle,
+            CompressionArg::None => io::ExrCompression::None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 pub enum FilmArg {
     /// The characteristic curve (toe, straight part, shoulder): display-referred.
@@ -196,6 +218,10 @@ pub struct RenderArgs {
     /// Write 32-bit float EXR instead of half.
     #[arg(long)]
     float: bool,
+    /// The EXR's codec: zip (16 scanlines, the default), zips (1 scanline), piz, rle or none
+    /// (the fastest to write and read, the largest file).
+    #[arg(long, value_enum, default_value_t = CompressionArg::Zip)]
+    compression: CompressionArg,
     /// Also write an sRGB 8-bit PNG preview here.
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -517,6 +543,7 @@ pub fn render_loaded(
         data_origin: frame.data_origin,
         attributes,
         float32_channels: Vec::new(),
+        compression: args.compression.into(),
     };
     let working_space = frame.working_space;
     Ok(RenderedFrame { image, preview, kept_channels, exr_options, working_space, profile: rendered.profile })
