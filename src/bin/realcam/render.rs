@@ -15,6 +15,15 @@ use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPA
 use realcam::pipeline::planner::{self, Plan};
 use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::Instant;
+
+/// When the process started (`main` sets it first), for `--profile`'s start-up line.
+pub static PROCESS_START: OnceLock<Instant> = OnceLock::new();
+
+fn ms_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
 
 /// `--compression`: the EXR codecs, by the names compositors use.
 #[derive(Clone, Copy, ValueEnum)]
@@ -372,7 +381,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let outputs = args.outputs()?;
     let camera = args.camera()?;
-    for path in render_frame(args, &camera, outputs, &mut Session::default())? {
+    for path in render_frame(args, &camera, outputs, &mut Session::opening(args))? {
         eprintln!("wrote {}", path.display());
     }
     Ok(())
@@ -383,9 +392,51 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 #[derive(Default)]
 pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
+    /// The GPU opening on another thread (`Session::opening`), joined by the first frame.
+    opening: Option<std::thread::JoinHandle<Result<Gpu>>>,
+    /// How the first frame reached the GPU, for `--profile`; taken when printed.
+    startup: Option<String>,
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        // A run that failed before its first frame reached the GPU still waits for the device
+        // to finish opening, so it is closed before the process exits.
+        if let Some(opening) = self.opening.take() {
+            let _ = opening.join();
+        }
+    }
 }
 
 impl Session {
+    /// A session whose GPU starts opening now, on another thread: loading the Vulkan driver
+    /// and creating the device (about 50-100 ms on lavapipe) overlap the first frame's EXR read.
+    pub fn opening(args: &RenderArgs) -> Session {
+        let gpu_args = args.gpu.clone();
+        let opening = std::thread::Builder::new().name("gpu-open".into()).spawn(move || gpu_args.open_quietly());
+        // Without a thread, the first frame opens the GPU itself.
+        Session { gpu: None, opening: opening.ok(), startup: None }
+    }
+
+    /// The GPU: the one opening on another thread, else opened now; prints it.
+    fn open_gpu(&mut self, args: &RenderArgs) -> Result<Gpu> {
+        let waited = Instant::now();
+        let (gpu, how) = match self.opening.take().map(std::thread::JoinHandle::join) {
+            Some(Ok(opened)) => (opened?, "waited for the GPU opened beside the read"),
+            Some(Err(_)) => bail!("opening the GPU failed (its thread panicked)"),
+            None => (args.gpu.open_quietly()?, "opened the GPU"),
+        };
+        eprintln!("device: {}", gpu.info());
+        self.startup = Some(format!("{how} {:.1} ms", ms_since(waited)));
+        Ok(gpu)
+    }
+
+    /// The start-up line of `--profile` after the first frame: when its GPU work was submitted,
+    /// counted from the process's start.
+    pub fn take_startup(&mut self) -> Option<String> {
+        self.startup.take()
+    }
+
     /// The GPU, once a frame has opened it (the Python package's `Camera.device`).
     #[allow(dead_code)]
     pub fn gpu(&self) -> Option<&Gpu> {
@@ -395,14 +446,24 @@ impl Session {
     /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
     /// Vulkan validation messages are an error.
     fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
-        let (gpu, renderer) = match &mut self.gpu {
+        let opened = match self.gpu.take() {
             Some(opened) => opened,
             None => {
-                let gpu = args.gpu.open()?;
+                let gpu = self.open_gpu(args)?;
+                let created = Instant::now();
                 let renderer = Renderer::new(&gpu, plan)?;
-                self.gpu.insert((gpu, renderer))
+                if let (Some(line), Some(start)) = (&mut self.startup, PROCESS_START.get()) {
+                    *line = format!(
+                        "start-up: the first frame submitted to the GPU {:.1} ms after the process started ({line}; \
+                         pipelines {:.1} ms)",
+                        ms_since(*start),
+                        ms_since(created)
+                    );
+                }
+                (gpu, renderer)
             }
         };
+        let (gpu, renderer) = self.gpu.insert(opened);
         let messages_before = gpu.validation_message_count();
         let rendered = renderer.render(frame, plan, false)?;
         let messages = gpu.validation_message_count() - messages_before;
@@ -473,7 +534,9 @@ pub struct LoadedFrame {
 
 /// Reads the passes `args` names and plans the frame through `camera`.
 pub fn load_frame(args: &RenderArgs, camera: &Camera) -> Result<LoadedFrame> {
+    let started = Instant::now();
     let passes = io::load_passes(&args.sources()).name_flags()?;
+    log::debug!("passes read in {:.1} ms", ms_since(started));
     plan_frame(args, camera, passes)
 }
 
@@ -529,6 +592,9 @@ pub fn render_loaded(
     let rendered = session.render(args, &frame, &plan)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
+        if let Some(line) = session.take_startup() {
+            eprintln!("{line}");
+        }
     }
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let preview = args.png.as_ref().map(|_| Image {
@@ -565,6 +631,7 @@ pub fn output_attributes(
 
 /// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
 pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
+    let started = Instant::now();
     let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
     let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
@@ -585,6 +652,7 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
     }
     outputs.commit()?;
+    log::debug!("outputs encoded and written in {:.1} ms", ms_since(started));
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
 }
 

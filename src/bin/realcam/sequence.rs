@@ -303,7 +303,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let read = read_ahead(scope, jobs, &camera, &stop);
         let (finish, finished) = sync_channel(1);
         let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop));
-        let mut session = Session::default();
+        let mut session = Session::opening(args);
         for ReadFrame { frame, args: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
                 break;
@@ -374,7 +374,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let stop = AtomicBool::new(false);
     // The frames are rendered up to the sensor and averaged; the film comes once, after.
     let sensor = realcam::pipeline::planner::sensor_camera(camera);
-    let mut session = Session::default();
+    let mut session = Session::opening(args);
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
         let read = read_ahead(scope, jobs, &sensor, &stop);
