@@ -534,9 +534,7 @@ pub struct LoadedFrame {
 
 /// Reads the passes `args` names and plans the frame through `camera`.
 pub fn load_frame(args: &RenderArgs, camera: &Camera) -> Result<LoadedFrame> {
-    let started = Instant::now();
     let passes = io::load_passes(&args.sources()).name_flags()?;
-    log::debug!("passes read in {:.1} ms", ms_since(started));
     plan_frame(args, camera, passes)
 }
 
@@ -631,7 +629,6 @@ pub fn output_attributes(
 
 /// Writes `rendered` into the reserved `outputs` that `args` names; the paths written.
 pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
-    let started = Instant::now();
     let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
     let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
@@ -652,7 +649,6 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
     }
     outputs.commit()?;
-    log::debug!("outputs encoded and written in {:.1} ms", ms_since(started));
     Ok(args.output_paths().into_iter().map(Path::to_path_buf).collect())
 }
 
