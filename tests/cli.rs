@@ -1986,6 +1986,19 @@ fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
     assert_contains(&run.stderr, "(a long exposure of 6 frames)");
     let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
     assert!(read("resumed.exr") == read("whole.exr"), "the resumed exposure differs from the uninterrupted one");
+    // A state resumed with another f-number is refused, the setting named; nothing is written.
+    let mut other = with_state("other.exr");
+    let fstop_at = other.iter().position(|a| a == "1.4").unwrap();
+    other[fstop_at] = "2.8".into();
+    let err = render(&dir, &other).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "error: --state \"{}\": the exposure was started with other camera settings (f_number: 1.4 there, \
+             f_number: 2.8 here); resume it with the same settings, or start another --state file",
+            dir.arg("exposure.state")
+        ),
+    );
     // A state from another range, and a state that is not one, are named.
     let mut other = with_state("other.exr");
     let frames_at = other.iter().position(|a| a == "1001-1006").unwrap();
@@ -2003,7 +2016,7 @@ fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
     assert_contains(
         &err,
         &format!(
-            "error: --state \"{}\": not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 1\"",
+            "error: --state \"{}\": not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 2\"",
             dir.arg("exposure.state")
         ),
     );

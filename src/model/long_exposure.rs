@@ -25,8 +25,10 @@ pub enum LongExposureError {
     State { reason: String },
 }
 
-/// The first line of a state file.
-const STATE_MAGIC: &str = "realcam-long-exposure 1";
+/// The first line of a state file (version 2 adds the settings line; a version 1 state, which
+/// has none, is read as made with any settings).
+const STATE_MAGIC: &str = "realcam-long-exposure 2";
+const STATE_MAGIC_V1: &str = "realcam-long-exposure 1";
 
 /// Frames accumulated into one exposure; see the module docs.
 #[derive(Clone, Debug, Default)]
@@ -37,9 +39,22 @@ pub struct LongExposure {
     done: Vec<i64>,
     /// Per value, the sum over the frames so far.
     sum: Vec<f64>,
+    /// The settings the frames were rendered with, on one line (the caller's description, such
+    /// as the camera's): a resumed exposure must use the same.
+    settings: String,
 }
 
 impl LongExposure {
+    /// An empty exposure whose frames are rendered with `settings` (one line).
+    pub fn new(settings: &str) -> LongExposure {
+        LongExposure { settings: settings.replace('\n', " "), ..LongExposure::default() }
+    }
+
+    /// The settings given to [`LongExposure::new`] (empty for a version 1 state).
+    pub fn settings(&self) -> &str {
+        &self.settings
+    }
+
     /// Adds `image`, frame number `frame` of the sequence (for the error of a frame whose size
     /// differs from the first's).
     pub fn add(&mut self, frame: i64, image: &Image) -> Result<(), LongExposureError> {
@@ -84,13 +99,14 @@ impl LongExposure {
         &self.done
     }
 
-    /// The state, to stop and resume: a text header (the first line [`STATE_MAGIC`], then
-    /// `WIDTH HEIGHT CHANNELS`, then the frames done, comma-separated) and the sums as
-    /// little-endian f64.
+    /// The state, to stop and resume: a text header (the first line [`STATE_MAGIC`], then the
+    /// settings, then `WIDTH HEIGHT CHANNELS`, then the frames done, comma-separated) and the
+    /// sums as little-endian f64.
     pub fn to_bytes(&self) -> Vec<u8> {
         let (w, h, c) = self.shape.unwrap_or((0, 0, 0));
         let frames: Vec<String> = self.done.iter().map(i64::to_string).collect();
-        let mut bytes = format!("{STATE_MAGIC}\n{w} {h} {c}\n{}\n", frames.join(",")).into_bytes();
+        let settings = &self.settings;
+        let mut bytes = format!("{STATE_MAGIC}\n{settings}\n{w} {h} {c}\n{}\n", frames.join(",")).into_bytes();
         bytes.reserve(self.sum.len() * 8);
         for s in &self.sum {
             bytes.extend_from_slice(&s.to_le_bytes());
@@ -101,7 +117,8 @@ impl LongExposure {
     /// The state [`LongExposure::to_bytes`] wrote.
     pub fn from_bytes(bytes: &[u8]) -> Result<LongExposure, LongExposureError> {
         let refuse = |reason: String| LongExposureError::State { reason };
-        let mut lines = bytes.splitn(4, |&b| b == b'\n');
+        let version = if bytes.starts_with(STATE_MAGIC_V1.as_bytes()) { 1 } else { 2 };
+        let mut lines = bytes.splitn(3 + version, |&b| b == b'\n');
         let mut line = |what: &str| {
             lines
                 .next()
@@ -109,9 +126,10 @@ impl LongExposure {
                 .map(str::to_string)
                 .ok_or_else(|| refuse(format!("the {what} line is missing")))
         };
-        if line("first")? != STATE_MAGIC {
+        if ![STATE_MAGIC, STATE_MAGIC_V1].contains(&line("first")?.as_str()) {
             return Err(refuse(format!("the first line is not \"{STATE_MAGIC}\"")));
         }
+        let settings = if version == 1 { String::new() } else { line("settings")? };
         let size_line = line("size")?;
         let size: Vec<u32> = size_line.split(' ').filter_map(|v| v.parse().ok()).collect();
         let [w, h, c] = size[..] else {
@@ -137,7 +155,7 @@ impl LongExposure {
         }
         let sum: Vec<f64> = data.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]))).collect();
         let shape = (values > 0).then_some((w, h, c));
-        Ok(LongExposure { shape, done, sum })
+        Ok(LongExposure { shape, done, sum, settings })
     }
 
     /// The exposure: the average of the frames (Kyaw 2013 sec. 7.4, blend factor 1/n).
@@ -207,8 +225,8 @@ mod tests {
                 .for_each(|(i, v)| *v = 0.1 * (i as f32 + 1.0) * n as f32 + 1e5 * (n % 3) as f32);
             image
         };
-        let mut whole = LongExposure::default();
-        let mut first = LongExposure::default();
+        let mut whole = LongExposure::new("f/2, focus 2 m");
+        let mut first = LongExposure::new("f/2, focus 2 m");
         for n in 1..=7 {
             whole.add(i64::from(n), &frame(n)).unwrap();
             if n <= 3 {
@@ -217,12 +235,16 @@ mod tests {
         }
         let mut resumed = LongExposure::from_bytes(&first.to_bytes()).unwrap();
         assert_eq!(resumed.done(), [1, 2, 3]);
+        assert_eq!(resumed.settings(), "f/2, focus 2 m");
         for n in 4..=7 {
             resumed.add(i64::from(n), &frame(n)).unwrap();
         }
         assert_eq!(resumed.to_bytes(), whole.to_bytes());
         assert_eq!(resumed.image().unwrap(), whole.image().unwrap());
         assert_eq!(LongExposure::from_bytes(&LongExposure::default().to_bytes()).unwrap().frames(), 0);
+        // A version 1 state (no settings line) still resumes.
+        let v1 = LongExposure::from_bytes(b"realcam-long-exposure 1\n1 1 1\n5\n\0\0\0\0\0\0\xf0\x3f").unwrap();
+        assert_eq!((v1.done(), v1.settings(), v1.image().unwrap().data), (&[5][..], "", vec![1.0]));
     }
 
     #[test]
@@ -230,10 +252,14 @@ mod tests {
         let state = |bytes: &[u8]| LongExposure::from_bytes(bytes).unwrap_err().to_string();
         assert_eq!(
             state(b"hello"),
-            "not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 1\""
+            "not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 2\""
         );
         assert_eq!(
-            state(b"realcam-long-exposure 1\n3 2\n1\n"),
+            state(b"realcam-long-exposure 2\n"),
+            "not a long-exposure state of realcam: the settings line is missing"
+        );
+        assert_eq!(
+            state(b"realcam-long-exposure 2\nf/2\n3 2\n1\n"),
             "not a long-exposure state of realcam: the size line \"3 2\" is not WIDTH HEIGHT CHANNELS"
         );
         assert_eq!(

@@ -359,9 +359,13 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     }
     let outputs = args.outputs()?;
     let state = args.sequence.state.as_deref();
+    // The frames are rendered up to the sensor and averaged; the film comes once, after.
+    let sensor = realcam::pipeline::planner::sensor_camera(camera);
+    // Every setting of the camera, so a resumed exposure is refused other settings.
+    let settings = format!("{sensor:?}");
     let mut exposure = match state.filter(|p| p.exists()) {
-        Some(path) => read_state(path, range)?,
-        None => LongExposure::default(),
+        Some(path) => read_state(path, range, &settings)?,
+        None => LongExposure::new(&settings),
     };
     let started = Instant::now();
     let total = range.frames.len();
@@ -372,8 +376,6 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let mut skipped = 0;
     let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
     let stop = AtomicBool::new(false);
-    // The frames are rendered up to the sensor and averaged; the film comes once, after.
-    let sensor = realcam::pipeline::planner::sensor_camera(camera);
     let mut session = Session::opening(args);
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
@@ -437,19 +439,52 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     Ok(())
 }
 
-/// The state of a stopped long exposure, all of whose frames are in `range`.
-fn read_state(path: &std::path::Path, range: &FrameRange) -> Result<LongExposure> {
+/// The state of a stopped long exposure, all of whose frames are in `range`, made with
+/// `settings` (a version 1 state has none and is taken as made with these).
+fn read_state(path: &std::path::Path, range: &FrameRange, settings: &str) -> Result<LongExposure> {
     let context = || format!("--state \"{}\"", path.display());
     let bytes = std::fs::read(path).with_context(context)?;
     let exposure = LongExposure::from_bytes(&bytes).with_context(context)?;
     if let Some(frame) = exposure.done().iter().find(|f| !range.frames.contains(f)) {
         bail!("{}: frame {frame} of the exposure is not in --frames \"{}\"", context(), range.text);
     }
+    if let Some((there, here)) = first_difference(exposure.settings(), settings) {
+        bail!(
+            "{}: the exposure was started with other camera settings ({there} there, {here} here); resume it \
+             with the same settings, or start another --state file",
+            context()
+        );
+    }
     Ok(exposure)
+}
+
+/// The first field (`name: value`) in which two settings lines differ; None when they are the
+/// same or `stored` is empty (a version 1 state).
+fn first_difference<'a>(stored: &'a str, current: &'a str) -> Option<(&'a str, &'a str)> {
+    if stored.is_empty() || stored == current {
+        return None;
+    }
+    // Debug's `Camera { lens: ThinLens { focal_length_mm: 50.0, f_number: 2.0, .. } .. }`: the
+    // fields without the struct names that open them or the braces that close them.
+    let fields = |s: &'a str| s.split(", ").map(|f| f.rsplit("{ ").next().unwrap_or(f).trim_end_matches([' ', '}']));
+    let pair = fields(stored).zip(fields(current)).find(|(a, b)| a != b);
+    Some(pair.unwrap_or((stored, current)))
 }
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_first_differing_camera_setting_is_named() {
+        let stored = "Camera { lens: ThinLens { focal_length_mm: 50.0, f_number: 2.0 }, blades: 6 }";
+        let current = "Camera { lens: ThinLens { focal_length_mm: 50.0, f_number: 5.6 }, blades: 6 }";
+        assert_eq!(super::first_difference(stored, current), Some(("f_number: 2.0", "f_number: 5.6")));
+        let current = "Camera { lens: ThinLens { focal_length_mm: 35.0, f_number: 2.0 }, blades: 6 }";
+        assert_eq!(super::first_difference(stored, current), Some(("focal_length_mm: 50.0", "focal_length_mm: 35.0")));
+        assert_eq!(super::first_difference(stored, stored), None);
+        // A version 1 state has no settings: any resume is taken as the same.
+        assert_eq!(super::first_difference("", current), None);
+    }
+
     #[test]
     fn farm_percent_reaches_100_only_at_the_end() {
         assert_eq!(super::farm_percent(1, 3), 33);
