@@ -255,7 +255,7 @@ mod tests {
             "not a long-exposure state of realcam: the first line is not \"realcam-long-exposure 2\""
         );
         assert_eq!(
-            state(b"realcam-long-exposure 2\n"),
+            state(b"realcam-long-exposure 2"),
             "not a long-exposure state of realcam: the settings line is missing"
         );
         assert_eq!(
