@@ -770,13 +770,14 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     assert_contains(err, &format!("wrote {}", dir.arg("out.exr")));
     assert_contains(err, &format!("wrote {}", dir.arg("out.png")));
     // Start-up: the GPU opened beside the EXR read; the time to the first submit covers the
-    // wait for it and the pipelines' creation.
+    // wait for it, the pipelines' creation and the recording.
     let startup =
         err.lines().find(|l| l.starts_with("start-up: ")).unwrap_or_else(|| panic!("no start-up line:\n{err}"));
     let numbers: Vec<f64> =
         startup.split(|c: char| !(c.is_ascii_digit() || c == '.')).filter_map(|t| t.parse().ok()).collect();
     let [first_submit_ms, waited_ms, pipelines_ms] = numbers[..] else { panic!("{startup}") };
     assert_contains(startup, "after the process started (waited for the GPU opened beside the read ");
+    assert_contains(startup, " ms; pipelines and recording ");
     assert!(first_submit_ms >= waited_ms + pipelines_ms && pipelines_ms > 0.0, "{startup}");
 
     // Chrome trace.

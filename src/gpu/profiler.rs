@@ -16,6 +16,8 @@ pub struct Profile {
     pub passes: Vec<PassTiming>,
     /// Host wall time from submit to fence.
     pub submit_wall_ms: f64,
+    /// When the work was submitted (host clock), for a caller's start-up time.
+    pub submitted_at: Option<std::time::Instant>,
 }
 
 impl Profile {
@@ -90,6 +92,7 @@ mod tests {
                 PassTiming { name: "bokeh".into(), start_ms: 1.5, gpu_ms: 2.25 },
             ],
             submit_wall_ms: 4.0,
+            submitted_at: None,
         };
         let json = p.chrome_trace_json();
         assert!(json.contains(r#""name":"bokeh","cat":"gpu","ph":"X","pid":1,"tid":1,"ts":1500.000,"dur":2250.000"#));

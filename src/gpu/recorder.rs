@@ -651,7 +651,13 @@ impl Recorder {
             }
             let data = self.downloads.iter().map(|(buffer, _)| buffer.read_f32()).collect();
             let checks = self.twin_checks.take().unwrap_or_default();
-            Ok((Profile { device: self.gpu.info().to_string(), passes, submit_wall_ms: wall_ms }, data, checks))
+            let profile = Profile {
+                device: self.gpu.info().to_string(),
+                passes,
+                submit_wall_ms: wall_ms,
+                submitted_at: Some(started),
+            };
+            Ok((profile, data, checks))
         }
     }
 }

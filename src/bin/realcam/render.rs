@@ -394,7 +394,7 @@ pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
     /// The GPU opening on another thread (`Session::opening`), joined by the first frame.
     opening: Option<std::thread::JoinHandle<Result<Gpu>>>,
-    /// How the first frame reached the GPU, for `--profile`; taken when printed.
+    /// How the first frame reached the GPU, for `--profile`'s start-up line; taken when printed.
     startup: Option<String>,
 }
 
@@ -432,9 +432,9 @@ impl Session {
     }
 
     /// The start-up line of `--profile` after the first frame: when its GPU work was submitted,
-    /// counted from the process's start.
+    /// counted from the process's start (None before, and after it was taken).
     pub fn take_startup(&mut self) -> Option<String> {
-        self.startup.take()
+        self.startup.take().filter(|line| line.starts_with("start-up: "))
     }
 
     /// The GPU, once a frame has opened it (the Python package's `Camera.device`).
@@ -446,26 +446,31 @@ impl Session {
     /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
     /// Vulkan validation messages are an error.
     fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
+        let mut created = None;
         let opened = match self.gpu.take() {
             Some(opened) => opened,
             None => {
                 let gpu = self.open_gpu(args)?;
-                let created = Instant::now();
+                created = Some(Instant::now());
                 let renderer = Renderer::new(&gpu, plan)?;
-                if let (Some(line), Some(start)) = (&mut self.startup, PROCESS_START.get()) {
-                    *line = format!(
-                        "start-up: the first frame submitted to the GPU {:.1} ms after the process started ({line}; \
-                         pipelines {:.1} ms)",
-                        ms_since(*start),
-                        ms_since(created)
-                    );
-                }
                 (gpu, renderer)
             }
         };
         let (gpu, renderer) = self.gpu.insert(opened);
         let messages_before = gpu.validation_message_count();
         let rendered = renderer.render(frame, plan, false)?;
+        // The first frame: from the process's start to its submit, and what came between.
+        if let (Some(created), Some(submitted), Some(start), Some(line)) =
+            (created, rendered.profile.submitted_at, PROCESS_START.get(), &mut self.startup)
+        {
+            let ms = |from: Instant| submitted.saturating_duration_since(from).as_secs_f64() * 1e3;
+            *line = format!(
+                "start-up: the first frame's GPU work submitted {:.1} ms after the process started ({line}; \
+                 pipelines and recording {:.1} ms)",
+                ms(*start),
+                ms(created)
+            );
+        }
         let messages = gpu.validation_message_count() - messages_before;
         if messages > 0 {
             bail!("{messages} Vulkan validation messages (see above)");
