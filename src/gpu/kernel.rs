@@ -312,6 +312,11 @@ impl<S: Twin> SpecializedKernel<S> {
         Ok(p)
     }
 
+    /// Compile the pipeline of `constants` now (a pass's `prepare`), not at its first dispatch.
+    pub fn prepare(&self, constants: &[u32]) -> GpuResult<()> {
+        self.pipeline(constants).map(|_| ())
+    }
+
     /// [`Kernel::dispatch_indirect`] with the pipeline of `constants`.
     pub fn dispatch_indirect(
         &self,

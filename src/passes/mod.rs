@@ -114,6 +114,13 @@ pub trait Pass: Sized + Send + Sync + 'static {
     /// Record one run: barriers (with the reason for each) and dispatches. Reads the frame's
     /// images it needs from `images` and replaces those it writes.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, params: &Self::Params) -> GpuResult<()>;
+
+    /// Create now the pipelines a run of `params` will need that [`Pass::new`] could not (those
+    /// specialised per run), so they compile beside the other passes' rather than while the
+    /// frame is recorded. Optional: a pipeline not prepared is created on its first dispatch.
+    fn prepare(&self, _params: &Self::Params) -> GpuResult<()> {
+        Ok(())
+    }
 }
 
 /// What a pass's plan decided.
@@ -176,6 +183,9 @@ fn create_erased<P: Pass>(gpu: &Gpu) -> GpuResult<Box<dyn RecordPass>> {
 
 /// A created pass, recording runs whose parameters it downcasts.
 pub trait RecordPass: Send + Sync {
+    /// [`Pass::prepare`] for one run.
+    fn prepare_run(&self, params: &(dyn Any + Send + Sync)) -> GpuResult<()>;
+
     fn record_run(
         &self,
         rec: &mut Recorder,
@@ -185,6 +195,13 @@ pub trait RecordPass: Send + Sync {
 }
 
 impl<P: Pass> RecordPass for P {
+    fn prepare_run(&self, params: &(dyn Any + Send + Sync)) -> GpuResult<()> {
+        match params.downcast_ref::<P::Params>() {
+            Some(p) => self.prepare(p),
+            None => Err(GpuError::Internal(format!("pass {}: a run's parameters are of another pass", P::NAME))),
+        }
+    }
+
     fn record_run(
         &self,
         rec: &mut Recorder,

@@ -27,7 +27,7 @@ use super::{dof_bin, dof_classify, dof_composite, dof_downsample, dof_level_gath
 use super::{dof_highlights, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
-use crate::gpu::{Gpu, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
+use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::BokehMode;
 use ash::vk;
@@ -173,6 +173,18 @@ impl Pass for TiledDof {
             level_lists: Kernel::new(gpu)?,
             level_gather: SpecializedKernel::new(gpu)?,
             composite: SpecializedKernel::new(gpu)?,
+        })
+    }
+
+    /// The gathers' and the composite's pipelines for this lens, compiled side by side.
+    fn prepare(&self, p: &TiledDofParams) -> GpuResult<()> {
+        let specialization = p.aperture_data.specialization(&p.aperture);
+        let constants = &specialization[..];
+        std::thread::scope(|scope| {
+            let gathers = scope.spawn(|| self.tile_gather.prepare(constants).and(self.level_gather.prepare(constants)));
+            let composite = self.composite.prepare(constants);
+            gathers.join().unwrap_or_else(|_| Err(GpuError::Internal("creating a pipeline panicked".into())))?;
+            composite
         })
     }
 
