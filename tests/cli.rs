@@ -108,6 +108,7 @@ where
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     let out = Command::new(env!("CARGO_BIN_EXE_realcam"))
         .args(&args)
+        .env_remove("OCIO")
         .envs(env.iter().copied())
         .current_dir(&dir.path)
         .env("REALCAM_CACHE_DIR", &dir.cache)
@@ -2215,8 +2216,58 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     assert_contains(
         &render(&dir, &unknown).failure(),
         "error: --colorspace \"sRGB - Texture\": not a colour space realcam knows; known: Linear Rec.709 (sRGB), \
-         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (OpenColorIO configs are not read yet)",
+         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (or any space of an OpenColorIO config: --config FILE, \
+         $OCIO)",
     );
+
+    // An OpenColorIO config's names, from --config or $OCIO; its errors name the config and the space.
+    let mut in_config = args.clone();
+    in_config.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--colorspace", "lin_ap0"]));
+    let err = render(&dir, &in_config).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: ACES2065-1 (--colorspace in OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5, \
+         not the file's chromaticities)",
+    );
+    assert_eq!(written(), xy(Chromaticities::ACES_AP0));
+    // The config knows "sRGB - Texture" (an alias of its sRGB-encoded Rec.709), which is no
+    // scene-linear input.
+    unknown.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5"]));
+    assert_contains(
+        &render(&dir, &unknown).failure(),
+        "error: --colorspace \"sRGB - Texture\": OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: \
+         colour space \"sRGB Encoded Rec.709 (sRGB)\" is not linear (realcam's passes add light, so the input must \
+         be scene-linear)",
+    );
+    let mut typo = args.clone();
+    typo.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--colorspace", "ACEScgg"]));
+    assert_contains(
+        &render(&dir, &typo).failure(),
+        "error: --colorspace \"ACEScgg\": OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: no \
+         colour space \"ACEScgg\"; its colour spaces: ",
+    );
+    let missing = dir.join("missing.ocio");
+    let mut from_env = args.clone();
+    from_env.extend(s(&["--colorspace", "ACEScg"]));
+    let mut all = s(&["render"]);
+    all.extend(from_env);
+    let missing_text = missing.display().to_string();
+    assert_contains(
+        &realcam_env(&dir, all, &[("OCIO", missing_text.as_str())]).failure(),
+        &format!(
+            "error: $OCIO: OpenColorIO config \"{}\": cannot read it: '{}' file does not exist.",
+            missing.display(),
+            missing.display()
+        ),
+    );
+    let mut all = s(&["render", "--colorspace", "lin_ap1"]);
+    all.extend(args.clone());
+    let err = realcam_env(&dir, all, &[("OCIO", "ocio://cg-config-latest")]).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: ACEScg (--colorspace in OpenColorIO config ocio://cg-config-latest from $OCIO); luminance",
+    );
+    assert_eq!(written(), xy(Chromaticities::ACES_AP1));
 
     // Green on the line from red to blue (binary fractions, exact in the file): no RGB space.
     let white = xy(Chromaticities::REC709)[3];

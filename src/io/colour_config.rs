@@ -51,7 +51,7 @@ impl ColourConfig {
         match std::env::var("OCIO") {
             Ok(path) if !path.is_empty() => {
                 let mut c = Self::load(&path)?;
-                c.name = format!("{} ($OCIO)", c.name);
+                c.name = format!("{} from $OCIO", c.name);
                 Ok(Some(c))
             }
             _ => Ok(None),

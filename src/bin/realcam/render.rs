@@ -6,6 +6,7 @@ use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::gpu::Gpu;
+use realcam::io::colour_config::ColourConfig;
 use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources, ScenePasses};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
@@ -163,6 +164,11 @@ pub struct RenderArgs {
     /// file's chromaticities attribute, else Rec.709.
     #[arg(long)]
     colorspace: Option<String>,
+    /// An OpenColorIO config whose colour space names --colorspace takes: a file (.ocio,
+    /// .ocioz) or a built-in one (ocio://cg-config-latest, ocio://studio-config-latest);
+    /// default: $OCIO when set.
+    #[arg(long, value_name = "FILE")]
+    config: Option<String>,
     /// Keep the input files' other channels (depth, vectors, AOVs, other view layers) in the
     /// output EXR, as stored; a name the output has already gets its pass as prefix (depth.R).
     #[arg(long = "keep-layers")]
@@ -593,13 +599,26 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
 /// weights.
 fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> {
     let from_file = frame.working_space;
-    let (name, how) = match &args.colorspace {
-        Some(text) => {
+    let config = match &args.config {
+        Some(path) => Some(ColourConfig::load(path).context("--config")?),
+        None => ColourConfig::from_env().context("$OCIO")?,
+    };
+    let (name, how) = match (&args.colorspace, &config) {
+        (Some(text), Some(config)) => {
+            let (name, space) = config.working_space(text).context(format!("--colorspace {text:?}"))?;
+            frame.working_space = space;
+            // A file stores its chromaticities as 32-bit floats.
+            let coords = |c: &Chromaticities| [c.red, c.green, c.blue, c.white].concat();
+            let same = coords(&from_file).iter().zip(coords(&space)).all(|(a, b)| (a - b).abs() < 1e-6);
+            let differs = if same { "" } else { ", not the file's chromaticities" };
+            (name, format!("--colorspace in OpenColorIO config {}{differs}", config.name))
+        }
+        (Some(text), None) => {
             let Some((name, space)) = named_space(text) else {
                 let known: Vec<&str> = NAMED_SPACES.iter().map(|(name, _, _)| *name).collect();
                 bail!(
-                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (OpenColorIO configs are \
-                     not read yet)",
+                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (or any space of an \
+                     OpenColorIO config: --config FILE, $OCIO)",
                     known.join(", ")
                 );
             };
@@ -607,7 +626,7 @@ fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> 
             let differs = if space_name(&from_file) != Some(name) { ", not the file's chromaticities" } else { "" };
             (name.to_string(), format!("--colorspace{differs}"))
         }
-        None => {
+        (None, _) => {
             let name = space_name(&from_file).unwrap_or("custom primaries");
             (name.to_string(), "the colour file's chromaticities, or Rec.709 without them".to_string())
         }
