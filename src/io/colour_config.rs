@@ -28,6 +28,18 @@ pub enum ColourConfigError {
     NotLinear { config: String, space: String },
     #[error("OpenColorIO config {config}: colour space {space:?} has no usable primaries: {message}")]
     Primaries { config: String, space: String, message: String },
+    #[error("OpenColorIO config {config}: no display {display:?}; its displays: {known}")]
+    UnknownDisplay { config: String, display: String, known: String },
+    #[error("OpenColorIO config {config}: display {display:?} has no view {view:?} for {space:?}; its views: {known}")]
+    UnknownView { config: String, display: String, view: String, space: String, known: String },
+}
+
+/// A display and view of a config and the processor from a working space to its display
+/// values (encoded for the display: an sRGB display's values carry the sRGB curve).
+pub struct DisplayView {
+    pub display: String,
+    pub view: String,
+    pub processor: ocio::CpuProcessor,
 }
 
 /// A loaded config and how it was named (the file, `$OCIO`'s file, or the built-in URI).
@@ -111,6 +123,45 @@ impl ColourConfig {
     }
 }
 
+impl ColourConfig {
+    /// The processor from `space` through `display`'s `view`; without them the config's
+    /// default display (its first active one) and that display's default view for `space`
+    /// (viewing rules, else its first active view): for the ACES configs the sRGB display and
+    /// the ACES output transform.
+    pub fn display_view(
+        &self,
+        space: &str,
+        display: Option<&str>,
+        view: Option<&str>,
+    ) -> Result<DisplayView, ColourConfigError> {
+        let c = &self.config;
+        let config = self.name.clone();
+        let displays: Vec<String> = (0..c.num_displays()).map(|i| c.display(i)).collect();
+        let display = display.map_or_else(|| c.default_display(), str::to_string);
+        if !displays.contains(&display) {
+            return Err(ColourConfigError::UnknownDisplay { config, display, known: displays.join(", ") });
+        }
+        let views: Vec<String> = (0..c.num_views(&display)).map(|i| c.view(&display, i)).collect();
+        let view = match view {
+            Some(v) => v.to_string(),
+            None => c
+                .default_view_for_color_space(&display, space)
+                .ok()
+                .filter(|v| !v.is_empty())
+                .unwrap_or_else(|| c.default_view(&display)),
+        };
+        if !views.contains(&view) {
+            let known = views.join(", ");
+            return Err(ColourConfigError::UnknownView { config, display, view, space: space.to_string(), known });
+        }
+        let processor = c
+            .get_display_view_processor(space, &display, &view)
+            .map_err(|e| ColourConfigError::Convert { config, space: space.to_string(), message: e.to_string() })?
+            .default_cpu_processor();
+        Ok(DisplayView { display, view, processor })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,5 +210,27 @@ mod tests {
         assert!(e.contains("colour space \"sRGB Encoded Rec.709 (sRGB)\" is not linear"), "{e}");
         let e = ColourConfig::load("/nonexistent/config.ocio").err().unwrap().to_string();
         assert!(e.starts_with("OpenColorIO config \"/nonexistent/config.ocio\": cannot read it:"), "{e}");
+    }
+
+    /// The ACES config's defaults are the sRGB display's ACES 2.0 output transform; 18 % grey
+    /// in ACEScg shows at 0.3491874 (PyOpenColorIO 2.6.0, scripts/ocio-reference.py).
+    #[test]
+    fn the_default_display_view_is_the_aces_output_transform() {
+        let c = ColourConfig::load("ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5").unwrap();
+        let dv = c.display_view("ACEScg", None, None).unwrap();
+        assert_eq!((dv.display.as_str(), dv.view.as_str()), ("sRGB - Display", "ACES 2.0 - SDR 100 nits (Rec.709)"));
+        let mut grey = [0.18f32; 3];
+        dv.processor.apply_rgb(&mut grey);
+        assert!(grey.iter().all(|v| (v - 0.3491874).abs() < 1e-5), "{grey:?}");
+        let e = c.display_view("ACEScg", Some("sRGB - Display"), Some("Filmic")).err().unwrap().to_string();
+        assert!(
+            e.starts_with(
+                "OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: display \"sRGB - Display\" has no view \
+                 \"Filmic\" for \"ACEScg\"; its views: "
+            ),
+            "{e}"
+        );
+        let e = c.display_view("ACEScg", Some("sRGB"), None).err().unwrap().to_string();
+        assert!(e.contains("no display \"sRGB\"; its displays: sRGB - Display, "), "{e}");
     }
 }
