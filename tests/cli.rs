@@ -2279,3 +2279,67 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     );
     assert_contains(&err, "are not an RGB space: the primaries lie on one line");
 }
+
+/// The PNG preview through an OpenColorIO config's display and view (issue 16, part 1): a flat
+/// ACEScg frame through optics that leave it flat (the ideal lens, no exposure gain, no
+/// vignetting, no flare) shows OpenColorIO's own display values of its colour, within one level
+/// of 255; the film curve is not applied on top. An unknown display or view names the config's
+/// list; --display without a config is refused.
+#[test]
+fn the_png_preview_goes_through_the_configs_display_and_view() {
+    let dir = TestDir::new("ocio_preview");
+    let flat = SynthScene {
+        width: 16,
+        height: 12,
+        background_depth_m: 3.0,
+        background_rgb: [0.5, 0.25, 0.1],
+        planes: Vec::new(),
+        highlights: Vec::new(),
+    };
+    let mut args = scene_args(&dir, "flat", &flat);
+    let png = dir.arg("out.png");
+    args.extend(s(&["--lens", "ideal", "--focal-length", "50", "--fstop", "2", "--focus", "3", "--no-exposure"]));
+    args.extend(s(&["--no-vignetting", "--no-flare", "--png", &png, "--colorspace", "ACEScg"]));
+    let mut with_config = args.clone();
+    with_config.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--explain"]));
+    let err = render(&dir, &with_config).success().stderr;
+    assert_contains(
+        &err,
+        "preview: OpenColorIO display \"sRGB - Display\", view \"ACES 2.0 - SDR 100 nits (Rec.709)\" (from ACEScg)",
+    );
+    assert_contains(&err, "film curve: not used: the PNG preview's tone curve is the config's view");
+    // PyOpenColorIO 2.6.0's display values of ACEScg (0.5, 0.25, 0.1) through that view
+    // (tests/ocio.rs, SRGB_ACES2_VIEW; scripts/ocio-reference.py).
+    let want = [0.6656523f32, 0.3968449, 0.2320423].map(|v| v * 255.0);
+    let samples = png_samples(&dir.join("out.png"));
+    assert_eq!(samples.len(), 16 * 12 * 3);
+    for px in samples.chunks_exact(3) {
+        assert!((0..3).all(|c| (f32::from(px[c]) - want[c]).abs() <= 1.0), "{px:?} vs OpenColorIO {want:?}");
+    }
+    // Without the config: the film curve and the sRGB curve, another picture.
+    let without = png_samples(&{
+        render(&dir, &args).success();
+        dir.join("out.png")
+    });
+    assert!(without.chunks_exact(3).all(|px| (f32::from(px[0]) - want[0]).abs() > 3.0), "{:?}", &without[..3]);
+
+    let mut view = with_config.clone();
+    view.extend(s(&["--view", "Filmic"]));
+    assert_contains(
+        &render(&dir, &view).failure(),
+        "error: --view: OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: display \"sRGB - Display\" \
+         has no view \"Filmic\" for \"ACEScg\"; its views: ACES 2.0 - SDR 100 nits (Rec.709), Un-tone-mapped, ",
+    );
+    let mut display = with_config.clone();
+    display.extend(s(&["--display", "sRGB"]));
+    assert_contains(
+        &render(&dir, &display).failure(),
+        "error: --display: OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: no display \"sRGB\"; \
+         its displays: sRGB - Display, Display P3 - Display, ",
+    );
+    args.extend(s(&["--display", "sRGB - Display"]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        "error: --display/--view: no OpenColorIO config (--config FILE, $OCIO)",
+    );
+}

@@ -6,7 +6,11 @@
 // The reference numbers as the script printed them (7 decimals, more than an f32 holds).
 #![allow(clippy::excessive_precision)]
 
+mod support;
+
+use realcam::io::colour_config::ColourConfig;
 use realcam::optics::colour::{mul_vec, Chromaticities};
+use realcam::pipeline::render::preview_rgba;
 
 const CONFIG: &str = "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5";
 
@@ -82,4 +86,44 @@ fn bradford_from_the_primaries_gives_the_aces_configs_matrix() {
             assert!((same_white[i][j] - plain[i][j]).abs() < 1e-12);
         }
     }
+}
+
+/// The PNG preview through the config's default display and view (the sRGB display's ACES 2.0
+/// output transform) gives OpenColorIO's display values of the seven ACEScg colours; HDR, NaN,
+/// infinite and negative values come out as finite display values, in [0, 1] within 1e-5 (the
+/// PNG clamps).
+#[test]
+fn the_preview_through_the_configs_view_is_opencolorios() {
+    let config = ColourConfig::load(CONFIG).unwrap();
+    let view = config.display_view("ACEScg", None, None).unwrap();
+    let camera = support::dof_camera(50.0, 2.0, 3.0, 0);
+    let rgba: Vec<f32> = SRGB_ACES2_VIEW.iter().flat_map(|(rgb, _)| [rgb[0], rgb[1], rgb[2], 1.0]).collect();
+    let preview = preview_rgba(&camera, &Chromaticities::ACES_AP1, &rgba, 7, Some(&view));
+    for (px, (input, want)) in preview.chunks_exact(4).zip(SRGB_ACES2_VIEW) {
+        let d = max_diff([px[0], px[1], px[2]], want);
+        assert!(d <= 1e-5, "{input:?}: preview {px:?}, OpenColorIO {want:?}");
+    }
+    let hard = [1e6, 1e6, 1e6, 1.0, f32::NAN, 0.2, 0.2, 1.0, f32::INFINITY, 0.0, 0.0, 1.0, -1.0, 0.5, 0.5, 1.0];
+    let preview = preview_rgba(&camera, &Chromaticities::ACES_AP1, &hard, 4, Some(&view));
+    for px in preview.chunks_exact(4) {
+        assert!(px[..3].iter().all(|v| (-1e-5..=1.0 + 1e-5).contains(v)), "{px:?}");
+    }
+}
+
+/// Without a config the preview converts to Rec.709 with the white adapted by Bradford, as
+/// OpenColorIO does: through the linear film it is the config's "Un-tone-mapped" view (the
+/// conversion and the sRGB curve) within 1e-5 for colours inside Rec.709.
+#[test]
+fn the_preview_without_a_config_is_the_untone_mapped_view() {
+    let config = ColourConfig::load(CONFIG).unwrap();
+    let view = config.display_view("ACEScg", Some("sRGB - Display"), Some("Un-tone-mapped")).unwrap();
+    let camera = support::dof_camera(50.0, 2.0, 3.0, 0);
+    let rgba = [0.18, 0.18, 0.18, 1.0, 1.0, 1.0, 1.0, 1.0, 0.5, 0.25, 0.1, 1.0, 0.3, 0.3, 0.5, 1.0];
+    let ours = preview_rgba(&camera, &Chromaticities::ACES_AP1, &rgba, 4, None);
+    let theirs = preview_rgba(&camera, &Chromaticities::ACES_AP1, &rgba, 4, Some(&view));
+    for (a, b) in ours.chunks_exact(4).zip(theirs.chunks_exact(4)) {
+        assert!(max_diff([a[0], a[1], a[2]], [b[0], b[1], b[2]]) <= 1e-5, "{a:?} vs OpenColorIO {b:?}");
+    }
+    // ACES's white shows white (kept as XYZ it would be warm: 1.0, 0.99, 0.93 or so).
+    assert!(ours[4..7].iter().all(|v| (v - 1.0).abs() < 1e-5), "{:?}", &ours[4..7]);
 }

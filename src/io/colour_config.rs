@@ -37,6 +37,8 @@ pub enum ColourConfigError {
 /// A display and view of a config and the processor from a working space to its display
 /// values (encoded for the display: an sRGB display's values carry the sRGB curve).
 pub struct DisplayView {
+    /// The config's name of the colour space the processor starts from.
+    pub space: String,
     pub display: String,
     pub view: String,
     pub processor: ocio::CpuProcessor,
@@ -158,7 +160,7 @@ impl ColourConfig {
             .get_display_view_processor(space, &display, &view)
             .map_err(|e| ColourConfigError::Convert { config, space: space.to_string(), message: e.to_string() })?
             .default_cpu_processor();
-        Ok(DisplayView { display, view, processor })
+        Ok(DisplayView { space: space.to_string(), display, view, processor })
     }
 }
 

@@ -32,7 +32,7 @@ pub use exr_write::{
     encode_exr_channels, encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrAttribute, ExrCompression,
     ExrWriteOptions,
 };
-pub use png::{encode_png_srgb, write_png_srgb};
+pub use png::{encode_png, write_png};
 
 use std::path::{Path, PathBuf};
 

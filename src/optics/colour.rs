@@ -153,6 +153,16 @@ pub const NAMED_SPACES: [(&str, &[&str], Chromaticities); 5] = [
     ("Linear P3-D65", &["linearp3d65", "linp3d65", "p3d65"], Chromaticities::P3_D65),
 ];
 
+/// The sRGB OETF (IEC 61966-2-1 sec. 5.2, eq. 5): a linear value in [0, 1] encoded for an
+/// sRGB display. In f32: the preview's pixels are f32.
+pub fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 /// The Bradford cone response matrix, XYZ to the sharpened LMS (ICC.1:2010 annex E.3).
 const BRADFORD: [[f64; 3]; 3] = [[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]];
 
