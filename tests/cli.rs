@@ -2203,6 +2203,7 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     let err = render(&dir, &args).success().stderr;
     assert_contains(&err, "colour space: ACEScg (the colour file's chromaticities");
     assert_contains(&err, "luminance = 0.2722 R + 0.6741 G + 0.0537 B");
+    assert_contains(&err, "chromatic effects at 628.8, 532.9, 467.2 nm (the primaries' dominant wavelengths)");
     assert_eq!(written(), xy(Chromaticities::ACES_AP1));
 
     // --colorspace wins.

@@ -676,7 +676,11 @@ fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<(String,
         }
     };
     let [r, g, b] = frame.working_space.luminance_weights();
-    let line = format!("colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B");
+    let [nm_r, nm_g, nm_b] = frame.channel_wavelengths_nm();
+    let line = format!(
+        "colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B; chromatic effects at \
+         {nm_r:.1}, {nm_g:.1}, {nm_b:.1} nm (the primaries' dominant wavelengths)"
+    );
     let wants_view = args.png.is_some() || args.display.is_some() || args.view.is_some();
     let display_view = match (&config, config_space) {
         (Some(config), Some(space)) if wants_view => {
