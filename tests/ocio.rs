@@ -103,6 +103,10 @@ fn the_preview_through_the_configs_view_is_opencolorios() {
         let d = max_diff([px[0], px[1], px[2]], want);
         assert!(d <= 1e-5, "{input:?}: preview {px:?}, OpenColorIO {want:?}");
     }
+    // A frame large enough to be split over the cores: every pixel as alone.
+    let large: Vec<f32> = rgba.iter().copied().cycle().take(4 * 7 * 5000).collect();
+    let split = preview_rgba(&camera, &Chromaticities::ACES_AP1, &large, 7, Some(&view));
+    assert!(split.chunks_exact(28).all(|row| row == preview.as_slice()));
     let hard = [1e6, 1e6, 1e6, 1.0, f32::NAN, 0.2, 0.2, 1.0, f32::INFINITY, 0.0, 0.0, 1.0, -1.0, 0.5, 0.5, 1.0];
     let preview = preview_rgba(&camera, &Chromaticities::ACES_AP1, &hard, 4, Some(&view));
     for px in preview.chunks_exact(4) {

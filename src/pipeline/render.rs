@@ -148,7 +148,15 @@ pub fn preview_rgba(
     use crate::optics::colour::{mul_vec, srgb_oetf, Chromaticities};
     let mut out = rgba.to_vec();
     if let Some(view) = view {
-        view.processor.apply_rgba_slice(&mut out);
+        // The ACES 2.0 output transform costs about 0.75 us a pixel on one core (10x the film
+        // curve): spread over the cores.
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let chunk_px = (out.len() / 4).div_ceil(threads).max(16384);
+        std::thread::scope(|scope| {
+            for part in out.chunks_mut(4 * chunk_px) {
+                scope.spawn(|| view.processor.apply_rgba_slice(part));
+            }
+        });
         return out;
     }
     if *space != Chromaticities::REC709 {
