@@ -108,6 +108,7 @@ where
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
     let out = Command::new(env!("CARGO_BIN_EXE_realcam"))
         .args(&args)
+        .env_remove("OCIO")
         .envs(env.iter().copied())
         .current_dir(&dir.path)
         .env("REALCAM_CACHE_DIR", &dir.cache)
@@ -2225,6 +2226,7 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     let err = render(&dir, &args).success().stderr;
     assert_contains(&err, "colour space: ACEScg (the colour file's chromaticities");
     assert_contains(&err, "luminance = 0.2722 R + 0.6741 G + 0.0537 B");
+    assert_contains(&err, "chromatic effects at 628.8, 532.9, 467.2 nm (the primaries' dominant wavelengths)");
     assert_eq!(written(), xy(Chromaticities::ACES_AP1));
 
     // --colorspace wins.
@@ -2238,8 +2240,58 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     assert_contains(
         &render(&dir, &unknown).failure(),
         "error: --colorspace \"sRGB - Texture\": not a colour space realcam knows; known: Linear Rec.709 (sRGB), \
-         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (OpenColorIO configs are not read yet)",
+         ACEScg, ACES2065-1, Linear Rec.2020, Linear P3-D65 (or any space of an OpenColorIO config: --config FILE, \
+         $OCIO)",
     );
+
+    // An OpenColorIO config's names, from --config or $OCIO; its errors name the config and the space.
+    let mut in_config = args.clone();
+    in_config.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--colorspace", "lin_ap0"]));
+    let err = render(&dir, &in_config).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: ACES2065-1 (--colorspace in OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5, \
+         not the file's chromaticities)",
+    );
+    assert_eq!(written(), xy(Chromaticities::ACES_AP0));
+    // The config knows "sRGB - Texture" (an alias of its sRGB-encoded Rec.709), which is no
+    // scene-linear input.
+    unknown.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5"]));
+    assert_contains(
+        &render(&dir, &unknown).failure(),
+        "error: --colorspace \"sRGB - Texture\": OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: \
+         colour space \"sRGB Encoded Rec.709 (sRGB)\" is not linear (realcam's passes add light, so the input must \
+         be scene-linear)",
+    );
+    let mut typo = args.clone();
+    typo.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--colorspace", "ACEScgg"]));
+    assert_contains(
+        &render(&dir, &typo).failure(),
+        "error: --colorspace \"ACEScgg\": OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: no \
+         colour space \"ACEScgg\"; its colour spaces: ",
+    );
+    let missing = dir.join("missing.ocio");
+    let mut from_env = args.clone();
+    from_env.extend(s(&["--colorspace", "ACEScg"]));
+    let mut all = s(&["render"]);
+    all.extend(from_env);
+    let missing_text = missing.display().to_string();
+    assert_contains(
+        &realcam_env(&dir, all, &[("OCIO", missing_text.as_str())]).failure(),
+        &format!(
+            "error: $OCIO: OpenColorIO config \"{}\": cannot read it: '{}' file does not exist.",
+            missing.display(),
+            missing.display()
+        ),
+    );
+    let mut all = s(&["render", "--colorspace", "lin_ap1"]);
+    all.extend(args.clone());
+    let err = realcam_env(&dir, all, &[("OCIO", "ocio://cg-config-latest")]).success().stderr;
+    assert_contains(
+        &err,
+        "colour space: ACEScg (--colorspace in OpenColorIO config ocio://cg-config-latest from $OCIO); luminance",
+    );
+    assert_eq!(written(), xy(Chromaticities::ACES_AP1));
 
     // Green on the line from red to blue (binary fractions, exact in the file): no RGB space.
     let white = xy(Chromaticities::REC709)[3];
@@ -2250,4 +2302,68 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
         &format!("error: color: \"{}\": its chromaticities attribute is unusable: chromaticities", color.display()),
     );
     assert_contains(&err, "are not an RGB space: the primaries lie on one line");
+}
+
+/// The PNG preview through an OpenColorIO config's display and view (issue 16, part 1): a flat
+/// ACEScg frame through optics that leave it flat (the ideal lens, no exposure gain, no
+/// vignetting, no flare) shows OpenColorIO's own display values of its colour, within one level
+/// of 255; the film curve is not applied on top. An unknown display or view names the config's
+/// list; --display without a config is refused.
+#[test]
+fn the_png_preview_goes_through_the_configs_display_and_view() {
+    let dir = TestDir::new("ocio_preview");
+    let flat = SynthScene {
+        width: 16,
+        height: 12,
+        background_depth_m: 3.0,
+        background_rgb: [0.5, 0.25, 0.1],
+        planes: Vec::new(),
+        highlights: Vec::new(),
+    };
+    let mut args = scene_args(&dir, "flat", &flat);
+    let png = dir.arg("out.png");
+    args.extend(s(&["--lens", "ideal", "--focal-length", "50", "--fstop", "2", "--focus", "3", "--no-exposure"]));
+    args.extend(s(&["--no-vignetting", "--no-flare", "--png", &png, "--colorspace", "ACEScg"]));
+    let mut with_config = args.clone();
+    with_config.extend(s(&["--config", "ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5", "--explain"]));
+    let err = render(&dir, &with_config).success().stderr;
+    assert_contains(
+        &err,
+        "preview: OpenColorIO display \"sRGB - Display\", view \"ACES 2.0 - SDR 100 nits (Rec.709)\" (from ACEScg)",
+    );
+    assert_contains(&err, "film curve: not used: the PNG preview's tone curve is the config's view");
+    // PyOpenColorIO 2.6.0's display values of ACEScg (0.5, 0.25, 0.1) through that view
+    // (tests/ocio.rs, SRGB_ACES2_VIEW; scripts/ocio-reference.py).
+    let want = [0.6656523f32, 0.3968449, 0.2320423].map(|v| v * 255.0);
+    let samples = png_samples(&dir.join("out.png"));
+    assert_eq!(samples.len(), 16 * 12 * 3);
+    for px in samples.chunks_exact(3) {
+        assert!((0..3).all(|c| (f32::from(px[c]) - want[c]).abs() <= 1.0), "{px:?} vs OpenColorIO {want:?}");
+    }
+    // Without the config: the film curve and the sRGB curve, another picture.
+    let without = png_samples(&{
+        render(&dir, &args).success();
+        dir.join("out.png")
+    });
+    assert!(without.chunks_exact(3).all(|px| (f32::from(px[0]) - want[0]).abs() > 3.0), "{:?}", &without[..3]);
+
+    let mut view = with_config.clone();
+    view.extend(s(&["--view", "Filmic"]));
+    assert_contains(
+        &render(&dir, &view).failure(),
+        "error: --view: OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: display \"sRGB - Display\" \
+         has no view \"Filmic\" for \"ACEScg\"; its views: ACES 2.0 - SDR 100 nits (Rec.709), Un-tone-mapped, ",
+    );
+    let mut display = with_config.clone();
+    display.extend(s(&["--display", "sRGB"]));
+    assert_contains(
+        &render(&dir, &display).failure(),
+        "error: --display: OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: no display \"sRGB\"; \
+         its displays: sRGB - Display, Display P3 - Display, ",
+    );
+    args.extend(s(&["--display", "sRGB - Display"]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        "error: --display/--view: no OpenColorIO config (--config FILE, $OCIO)",
+    );
 }

@@ -79,3 +79,39 @@ fn an_acescg_frame_and_its_rec709_conversion_render_the_same_light() {
     let error = worst(&convert(&out_misread, &ap1_to_709), &out_709);
     assert!(error > 1e-3, "the weights made no difference ({error:.2e}): the test does not reach the sprites");
 }
+
+/// The chromatic effects take the working space's channel wavelengths (the primaries' dominant
+/// wavelengths, src/optics/wavelengths.rs): a lens with longitudinal colour (red, the C line,
+/// 0.4 mm behind green; blue, the F line, 0.3 mm in front) offsets an ACEScg frame's red and
+/// blue CoC by its values at 628.8 / 533.0 / 467.2 nm and a Rec.709 frame's at 611.4 / 549.1 /
+/// 464.2 nm; the diffraction patterns are computed at the same wavelengths.
+#[test]
+fn the_chromatic_effects_take_the_working_spaces_wavelengths() {
+    let mut camera = support::dof_camera(50.0, 2.0, 1.0, 6);
+    camera.longitudinal_color_mm = Some([0.4, -0.3]);
+    let (color, depth) = scene().render();
+    let frame = |space| Frame {
+        working_space: space,
+        ..Frame::new(color.width, color.height, color.data.clone(), depth.data.clone())
+    };
+    for (space, nm, line) in [
+        (Chromaticities::ACES_AP1, [628.8, 533.0, 467.2], "(at 629/533/467 nm)"),
+        (Chromaticities::REC709, [611.4, 549.1, 464.2], "(at 611/549/464 nm)"),
+    ] {
+        let frame = frame(space);
+        let got = frame.channel_wavelengths_nm();
+        assert!((0..3).all(|c| (got[c] - nm[c]).abs() < 0.06), "{got:?}");
+        let planned = plan(&frame, &camera);
+        assert!(planned.explain().contains(line), "{}", planned.explain());
+        let pitch_mm = planned.facts.pixel_pitch_mm;
+        let want = camera.longitudinal_color_coc_px(pitch_mm, got).unwrap();
+        let offsets = planned.facts.channel_offsets_px.unwrap();
+        assert_eq!(offsets, want);
+        camera.bokeh = realcam::model::camera::BokehMode::Diffraction;
+        // A small frame in focus keeps the diffraction tables small.
+        let small = Frame { working_space: space, ..Frame::new(8, 8, vec![0.1; 256], vec![1.0; 64]) };
+        let diffraction = plan(&small, &camera).explain();
+        camera.bokeh = realcam::model::camera::BokehMode::Tiled;
+        assert!(diffraction.contains(&format!("at {}", &line[4..15])), "{diffraction}");
+    }
+}

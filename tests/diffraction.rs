@@ -24,7 +24,7 @@ const FOCUS_M: f32 = 0.63;
 const FAR_M: f32 = 1e10;
 
 fn settings() -> PsfTableSettings {
-    PsfTableSettings { depth_levels: 16, subpixel: 2, max_radius_px: 16, integration_samples: 4 }
+    PsfTableSettings { depth_levels: 16, subpixel: 2, max_radius_px: 16, ..Default::default() }
 }
 
 /// Run the pass once; returns the RGBA output and the pass's GPU time in ms.
@@ -267,7 +267,13 @@ fn a_far_point_becomes_a_disk_of_the_geometric_coc_and_a_focused_point_an_airy_s
 #[test]
 fn tables_sum_to_one_and_extreme_depths_stay_finite() {
     let lens = lens();
-    let small = PsfTableSettings { depth_levels: 6, subpixel: 2, max_radius_px: 12, integration_samples: 3 };
+    let small = PsfTableSettings {
+        depth_levels: 6,
+        subpixel: 2,
+        max_radius_px: 12,
+        integration_samples: 3,
+        ..Default::default()
+    };
     // (min, max): from 0 (clamped), only the focus distance, nearer than the focal length
     // (50 mm), out to 1e10 and infinity.
     let ranges = [(0.0, 1e10), (0.63, 0.63), (0.02, 0.045), (0.03, f64::INFINITY), (1e10, 1e10)];

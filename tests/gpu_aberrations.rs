@@ -128,6 +128,14 @@ fn lateral_colour_displaces_red_and_blue_by_the_tabled_amounts() {
     let tables = quadratic(0.0, 1.5, -1.5);
     let camera = camera_with(tables.clone());
     let (rgba, _, _) = render(&gpu, &frame, &camera);
+    // The lens file's red (C line) and blue (F line) at Rec.709's channel wavelengths (611,
+    // 549, 464 nm), against green: the parabola through the lines gives red 0.7625 and blue
+    // -0.6951 of the lens file's +-1.5 (src/optics/wavelengths.rs).
+    let tables = tables.at_wavelengths(frame.channel_wavelengths_nm());
+    // At 6 mm the lens file's tables are +-1.5 % times (6 / 4.8)^2 (quadratic()).
+    let edge = |t: &HeightTable| t.values[12] / (6.0f64 / 4.8).powi(2);
+    assert!((edge(&tables.red_extra_percent) / 1.5 - 0.7625).abs() < 1e-3, "{tables:?}");
+    assert!((edge(&tables.blue_extra_percent) / 1.5 + 0.6951).abs() < 1e-3, "{tables:?}");
     let centroid_x = |c: usize| {
         let (mut m, mut s) = (0.0, 0.0);
         for y in 60..84 {
@@ -157,7 +165,7 @@ fn distortion_pass_matches_its_cpu_twin() {
     let frame = lines_frame(&[20, 50, 90, 130]);
     let (rgba, plan, _) = render(&gpu, &frame, &camera);
     let params = &plan.params::<Distortion>().unwrap().push;
-    let cpu = distortion_cpu(&frame.color, params, &tables);
+    let cpu = distortion_cpu(&frame.color, params, &tables.at_wavelengths(frame.channel_wavelengths_nm()));
     let worst = rgba.iter().zip(&cpu).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst < 2e-3, "GPU vs CPU distortion differ by {worst}");
     // Tables that are all zero: the pass is not recorded.

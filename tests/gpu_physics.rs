@@ -732,7 +732,9 @@ fn aperture_image_shapes_the_bokeh_upright_behind_and_inverted_in_front() {
 
 #[test]
 fn longitudinal_colour_gives_each_channel_its_own_disk() {
-    // Red focusing 0.4 mm behind green and blue 0.3 mm in front: each channel's image of a point
+    // Red (the C line) focusing 0.4 mm behind green and blue (the F line) 0.3 mm in front; at
+    // Rec.709's channel wavelengths (611, 549, 464 nm) red 0.2749 mm behind the green channel
+    // and blue 0.1647 mm in front (src/optics/wavelengths.rs). Each channel's image of a point
     // is the disk of its own CoC, C_c = D' (v w / (1 + delta w) - 1) with w = 1/f - 1/u (eq 5.3
     // with the channel's film offset, as for field curvature). Behind focus red is the smaller
     // disk, in front of focus the larger; in focus both become disks while green stays a point.
@@ -751,6 +753,8 @@ fn longitudinal_colour_gives_each_channel_its_own_disk() {
             let frame = testdata_frame(scene, &camera);
             let (rgba, plan, profile) = render(&gpu, &frame, &camera);
             assert!(plan.runs("longitudinal_color") && profile.pass_ms("longitudinal_color").is_some());
+            let [red_mm, blue_mm] = camera.longitudinal_color_mm_at(frame.channel_wavelengths_nm()).unwrap();
+            assert!((red_mm - 0.2749).abs() < 5e-4 && (blue_mm + 0.1647).abs() < 5e-4, "{red_mm} {blue_mm}");
             let pitch_mm = camera.pixel_pitch_mm(frame.width, frame.height);
             let l = &camera.lens;
             let v = l.image_distance_mm();

@@ -15,6 +15,7 @@
 //!   run never touches an existing file; targets that are not regular files, or are inputs, are
 //!   refused before any work.
 
+pub mod colour_config;
 pub mod exr_read;
 pub mod exr_write;
 pub mod film_file;
@@ -31,7 +32,7 @@ pub use exr_write::{
     encode_exr_channels, encode_exr_rgba, write_exr_channels, write_exr_rgba, ExrAttribute, ExrCompression,
     ExrWriteOptions,
 };
-pub use png::{encode_png_srgb, write_png_srgb};
+pub use png::{encode_png, write_png};
 
 use std::path::{Path, PathBuf};
 

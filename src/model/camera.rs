@@ -710,14 +710,22 @@ impl Camera {
         }
     }
 
-    /// Longitudinal colour as an offset of the signed CoC of the red and blue channels (px),
-    /// for a lens focused at `focus`. A channel whose image surface lies delta behind green's
+    /// Longitudinal colour at the channel wavelengths `nm` (R, G, B): the red and the blue
+    /// channel's focus minus the green channel's (mm), from the lens file's C- and F-line values
+    /// ([`crate::optics::wavelengths::channel_values`]).
+    pub fn longitudinal_color_mm_at(&self, nm: [f64; 3]) -> Option<[f64; 2]> {
+        let [red_mm, blue_mm] = self.longitudinal_color_mm?;
+        Some(crate::optics::wavelengths::channel_values(red_mm, blue_mm, nm))
+    }
+
+    /// Longitudinal colour as an offset of the signed CoC of the red and blue channels (px) at
+    /// the channel wavelengths `nm`, for a lens focused at `focus`. A channel whose image surface lies delta behind green's
     /// sees, in the form of src/passes/coc.rs (Kyaw 2013 eq 5.3 with a film offset),
     /// C_c = D' (v w / (1 + delta w) - 1) with w = 1/f - 1/u, i.e. C_c - C_g = -D' delta w / (1 + delta w);
     /// w is taken at the focus distance (w = 1/v), which is exact at the focus plane and off by
     /// at most the magnification's fraction elsewhere.
-    pub fn longitudinal_color_coc_px(&self, pixel_pitch_mm: f64) -> Option<[f64; 2]> {
-        let [red_mm, blue_mm] = self.longitudinal_color_mm?;
+    pub fn longitudinal_color_coc_px(&self, pixel_pitch_mm: f64, nm: [f64; 3]) -> Option<[f64; 2]> {
+        let [red_mm, blue_mm] = self.longitudinal_color_mm_at(nm)?;
         let l = &self.lens;
         let v_mm = l.image_distance_mm();
         let aperture_px = v_mm / (l.effective_f_number() * l.pupil_magnification) / pixel_pitch_mm;

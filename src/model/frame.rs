@@ -29,6 +29,13 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// The wavelengths (nm) the red, green and blue channels stand for in the chromatic
+    /// effects: the working space's dominant wavelengths
+    /// ([`crate::optics::wavelengths::channel_wavelengths_nm`]).
+    pub fn channel_wavelengths_nm(&self) -> [f64; 3] {
+        crate::optics::wavelengths::channel_wavelengths_nm(&self.working_space)
+    }
+
     /// From loaded passes. Ray-length depth becomes planar depth using the camera's focal length
     /// and pixel pitch (the renderer's pinhole): z = d / sqrt(1 + (r_px * pitch / f)^2).
     pub fn from_passes(passes: ScenePasses, camera: &Camera, depth_kind: DepthKind) -> Frame {

@@ -101,6 +101,19 @@ impl Chromaticities {
     pub fn rgb_to(&self, to: &Chromaticities) -> [[f64; 3]; 3] {
         mul(&inverse(&to.rgb_to_xyz()), &self.rgb_to_xyz())
     }
+
+    /// The matrix taking RGB in `self` to RGB in `to` with `self`'s white adapted to `to`'s by
+    /// the linearised Bradford transform (ICC.1:2010 annex E.3, eq. E.10-E.12: cone responses
+    /// scaled by the ratio of the two whites'), as OpenColorIO's ACES configs convert between
+    /// spaces of different whites: RGB (1, 1, 1) stays (1, 1, 1). With equal whites it is
+    /// [`Chromaticities::rgb_to`].
+    pub fn rgb_to_adapted(&self, to: &Chromaticities) -> [[f64; 3]; 3] {
+        let cone = |[x, y]: [f64; 2]| mul_vec(&BRADFORD, [x / y, 1.0, (1.0 - x - y) / y]);
+        let (src, dst) = (cone(self.white), cone(to.white));
+        let scale = [[dst[0] / src[0], 0.0, 0.0], [0.0, dst[1] / src[1], 0.0], [0.0, 0.0, dst[2] / src[2]]];
+        let adapt = mul(&inverse(&BRADFORD), &mul(&scale, &BRADFORD));
+        mul(&inverse(&to.rgb_to_xyz()), &mul(&adapt, &self.rgb_to_xyz()))
+    }
 }
 
 /// A colour space by name: realcam's short names and the names of the ACES configs of
@@ -139,6 +152,19 @@ pub const NAMED_SPACES: [(&str, &[&str], Chromaticities); 5] = [
     ("Linear Rec.2020", &["linearrec2020", "linrec2020", "rec2020"], Chromaticities::REC2020),
     ("Linear P3-D65", &["linearp3d65", "linp3d65", "p3d65"], Chromaticities::P3_D65),
 ];
+
+/// The sRGB OETF (IEC 61966-2-1 sec. 5.2, eq. 5): a linear value in [0, 1] encoded for an
+/// sRGB display. In f32: the preview's pixels are f32.
+pub fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The Bradford cone response matrix, XYZ to the sharpened LMS (ICC.1:2010 annex E.3).
+const BRADFORD: [[f64; 3]; 3] = [[0.8951, 0.2664, -0.1614], [-0.7502, 1.7135, 0.0367], [0.0389, -0.0685, 1.0296]];
 
 fn determinant(m: &[[f64; 3]; 3]) -> f64 {
     m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])

@@ -83,6 +83,31 @@ impl DistortionTables {
         r
     }
 
+    /// The tables at the channel wavelengths `nm` (R, G, B) instead of the lens file's lines
+    /// (red C, blue F, against green): at each height, red's and blue's extra against the green
+    /// channel from the parabola through the three lines
+    /// ([`crate::optics::wavelengths::channel_values`]); green's table stays (the reference).
+    pub fn at_wavelengths(&self, nm: [f64; 3]) -> DistortionTables {
+        let heights = &self.green_percent.image_height_mm;
+        let extra: Vec<[f64; 2]> = heights
+            .iter()
+            .map(|&h| {
+                crate::optics::wavelengths::channel_values(
+                    self.red_extra_percent.at(h),
+                    self.blue_extra_percent.at(h),
+                    nm,
+                )
+            })
+            .collect();
+        let table =
+            |c: usize| HeightTable { image_height_mm: heights.clone(), values: extra.iter().map(|e| e[c]).collect() };
+        DistortionTables {
+            green_percent: self.green_percent.clone(),
+            red_extra_percent: table(0),
+            blue_extra_percent: table(1),
+        }
+    }
+
     pub fn is_zero(&self) -> bool {
         self.green_percent.is_zero() && self.red_extra_percent.is_zero() && self.blue_extra_percent.is_zero()
     }

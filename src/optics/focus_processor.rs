@@ -124,11 +124,20 @@ pub struct PsfTableSettings {
     pub max_radius_px: u32,
     /// Integration resolution per pixel: annuli `1/n` pixel wide, spread at `1/n` pixel steps.
     pub integration_samples: u32,
+    /// The wavelength (nm) of each channel's pattern (R, G, B): the working space's
+    /// ([`crate::model::frame::Frame::channel_wavelengths_nm`]).
+    pub wavelengths_nm: [f64; 3],
 }
 
 impl Default for PsfTableSettings {
     fn default() -> Self {
-        PsfTableSettings { depth_levels: 64, subpixel: 2, max_radius_px: 32, integration_samples: 4 }
+        PsfTableSettings {
+            depth_levels: 64,
+            subpixel: 2,
+            max_radius_px: 32,
+            integration_samples: 4,
+            wavelengths_nm: WAVELENGTHS_RGB_NM,
+        }
     }
 }
 
@@ -374,7 +383,8 @@ pub fn build_tables(
     let coc_radius_px: Vec<f64> = defocus.iter().map(|w| w * px_per_defocus_m).collect();
 
     let largest_coc_px = coc_radius_px.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let halo_px = HALO_AIRY_RADII * geometry.airy_radius_px(WAVELENGTHS_RGB_NM[0]) + 1.0;
+    let longest_nm = settings.wavelengths_nm.iter().fold(0.0f64, |m, &l| m.max(l));
+    let halo_px = HALO_AIRY_RADII * geometry.airy_radius_px(longest_nm) + 1.0;
     let radius_px = ((largest_coc_px + halo_px).ceil() as u32).clamp(1, max_radius_px);
     let cut_px = radius_px as f64 + 0.5 - (subpixel - 1) as f64 / subpixel as f64;
     let clipped_levels = coc_radius_px.iter().filter(|r| r.abs() > cut_px).count();
@@ -404,7 +414,7 @@ pub fn build_tables(
                         let spec = TableSpec {
                             geometry: &geometry,
                             defocus_per_mm: defocus[level] * 1e-3,
-                            wavelength_nm: WAVELENGTHS_RGB_NM[channel],
+                            wavelength_nm: settings.wavelengths_nm[channel],
                             radius_px,
                             subpixel,
                             cut_px,
@@ -641,7 +651,7 @@ mod tests {
     const PITCH_MM: f64 = 0.0112;
 
     fn small_settings() -> PsfTableSettings {
-        PsfTableSettings { depth_levels: 9, subpixel: 2, max_radius_px: 16, integration_samples: 4 }
+        PsfTableSettings { depth_levels: 9, subpixel: 2, max_radius_px: 16, ..Default::default() }
     }
 
     #[test]
@@ -768,7 +778,7 @@ mod tests {
     fn a_sub_pixel_psf_lands_in_its_pixel() {
         // Huge pixels (0.2 mm) at f/2: the in-focus Airy disk is 1/100 of a pixel.
         let lens = ThinLens::new(50.0, 2.0, 2000.0).unwrap();
-        let settings = PsfTableSettings { depth_levels: 3, subpixel: 2, max_radius_px: 4, integration_samples: 4 };
+        let settings = PsfTableSettings { depth_levels: 3, subpixel: 2, max_radius_px: 4, ..Default::default() };
         let t = build_tables(&lens, 0.2, 1.9, 2.1, &settings);
         let k = t.mapping.knot_level;
         let centre = t.entries() / 2;
@@ -850,7 +860,13 @@ mod tests {
 
     #[test]
     fn clipped_levels_are_reported_and_renormalised() {
-        let settings = PsfTableSettings { depth_levels: 5, subpixel: 1, max_radius_px: 6, integration_samples: 2 };
+        let settings = PsfTableSettings {
+            depth_levels: 5,
+            subpixel: 1,
+            max_radius_px: 6,
+            integration_samples: 2,
+            ..Default::default()
+        };
         let t = build_tables(&lens(), PITCH_MM, 0.4, 1e10, &settings);
         assert_eq!(t.radius_px, 6);
         assert!(t.clipped_levels >= 2, "{}", t.clipped_levels);

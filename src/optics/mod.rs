@@ -30,6 +30,7 @@ pub mod prescription;
 pub mod sensor;
 pub mod shutter;
 pub mod spherical;
+pub mod wavelengths;
 
 pub use dof::{dof_limits, dof_report, CocCriterion, DofLimits};
 pub use film::FilmCurve;

@@ -163,8 +163,10 @@ impl Pass for Diffraction {
         if let Some(gated) = input.dof_method_gate(BokehMode::Diffraction) {
             return gated;
         }
+        let nm = input.frame.channel_wavelengths_nm();
         let settings = PsfTableSettings {
             subpixel: 1,
+            wavelengths_nm: nm,
             max_radius_px: (0.5 * f.max_coc_px).ceil().max(1.0) as u32 + 4,
             ..Default::default()
         };
@@ -173,9 +175,12 @@ impl Pass for Diffraction {
         let (w, h) = input.size();
         let push = DiffractionPush::new(&tables, w, h);
         let why = format!(
-            "--bokeh diffraction: Potmesil & Chakravarty focus processor, {} depth tables of radius {} px at 650/550/450 nm, gathered over the whole frame",
+            "--bokeh diffraction: Potmesil & Chakravarty focus processor, {} depth tables of radius {} px at {:.0}/{:.0}/{:.0} nm, gathered over the whole frame",
             tables.levels(),
-            tables.radius_px
+            tables.radius_px,
+            nm[0],
+            nm[1],
+            nm[2]
         );
         Decision::run(DiffractionParams { push, tables: Arc::new(tables) }, why)
     }

@@ -123,11 +123,17 @@ impl Pass for Distortion {
         match &input.camera.distortion {
             Some(tables) if !tables.is_zero() => {
                 let frame = input.frame;
+                let nm = frame.channel_wavelengths_nm();
+                let tables = &tables.at_wavelengths(nm);
                 let why = format!(
-                    "the lens's tables: distortion up to {:.2}%, lateral colour up to {:.3}% (red) and {:.3}% (blue)",
+                    "the lens's tables: distortion up to {:.2}%, lateral colour up to {:.3}% (red) and {:.3}% (blue) \
+                     at {:.0}/{:.0}/{:.0} nm",
                     tables.green_percent.max_abs(),
                     tables.red_extra_percent.max_abs(),
-                    tables.blue_extra_percent.max_abs()
+                    tables.blue_extra_percent.max_abs(),
+                    nm[0],
+                    nm[1],
+                    nm[2]
                 );
                 let push = DistortionPush {
                     size: [frame.width as i32, frame.height as i32],

@@ -61,11 +61,15 @@ impl Pass for LongitudinalColor {
 
     fn plan(input: &PlanInput<'_>) -> Decision<[i32; 2]> {
         let (camera, f) = (input.camera, &input.facts);
-        let (Some([red_mm, blue_mm]), Some([r, b])) = (camera.longitudinal_color_mm, f.channel_offsets_px) else {
+        let nm = input.frame.channel_wavelengths_nm();
+        let (Some([red_mm, blue_mm]), Some([r, b])) = (camera.longitudinal_color_mm_at(nm), f.channel_offsets_px)
+        else {
             return Decision::skip("the lens file has no longitudinal_color");
         };
         let shifts = format!(
-            "red focuses {red_mm:+.4} mm and blue {blue_mm:+.4} mm from green: CoC offsets {r:+.2} / {b:+.2} px"
+            "red focuses {red_mm:+.4} mm and blue {blue_mm:+.4} mm from green (at {:.0}/{:.0}/{:.0} nm): CoC \
+             offsets {r:+.2} / {b:+.2} px",
+            nm[0], nm[1], nm[2]
         );
         if !f.channel_offsets_visible() {
             Decision::skip(format!("{shifts}, at most {VISIBLE_COC_PX} px: invisible"))

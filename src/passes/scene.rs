@@ -82,7 +82,7 @@ impl SceneFacts {
         }
         // Longitudinal colour shifts the red and blue CoC by constants: an in-focus point gets
         // red and blue disks of those diameters. Visible when one exceeds a pixel.
-        let channel_offsets_px = camera.longitudinal_color_coc_px(pitch_mm);
+        let channel_offsets_px = camera.longitudinal_color_coc_px(pitch_mm, frame.channel_wavelengths_nm());
         if let Some([r, b]) = channel_offsets_px.filter(|o| offsets_visible(*o)) {
             coc_range_px = (coc_range_px.0 + r.min(b).min(0.0), coc_range_px.1 + r.max(b).max(0.0));
         }

@@ -6,6 +6,7 @@ use crate::motion_args::MotionArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use realcam::gpu::Gpu;
+use realcam::io::colour_config::{ColourConfig, ColourConfigError, DisplayView};
 use realcam::io::output::Outputs;
 use realcam::io::{self, DepthKind, ExrWriteOptions, Image, MemoryBudget, PassSources, ScenePasses};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
@@ -15,7 +16,7 @@ use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPA
 use realcam::pipeline::planner::{self, Plan};
 use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 /// When the process started (`main` sets it first), for `--profile`'s start-up line.
@@ -172,6 +173,19 @@ pub struct RenderArgs {
     /// file's chromaticities attribute, else Rec.709.
     #[arg(long)]
     colorspace: Option<String>,
+    /// An OpenColorIO config whose colour space names --colorspace takes: a file (.ocio,
+    /// .ocioz) or a built-in one (ocio://cg-config-latest, ocio://studio-config-latest);
+    /// default: $OCIO when set.
+    #[arg(long, value_name = "FILE")]
+    config: Option<String>,
+    /// The PNG preview's display in the OpenColorIO config (--config, $OCIO); default: the
+    /// config's default display ("sRGB - Display" in the ACES configs).
+    #[arg(long)]
+    display: Option<String>,
+    /// The PNG preview's view of --display: its tone curve (the ACES configs: the ACES output
+    /// transform); default: the display's default view for the working space.
+    #[arg(long)]
+    view: Option<String>,
     /// Keep the input files' other channels (depth, vectors, AOVs, other view layers) in the
     /// output EXR, as stored; a name the output has already gets its pass as prefix (depth.R).
     #[arg(long = "keep-layers")]
@@ -498,12 +512,15 @@ impl Session {
 /// One frame rendered, ready to write.
 pub struct RenderedFrame {
     pub image: Image,
-    /// The PNG preview's image (through the film curve), when a PNG is asked for.
+    /// The PNG preview's image (display-encoded: through the config's view, or the film curve
+    /// and the sRGB curve), when a PNG is asked for.
     pub preview: Option<Image>,
     /// The input's other channels (--keep-layers), written beside R, G, B, A.
     pub kept_channels: Vec<(String, Vec<f32>)>,
     /// The colour space of `image`.
     pub working_space: Chromaticities,
+    /// The OpenColorIO display and view of the preview, when a config gives one.
+    pub display_view: Option<Arc<DisplayView>>,
     pub exr_options: ExrWriteOptions,
     pub profile: realcam::gpu::Profile,
 }
@@ -534,6 +551,8 @@ pub struct LoadedFrame {
     pub kept_channels: Vec<(String, Vec<f32>)>,
     channel_report: String,
     space_line: String,
+    /// The OpenColorIO display and view of the preview, when a config gives one.
+    display_view: Option<Arc<DisplayView>>,
     focal_length_warning: Option<String>,
 }
 
@@ -551,7 +570,7 @@ pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -
     let kept_channels = std::mem::take(&mut passes.kept_channels);
     let render_focal_length = passes.render_focal_length_mm.clone();
     let mut frame = Frame::from_passes(passes, camera, args.depth_kind.into());
-    let space_line = choose_working_space(args, &mut frame)?;
+    let (space_line, display_view) = choose_working_space(args, &mut frame)?;
     let plan = planner::plan(&frame, camera);
     // The render's focal length: what the input says, else --focal-length's.
     let render_mm = render_focal_length.as_ref().map_or(camera.lens.focal_length_mm, |(mm, _)| *mm);
@@ -559,7 +578,7 @@ pub fn plan_frame(args: &RenderArgs, camera: &Camera, mut passes: ScenePasses) -
         Some((_, attribute)) => format!("{w} (its {attribute} attribute)"),
         None => w,
     });
-    Ok(LoadedFrame { frame, plan, kept_channels, channel_report, space_line, focal_length_warning })
+    Ok(LoadedFrame { frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning })
 }
 
 /// Renders the `loaded` frame through `camera` on the session's GPU; `--explain` and the
@@ -570,18 +589,25 @@ pub fn render_loaded(
     loaded: LoadedFrame,
     session: &mut Session,
 ) -> Result<RenderedFrame> {
-    let LoadedFrame { frame, plan, kept_channels, channel_report, space_line, focal_length_warning } = loaded;
+    let LoadedFrame { frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning } =
+        loaded;
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
         let (_, _, w, h) = frame.display_window;
         eprintln!("{}", camera.explain_camera(w, h));
-        let film = if args.film_in_exr {
-            "in the EXR and the PNG (--film-in-exr)"
-        } else {
-            "in the PNG preview only; the EXR is scene-referred"
+        let film = match (args.film_in_exr, &display_view) {
+            (true, None) => "in the EXR and the PNG (--film-in-exr)",
+            (false, None) => "in the PNG preview only; the EXR is scene-referred",
+            (true, Some(_)) => "in the EXR (--film-in-exr); the PNG shows the EXR through the config's view",
+            (false, Some(_)) => {
+                "not used: the PNG preview's tone curve is the config's view; the EXR is scene-referred"
+            }
         };
         eprintln!("  film curve: {film}");
         eprintln!("  {space_line}");
+        if let Some(dv) = &display_view {
+            eprintln!("  preview: OpenColorIO display {:?}, view {:?} (from {})", dv.display, dv.view, dv.space);
+        }
         eprintln!("{}", plan.explain());
     }
     if let Some(warning) = &focal_length_warning {
@@ -601,7 +627,13 @@ pub fn render_loaded(
     }
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let preview = args.png.as_ref().map(|_| Image {
-        data: realcam::pipeline::render::preview_rgba(camera, &frame.working_space, &image.data, image.width),
+        data: realcam::pipeline::render::preview_rgba(
+            camera,
+            &frame.working_space,
+            &image.data,
+            image.width,
+            display_view.as_deref(),
+        ),
         ..image.clone()
     });
     let (_, _, w, h) = frame.display_window;
@@ -615,7 +647,15 @@ pub fn render_loaded(
         compression: args.compression.into(),
     };
     let working_space = frame.working_space;
-    Ok(RenderedFrame { image, preview, kept_channels, exr_options, working_space, profile: rendered.profile })
+    Ok(RenderedFrame {
+        image,
+        preview,
+        kept_channels,
+        exr_options,
+        working_space,
+        display_view,
+        profile: rendered.profile,
+    })
 }
 
 /// The output's EXR attributes: the camera's for a `width` x `height` frame, and the colour
@@ -648,7 +688,7 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
     let exr = io::encode_exr_channels(&args.output, image.width, image.height, &channels, &exr_options)?;
     outputs.write("output", &exr)?;
     if let Some(png) = &args.png {
-        outputs.write("png", &io::encode_png_srgb(png, rendered.preview.as_ref().unwrap_or(image))?)?;
+        outputs.write("png", &io::encode_png(png, rendered.preview.as_ref().unwrap_or(image))?)?;
     }
     if args.trace.is_some() {
         outputs.write("trace", rendered.profile.chrome_trace_json().as_bytes())?;
@@ -659,16 +699,29 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
 
 /// Sets the frame's colour space from --colorspace (else it keeps the colour file's
 /// chromaticities, or Rec.709); the `--explain` line that says which, with its luminance
-/// weights.
-fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> {
+/// weights; and the preview's display and view when there is an OpenColorIO config.
+fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<(String, Option<Arc<DisplayView>>)> {
     let from_file = frame.working_space;
-    let (name, how) = match &args.colorspace {
-        Some(text) => {
+    let config = match &args.config {
+        Some(path) => Some(ColourConfig::load(path).context("--config")?),
+        None => ColourConfig::from_env().context("$OCIO")?,
+    };
+    let mut config_space = None;
+    let (name, how) = match (&args.colorspace, &config) {
+        (Some(text), Some(config)) => {
+            let (name, space) = config.working_space(text).context(format!("--colorspace {text:?}"))?;
+            frame.working_space = space;
+            config_space = Some(name.clone());
+            // A file stores its chromaticities as 32-bit floats.
+            let differs = if same_space(&from_file, &space) { "" } else { ", not the file's chromaticities" };
+            (name, format!("--colorspace in OpenColorIO config {}{differs}", config.name))
+        }
+        (Some(text), None) => {
             let Some((name, space)) = named_space(text) else {
                 let known: Vec<&str> = NAMED_SPACES.iter().map(|(name, _, _)| *name).collect();
                 bail!(
-                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (OpenColorIO configs are \
-                     not read yet)",
+                    "--colorspace {text:?}: not a colour space realcam knows; known: {} (or any space of an \
+                     OpenColorIO config: --config FILE, $OCIO)",
                     known.join(", ")
                 );
             };
@@ -676,13 +729,52 @@ fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<String> 
             let differs = if space_name(&from_file) != Some(name) { ", not the file's chromaticities" } else { "" };
             (name.to_string(), format!("--colorspace{differs}"))
         }
-        None => {
+        (None, _) => {
             let name = space_name(&from_file).unwrap_or("custom primaries");
+            // The config's space of these primaries: the one of realcam's name, else its
+            // scene_linear role.
+            if let Some(config) = &config {
+                config_space = [name, "scene_linear"]
+                    .into_iter()
+                    .filter_map(|n| config.working_space(n).ok())
+                    .find(|(_, space)| same_space(space, &from_file))
+                    .map(|(n, _)| n);
+            }
             (name.to_string(), "the colour file's chromaticities, or Rec.709 without them".to_string())
         }
     };
     let [r, g, b] = frame.working_space.luminance_weights();
-    Ok(format!("colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B"))
+    let [nm_r, nm_g, nm_b] = frame.channel_wavelengths_nm();
+    let line = format!(
+        "colour space: {name} ({how}); luminance = {r:.4} R + {g:.4} G + {b:.4} B; chromatic effects at \
+         {nm_r:.1}, {nm_g:.1}, {nm_b:.1} nm (the primaries' dominant wavelengths)"
+    );
+    let wants_view = args.png.is_some() || args.display.is_some() || args.view.is_some();
+    let display_view = match (&config, config_space) {
+        (Some(config), Some(space)) if wants_view => {
+            let dv = config.display_view(&space, args.display.as_deref(), args.view.as_deref()).map_err(|e| {
+                let flag = if matches!(e, ColourConfigError::UnknownDisplay { .. }) { "--display" } else { "--view" };
+                anyhow::Error::new(e).context(flag)
+            })?;
+            Some(Arc::new(dv))
+        }
+        (Some(config), None) if args.display.is_some() || args.view.is_some() => bail!(
+            "--display/--view: OpenColorIO config {} has no colour space of the input's primaries ({name}); \
+             name it with --colorspace",
+            config.name
+        ),
+        (None, _) if args.display.is_some() || args.view.is_some() => {
+            bail!("--display/--view: no OpenColorIO config (--config FILE, $OCIO)")
+        }
+        _ => None,
+    };
+    Ok((line, display_view))
+}
+
+/// The same primaries and white within 1e-6 (a file stores them as 32-bit floats).
+fn same_space(a: &Chromaticities, b: &Chromaticities) -> bool {
+    let coords = |c: &Chromaticities| [c.red, c.green, c.blue, c.white].concat();
+    coords(a).iter().zip(coords(b)).all(|(x, y)| (x - y).abs() < 1e-6)
 }
 
 fn indent(text: &str) -> String {

@@ -372,6 +372,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let mut progress = Progress::new(total);
     let mut exr_options = None;
     let mut working_space = realcam::optics::colour::Chromaticities::REC709;
+    let mut display_view = None;
     let mut failed = None;
     let mut skipped = 0;
     let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
@@ -392,6 +393,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
                     exposure.add(frame, &rendered.image)?;
                     exr_options = Some(rendered.exr_options);
                     working_space = rendered.working_space;
+                    display_view = rendered.display_view;
                     if let Some(path) = state {
                         realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
                     }
@@ -420,7 +422,13 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let average = exposure.image()?;
     let image = if camera.film_on_output { session.expose_on_film(args, camera, average)? } else { average };
     let preview = args.png.as_ref().map(|_| realcam::io::Image {
-        data: realcam::pipeline::render::preview_rgba(camera, &working_space, &image.data, image.width),
+        data: realcam::pipeline::render::preview_rgba(
+            camera,
+            &working_space,
+            &image.data,
+            image.width,
+            display_view.as_deref(),
+        ),
         ..image.clone()
     });
     let attributes = output_attributes(camera, image.width, image.height, &working_space);
@@ -431,6 +439,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
         kept_channels: Vec::new(),
         exr_options,
         working_space,
+        display_view,
         profile: Default::default(),
     };
     for path in write_outputs(args, outputs, &rendered)? {

@@ -1,0 +1,238 @@
+//! OpenColorIO configs (issue 16, part 1) through the pure-Rust `ocio` crate: a config from a
+//! file, `$OCIO`, or a built-in one (`ocio://cg-config-latest`, ...), and the working colour
+//! space a config names, as the [`Chromaticities`] the passes use.
+//!
+//! A space's primaries come from the config's own processor: RGB (1, 0, 0), (0, 1, 0),
+//! (0, 0, 1) converted to the default built-in config's "Linear Rec.709 (sRGB)" through the
+//! configs' interchange roles. OpenColorIO adapts whites by Bradford, so that matrix is
+//! [`Chromaticities::rgb_to_adapted`] of the space's primaries: a space realcam knows by its
+//! primaries (ACEScg, ACES2065-1, Rec.709, Rec.2020, P3-D65) is recognised within 1e-4 and keeps
+//! its own primaries and white; any other linear space gets the primaries of that matrix with
+//! D65's white (its luminance weights are then the adapted space's).
+
+use crate::optics::colour::{Chromaticities, NAMED_SPACES};
+
+/// The built-in config's linear Rec.709 space every space is measured against.
+const REC709_BUILTIN: &str = "Linear Rec.709 (sRGB)";
+
+/// Every failure of a config; each names the config and, where relevant, the colour space.
+#[derive(Debug, thiserror::Error)]
+pub enum ColourConfigError {
+    #[error("OpenColorIO config {config}: cannot read it: {message}")]
+    Load { config: String, message: String },
+    #[error("OpenColorIO config {config}: no colour space {space:?}; its colour spaces: {known}")]
+    UnknownSpace { config: String, space: String, known: String },
+    #[error("OpenColorIO config {config}: colour space {space:?} cannot be converted to Rec.709: {message}")]
+    Convert { config: String, space: String, message: String },
+    #[error("OpenColorIO config {config}: colour space {space:?} is not linear (realcam's passes add light, so the input must be scene-linear)")]
+    NotLinear { config: String, space: String },
+    #[error("OpenColorIO config {config}: colour space {space:?} has no usable primaries: {message}")]
+    Primaries { config: String, space: String, message: String },
+    #[error("OpenColorIO config {config}: no display {display:?}; its displays: {known}")]
+    UnknownDisplay { config: String, display: String, known: String },
+    #[error("OpenColorIO config {config}: display {display:?} has no view {view:?} for {space:?}; its views: {known}")]
+    UnknownView { config: String, display: String, view: String, space: String, known: String },
+}
+
+/// A display and view of a config and the processor from a working space to its display
+/// values (encoded for the display: an sRGB display's values carry the sRGB curve).
+pub struct DisplayView {
+    /// The config's name of the colour space the processor starts from.
+    pub space: String,
+    pub display: String,
+    pub view: String,
+    pub processor: ocio::CpuProcessor,
+}
+
+/// A loaded config and how it was named (the file, `$OCIO`'s file, or the built-in URI).
+pub struct ColourConfig {
+    pub config: ocio::Config,
+    pub name: String,
+}
+
+impl ColourConfig {
+    /// A config file (`.ocio`, `.ocioz`) or a built-in config's URI (`ocio://cg-config-latest`).
+    pub fn load(path_or_uri: &str) -> Result<Self, ColourConfigError> {
+        let name =
+            if path_or_uri.starts_with("ocio://") { path_or_uri.to_string() } else { format!("\"{path_or_uri}\"") };
+        let config = ocio::Config::create_from_file(path_or_uri)
+            .map_err(|e| ColourConfigError::Load { config: name.clone(), message: e.to_string() })?;
+        Ok(ColourConfig { config, name })
+    }
+
+    /// The config `$OCIO` names, if it is set and not empty.
+    pub fn from_env() -> Result<Option<Self>, ColourConfigError> {
+        match std::env::var("OCIO") {
+            Ok(path) if !path.is_empty() => {
+                let mut c = Self::load(&path)?;
+                c.name = format!("{} from $OCIO", c.name);
+                Ok(Some(c))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The config's name of `space` (an alias or role resolved), and its primaries and white.
+    pub fn working_space(&self, space: &str) -> Result<(String, Chromaticities), ColourConfigError> {
+        let config = self.name.clone();
+        let Some(cs) = self.config.get_color_space(space) else {
+            let n = self.config.num_color_spaces();
+            let known: Vec<&str> = (0..n).map(|i| self.config.color_space_name_by_index(i)).collect();
+            return Err(ColourConfigError::UnknownSpace { config, space: space.to_string(), known: known.join(", ") });
+        };
+        let canonical = cs.name().to_string();
+        let err =
+            |message: String| ColourConfigError::Convert { config: config.clone(), space: canonical.clone(), message };
+        let processor = ocio::Config::get_processor_to_builtin_color_space(&self.config, &canonical, REC709_BUILTIN)
+            .map_err(|e| err(e.to_string()))?
+            .default_cpu_processor();
+        let apply = |v: [f64; 3]| {
+            let mut rgb = v.map(|x| x as f32);
+            processor.apply_rgb(&mut rgb);
+            rgb.map(f64::from)
+        };
+        let columns = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(apply);
+        let m = [0, 1, 2].map(|i| [0, 1, 2].map(|j| columns[j][i]));
+        // Linear: a mix of the primaries, and the same mix 16 times brighter, land where the
+        // matrix says.
+        for v in [[0.3, 0.5, 0.2], [4.8, 8.0, 3.2]] {
+            let want = crate::optics::colour::mul_vec(&m, v);
+            let got = apply(v);
+            let scale = want.iter().fold(1.0f64, |s, x| s.max(x.abs()));
+            if (0..3).any(|i| !got[i].is_finite() || (got[i] - want[i]).abs() > 1e-4 * scale) {
+                return Err(ColourConfigError::NotLinear { config, space: canonical });
+            }
+        }
+        let close = |a: &[[f64; 3]; 3]| (0..3).all(|i| (0..3).all(|j| (a[i][j] - m[i][j]).abs() < 1e-4));
+        if let Some((_, _, c)) = NAMED_SPACES.iter().find(|(_, _, c)| close(&c.rgb_to_adapted(&Chromaticities::REC709)))
+        {
+            return Ok((canonical, *c));
+        }
+        // The adapted primaries: XYZ (D65) of each column, as xy.
+        let xyz = Chromaticities::REC709.rgb_to_xyz();
+        let xy = |col: [f64; 3]| {
+            let p = crate::optics::colour::mul_vec(&xyz, col);
+            let sum = p[0] + p[1] + p[2];
+            [p[0] / sum, p[1] / sum]
+        };
+        Chromaticities::new(xy(columns[0]), xy(columns[1]), xy(columns[2]), Chromaticities::REC709.white)
+            .map(|c| (canonical.clone(), c))
+            .map_err(|e| ColourConfigError::Primaries {
+                config: config.clone(),
+                space: canonical.clone(),
+                message: e.to_string(),
+            })
+    }
+}
+
+impl ColourConfig {
+    /// The processor from `space` through `display`'s `view`; without them the config's
+    /// default display (its first active one) and that display's default view for `space`
+    /// (viewing rules, else its first active view): for the ACES configs the sRGB display and
+    /// the ACES output transform.
+    pub fn display_view(
+        &self,
+        space: &str,
+        display: Option<&str>,
+        view: Option<&str>,
+    ) -> Result<DisplayView, ColourConfigError> {
+        let c = &self.config;
+        let config = self.name.clone();
+        let displays: Vec<String> = (0..c.num_displays()).map(|i| c.display(i)).collect();
+        let display = display.map_or_else(|| c.default_display(), str::to_string);
+        if !displays.contains(&display) {
+            return Err(ColourConfigError::UnknownDisplay { config, display, known: displays.join(", ") });
+        }
+        let views: Vec<String> = (0..c.num_views(&display)).map(|i| c.view(&display, i)).collect();
+        let view = match view {
+            Some(v) => v.to_string(),
+            None => c
+                .default_view_for_color_space(&display, space)
+                .ok()
+                .filter(|v| !v.is_empty())
+                .unwrap_or_else(|| c.default_view(&display)),
+        };
+        if !views.contains(&view) {
+            let known = views.join(", ");
+            return Err(ColourConfigError::UnknownView { config, display, view, space: space.to_string(), known });
+        }
+        let processor = c
+            .get_display_view_processor(space, &display, &view)
+            .map_err(|e| ColourConfigError::Convert { config, space: space.to_string(), message: e.to_string() })?
+            .default_cpu_processor();
+        Ok(DisplayView { space: space.to_string(), display, view, processor })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_aces_configs_spaces_have_realcams_primaries() {
+        let c = ColourConfig::load("ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5").unwrap();
+        for (name, want) in [
+            ("ACEScg", Chromaticities::ACES_AP1),
+            ("ACES2065-1", Chromaticities::ACES_AP0),
+            ("Linear Rec.2020", Chromaticities::REC2020),
+            ("Linear P3-D65", Chromaticities::P3_D65),
+            ("Linear Rec.709 (sRGB)", Chromaticities::REC709),
+        ] {
+            assert_eq!(c.working_space(name).unwrap(), (name.to_string(), want));
+        }
+        // An alias and a role resolve to the space's own name.
+        assert_eq!(c.working_space("lin_ap1").unwrap().0, "ACEScg");
+        assert_eq!(c.working_space("scene_linear").unwrap().0, "ACEScg");
+    }
+
+    /// A linear space with primaries realcam does not know: Adobe RGB (1998) (D65; Adobe RGB
+    /// (1998) Color Image Encoding sec. 4.3.1.1: red 0.64, 0.33, green 0.21, 0.71, blue 0.15,
+    /// 0.06) comes back with its primaries.
+    #[test]
+    fn other_linear_spaces_get_their_primaries_from_the_processor() {
+        let c = ColourConfig::load("ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5").unwrap();
+        let (_, adobe) = c.working_space("Linear AdobeRGB").unwrap();
+        for (got, want) in [adobe.red, adobe.green, adobe.blue, adobe.white].iter().zip([
+            [0.64, 0.33],
+            [0.21, 0.71],
+            [0.15, 0.06],
+            [0.3127, 0.3290],
+        ]) {
+            assert!((got[0] - want[0]).abs() < 2e-4 && (got[1] - want[1]).abs() < 2e-4, "{got:?} vs {want:?}");
+        }
+    }
+
+    #[test]
+    fn errors_name_the_config_and_the_space() {
+        let c = ColourConfig::load("ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5").unwrap();
+        let e = c.working_space("ACEScgg").unwrap_err().to_string();
+        assert!(e.starts_with("OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: no colour space \"ACEScgg\"; its colour spaces: "), "{e}");
+        assert!(e.contains("ACES2065-1, ACEScc, ACEScct, ACEScg"), "{e}");
+        let e = c.working_space("sRGB Encoded Rec.709 (sRGB)").unwrap_err().to_string();
+        assert!(e.contains("colour space \"sRGB Encoded Rec.709 (sRGB)\" is not linear"), "{e}");
+        let e = ColourConfig::load("/nonexistent/config.ocio").err().unwrap().to_string();
+        assert!(e.starts_with("OpenColorIO config \"/nonexistent/config.ocio\": cannot read it:"), "{e}");
+    }
+
+    /// The ACES config's defaults are the sRGB display's ACES 2.0 output transform; 18 % grey
+    /// in ACEScg shows at 0.3491874 (PyOpenColorIO 2.6.0, scripts/ocio-reference.py).
+    #[test]
+    fn the_default_display_view_is_the_aces_output_transform() {
+        let c = ColourConfig::load("ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5").unwrap();
+        let dv = c.display_view("ACEScg", None, None).unwrap();
+        assert_eq!((dv.display.as_str(), dv.view.as_str()), ("sRGB - Display", "ACES 2.0 - SDR 100 nits (Rec.709)"));
+        let mut grey = [0.18f32; 3];
+        dv.processor.apply_rgb(&mut grey);
+        assert!(grey.iter().all(|v| (v - 0.3491874).abs() < 1e-5), "{grey:?}");
+        let e = c.display_view("ACEScg", Some("sRGB - Display"), Some("Filmic")).err().unwrap().to_string();
+        assert!(
+            e.starts_with(
+                "OpenColorIO config ocio://cg-config-v4.0.0_aces-v2.0_ocio-v2.5: display \"sRGB - Display\" has no view \
+                 \"Filmic\" for \"ACEScg\"; its views: "
+            ),
+            "{e}"
+        );
+        let e = c.display_view("ACEScg", Some("sRGB"), None).err().unwrap().to_string();
+        assert!(e.contains("no display \"sRGB\"; its displays: sRGB - Display, "), "{e}");
+    }
+}
