@@ -2228,3 +2228,67 @@ fn the_colour_space_comes_from_the_file_or_colorspace_and_goes_to_the_output() {
     );
     assert_contains(&err, "are not an RGB space: the primaries lie on one line");
 }
+
+/// The Tessar's lens file with one fitted ghost: a 10 x 6 px box of light 2 in the green
+/// channel of a 40 x 20 px frame, its centre at x = 10 + 1 px per degree (fitted 0..30 deg).
+fn lens_with_a_box_ghost(dir: &TestDir) -> String {
+    use realcam::io::lens_file::{FittedGhostSpec, LensFileWriter};
+    use realcam::optics::bezier_ghost::{BezierGhost, GhostPolynomials, Transfer};
+    let transfer = Transfer {
+        border: 2.0,
+        inner: 2.0,
+        inner_falloff_px: 0.0,
+        outer_falloff_px: 0.0,
+        inner_exponent: 1.0,
+        outer_exponent: 1.0,
+    };
+    let g = BezierGhost {
+        centre_px: [10.0, 10.0],
+        height_px: 3.0,
+        left_px: 5.0,
+        right_px: 5.0,
+        left_control: 1.0,
+        right_control: 1.0,
+        transfer,
+    };
+    let mut coefficients: Vec<Vec<f64>> = g.to_params().iter().map(|&v| vec![v]).collect();
+    coefficients[0] = vec![10.0, 1.0];
+    let spec = FittedGhostSpec::new("2/1", 1, [40, 20], &GhostPolynomials { angles_deg: [0.0, 30.0], coefficients });
+    let tessar =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml")).unwrap();
+    let mut w = LensFileWriter::edit(&tessar).unwrap();
+    w.fitted_ghosts(&[spec], None);
+    std::fs::write(dir.join("box.toml"), w.finish()).unwrap();
+    dir.arg("box.toml")
+}
+
+#[test]
+fn flare_predict_prints_walchs_estimators_for_a_light() {
+    let dir = TestDir::new("flare-predict");
+    let lens = lens_with_a_box_ghost(&dir);
+    // 45 deg straight right (clamped to the fitted 30: the box at x 35..45, half out of the
+    // frame: 30 px); one stop more ISO than measured: scale 2, so 2 x 2 / 3 = 4/3 on the mean
+    // of the channels. Sum 40, average 40 / 800 = 0.05; log-average
+    // exp((30 ln(1e-6 + 4/3) + 770 ln 1e-6) / 800); eq 9.3 with 100 and 1: 101 / 101.1.
+    let run = realcam(
+        &dir,
+        s(&["flare-predict", "--lens", &lens, "--light", "1,0,-1", "--iso", "200", "--measured-iso", "100"])
+            .into_iter()
+            .chain(s(&["--scene-max", "100", "--scene-min", "1"])),
+    )
+    .success();
+    assert_eq!(
+        run.stdout,
+        "constellation angle (eq 8.1): 45.0000 deg\nroll (eq 8.2): 0.0000 deg\nbrightness scale (eq 8.3): 2.000000\n\
+         flare of 1 fitted ghosts on 40x20 px (sec. 9.1):\n  min 0.000000e0\n  max 1.333333e0\n  sum 4.000000e1\n  \
+         average 5.000000e-2\n  log-average 1.697013e-6\ncontrast ratio K_real/K_ideal (eq 9.3): 0.999011\n"
+    );
+    // A lens without fitted ghosts, and a light at the camera, are named.
+    let tessar = concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", tessar, "--light", "0,0,-1"])).failure();
+    assert_contains(&e, "tessar-walch-lens.toml: the lens has no [[fitted_ghost]] section");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", &lens, "--light", "0,0,0"])).failure();
+    assert_contains(&e, "the light is at the camera");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", &lens, "--light", "1,2"])).failure();
+    assert_contains(&e, "--light takes three numbers X,Y,Z, not 2");
+}

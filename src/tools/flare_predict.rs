@@ -130,7 +130,7 @@ pub fn text(p: &Prediction) -> String {
     let e = &p.estimators;
     format!(
         "constellation angle (eq 8.1): {:.4} deg\nroll (eq 8.2): {:.4} deg\nbrightness scale (eq 8.3): {:.6}\n\
-         flare of {} ghosts on {}x{} px (sec. 9.1):\n  min {:.6e}\n  max {:.6e}\n  sum {:.6e}\n  average {:.6e}\n  \
+         flare of {} fitted ghosts on {}x{} px (sec. 9.1):\n  min {:.6e}\n  max {:.6e}\n  sum {:.6e}\n  average {:.6e}\n  \
          log-average {:.6e}\ncontrast ratio K_real/K_ideal (eq 9.3): {:.6}\n",
         p.angle_deg,
         p.roll_deg,
