@@ -2292,3 +2292,35 @@ fn flare_predict_prints_walchs_estimators_for_a_light() {
     let e = realcam(&dir, s(&["flare-predict", "--lens", &lens, "--light", "1,2"])).failure();
     assert_contains(&e, "--light takes three numbers X,Y,Z, not 2");
 }
+
+#[test]
+fn flare_fit_writes_the_fitted_ghosts_into_a_new_lens_file_and_predict_reads_them() {
+    // The tiny case: the Tessar's ghost 4/0 in green at f/2.8 on a 320x180 frame, 2..5 deg.
+    let dir = TestDir::new("flare-fit");
+    let tessar = concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml");
+    let before = std::fs::read_to_string(tessar).unwrap();
+    let out = dir.arg("fitted.toml");
+    let args = |out: &str| {
+        s(&["flare-fit", "--lens", tessar, "--fstop", "2.8", "--sensor", "36x20.25", "--size", "320x180"])
+            .into_iter()
+            .chain(s(&["--angles", "2,3,4,5", "--rays", "24", "--cells", "16", "--channels", "1", "--ghosts", "4/0"]))
+            .chain(s(&["--out", out]))
+            .collect::<Vec<_>>()
+    };
+    let run = realcam(&dir, args(&out)).success();
+    assert_contains(&run.stdout, "| 4/0 | 1 | 4 | ");
+    let lens = realcam::io::lens_file::LensFile::load(Path::new(&out)).unwrap();
+    assert_eq!(lens.fitted_ghosts.len(), 1);
+    let g = &lens.fitted_ghosts[0];
+    assert_eq!((g.ghost.as_str(), g.channel, g.frame_px, g.angles_deg), ("4/0", 1, [320, 180], [2.0, 5.0]));
+    // The rest of the lens is the input's.
+    let original = realcam::io::lens_file::LensFile::load(Path::new(tessar)).unwrap();
+    assert_eq!(realcam::io::lens_file::LensFile { fitted_ghosts: Vec::new(), ..lens }, original);
+    // The written file predicts; the input is never the output, and is left as it was.
+    realcam(&dir, s(&["flare-predict", "--lens", &out, "--light", "0.05,0,-1"])).success();
+    let e = realcam(&dir, args(tessar)).failure();
+    assert_contains(&e, "--out");
+    assert_eq!(std::fs::read_to_string(tessar).unwrap(), before);
+    let e = realcam(&dir, s(&["flare-fit", "--lens", tessar, "--out", &out, "--ghosts", "4-0"])).failure();
+    assert_contains(&e, "--ghosts: \"4-0\" is not FIRST/SECOND (e.g. 4/0)");
+}
