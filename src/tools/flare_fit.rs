@@ -660,7 +660,7 @@ mod tests {
         let mut w = LensFileWriter::edit(tessar).unwrap();
         w.fitted_ghosts(std::slice::from_ref(&f.spec), None);
         let lens = LensFile::parse(&w.finish(), std::path::Path::new("fitted.toml")).unwrap();
-        assert_eq!(lens.fitted_ghosts, [f.spec.clone()]);
+        assert_eq!(lens.fitted_ghosts, std::slice::from_ref(&f.spec));
     }
 
     #[test]
