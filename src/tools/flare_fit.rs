@@ -600,18 +600,7 @@ mod tests {
         assert_eq!((image.width, image.height, image.cell_px), (39, 39, 20.0));
         let f = fit(&image, &moments_guess(&image).unwrap(), &FitOptions::default());
         let drawn = image.draw(&f.ghost);
-        let centroid = |v: &[f64]| {
-            let (mut s, mut sx, mut sy) = (0.0, 0.0, 0.0);
-            for y in 0..image.height {
-                for x in 0..image.width {
-                    let (px, py) = image.centre_of(x, y);
-                    let e = v[(y * image.width + x) as usize];
-                    (s, sx, sy) = (s + e, sx + e * px, sy + e * py);
-                }
-            }
-            (s, [sx / s, sy / s])
-        };
-        let ((e_t, c_t), (e_f, c_f)) = (centroid(&image.values), centroid(&drawn));
+        let ((e_t, c_t), (e_f, c_f)) = (energy_centroid(&image, &image.values), energy_centroid(&image, &drawn));
         let peak = image.values.iter().copied().fold(0.0, f64::max);
         let rmse = mse(&drawn, &image.values).sqrt() / peak;
         let moved = (c_t[0] - c_f[0]).hypot(c_t[1] - c_f[1]);
