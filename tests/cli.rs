@@ -2299,6 +2299,11 @@ fn flare_fit_writes_the_fitted_ghosts_into_a_new_lens_file_and_predict_reads_the
     assert_eq!(realcam::io::lens_file::LensFile { fitted_ghosts: Vec::new(), ..lens }, original);
     // The written file predicts; the input is never the output, and is left as it was.
     realcam(&dir, s(&["flare-predict", "--lens", &out, "--light", "0.05,0,-1"])).success();
+    // The report compares the fitted primitives only on the frame they were fitted on.
+    let e =
+        realcam(&dir, s(&["flare", "--lens", &out, "--size", "640x360", "--out-dir", &dir.arg("report")])).failure();
+    assert_contains(&e, "--size 640x360: fitted_ghost \"4/0\" of the lens is of a 320x180 frame");
+    assert!(!dir.join("report").exists());
     let e = realcam(&dir, args(tessar)).failure();
     assert_contains(&e, "--out");
     assert_eq!(std::fs::read_to_string(tessar).unwrap(), before);

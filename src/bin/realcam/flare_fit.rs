@@ -24,13 +24,13 @@ pub struct FlareFitArgs {
     #[arg(long, default_value = "1280x720")]
     size: String,
     /// Angles of the light off the axis to trace and fit (degrees, towards +x).
-    #[arg(long = "angles", default_value = "1,2,3,4,5,6,7,8,9,10,11,12,13", value_delimiter = ',')]
+    #[arg(long = "angles", default_value = "0,1,2,3,4,5,6,7,8,9,10,11,12", value_delimiter = ',')]
     angles_deg: Vec<f64>,
     /// Rays across the front lens per wavelength for the traced images.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 32)]
     rays: usize,
     /// Cells across a traced image at most (larger ghosts are fitted on coarser cells).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 24)]
     cells: u32,
     /// Order of each parameter's polynomial of the angle (Walch ch. 8).
     #[arg(long, default_value_t = 2)]
