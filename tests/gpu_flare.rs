@@ -417,19 +417,13 @@ fn the_fitted_primitives_stand_beside_the_traced_ghosts_in_the_flare_report_with
     // time; at 7 degrees, outside the fitted range, the fitted model compares nothing and
     // draws nothing.
     use realcam::tools::accuracy_flare::{run, FlareAccuracyOptions};
-    use realcam::tools::flare_fit::{fit_traced_ghosts, FitOptions, TracedFitOptions};
+    use realcam::tools::flare_fit::{fit_traced_ghosts, TracedFitOptions};
     let (w, h) = (320, 180);
     let camera = realcam::tools::bench_flare::flare_camera(w, h);
     let fit = TracedFitOptions {
-        width: w,
-        height: h,
-        angles_deg: vec![2.0, 3.0, 4.0, 5.0],
-        rays_across: 32,
-        max_cells: 24,
-        order: 2,
         channels: vec![1],
         ghosts: vec![(4, 0)],
-        fit: FitOptions::default(),
+        ..TracedFitOptions::new(w, h, vec![2.0, 3.0, 4.0, 5.0])
     };
     let fitted: Vec<_> = fit_traced_ghosts(&camera, &fit, |_| {}).into_iter().map(|f| f.spec).collect();
     assert_eq!(fitted.len(), 1);

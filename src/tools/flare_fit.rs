@@ -499,6 +499,24 @@ pub struct TracedFitOptions {
     pub fit: FitOptions,
 }
 
+impl TracedFitOptions {
+    /// Every ghost in every channel at `angles_deg` on a `width` x `height` frame, with
+    /// `realcam flare-fit`'s defaults: 32 rays across, at most 24 cells, parabolas.
+    pub fn new(width: u32, height: u32, angles_deg: Vec<f64>) -> TracedFitOptions {
+        TracedFitOptions {
+            width,
+            height,
+            angles_deg,
+            rays_across: 32,
+            max_cells: 24,
+            order: 2,
+            channels: vec![0, 1, 2],
+            ghosts: Vec::new(),
+            fit: FitOptions::default(),
+        }
+    }
+}
+
 /// One ghost in one channel fitted over the angles, and how far its polynomials' primitive
 /// is from the traced images (the worst sample): RMS difference over the traced peak, the
 /// relative energy error, the centroid's distance (frame px).
@@ -755,15 +773,10 @@ mod tests {
         use crate::io::lens_file::{LensFile, LensFileWriter};
         let camera = crate::tools::bench_flare::flare_camera(320, 180);
         let options = TracedFitOptions {
-            width: 320,
-            height: 180,
-            angles_deg: vec![5.0, 2.0, 3.0, 4.0],
             rays_across: 48,
-            max_cells: 24,
-            order: 2,
             channels: vec![1],
             ghosts: vec![(4, 0)],
-            fit: FitOptions::default(),
+            ..TracedFitOptions::new(320, 180, vec![5.0, 2.0, 3.0, 4.0])
         };
         let mut heard = Vec::new();
         let fitted = fit_traced_ghosts(&camera, &options, |m| heard.push(m.to_string()));
