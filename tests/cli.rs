@@ -2367,3 +2367,85 @@ fn the_png_preview_goes_through_the_configs_display_and_view() {
         "error: --display/--view: no OpenColorIO config (--config FILE, $OCIO)",
     );
 }
+
+/// The Tessar's lens file with one fitted ghost: a 10 x 6 px box of light 2 in the green
+/// channel of a 40 x 20 px frame (sharp edges on pixel borders), its centre at x = 10 + 1 px
+/// per degree (fitted 0..30 deg).
+fn lens_with_a_box_ghost(dir: &TestDir) -> String {
+    let tessar =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml")).unwrap();
+    let ghost = "\n[[fitted_ghost]]\nghost = \"2/1\"\nchannel = 1\nframe_px = [40, 20]\nangles_deg = [0.0, 30.0]\n\
+        centre_x_px = [10.0, 1.0]\ncentre_y_px = [10.0]\nheight_px = [3.0]\nleft_px = [5.0]\nright_px = [5.0]\n\
+        left_control = [1.0]\nright_control = [1.0]\nborder = [2.0]\ninner = [2.0]\ninner_falloff_px = [0.0]\n\
+        outer_falloff_px = [0.0]\ninner_exponent = [1.0]\nouter_exponent = [1.0]\n";
+    std::fs::write(dir.join("box.toml"), tessar + ghost).unwrap();
+    dir.arg("box.toml")
+}
+
+#[test]
+fn flare_predict_prints_walchs_estimators_for_a_light() {
+    let dir = TestDir::new("flare-predict");
+    let lens = lens_with_a_box_ghost(&dir);
+    // 45 deg straight right (clamped to the fitted 30: the box at x 35..45, half out of the
+    // frame: 30 px); one stop more ISO than measured: scale 2, so 2 x 2 / 3 = 4/3 on the mean
+    // of the channels. Sum 40, average 40 / 800 = 0.05; log-average
+    // exp((30 ln(1e-6 + 4/3) + 770 ln 1e-6) / 800); eq 9.3 with 100 and 1: 101 / 101.1.
+    let run = realcam(
+        &dir,
+        s(&["flare-predict", "--lens", &lens, "--light", "1,0,-1", "--iso", "200", "--measured-iso", "100"])
+            .into_iter()
+            .chain(s(&["--scene-max", "100", "--scene-min", "1"])),
+    )
+    .success();
+    assert_eq!(
+        run.stdout,
+        "constellation angle (eq 8.1): 45.0000 deg\nroll (eq 8.2): 0.0000 deg\nbrightness scale (eq 8.3): 2.000000\n\
+         flare of 1 fitted ghosts on 40x20 px (sec. 9.1):\n  min 0.000000e0\n  max 1.333333e0\n  sum 4.000000e1\n  \
+         average 5.000000e-2\n  log-average 1.697013e-6\ncontrast ratio K_real/K_ideal (eq 9.3): 0.999011\n"
+    );
+    // A lens without fitted ghosts, and a light at the camera, are named.
+    let tessar = concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", tessar, "--light", "0,0,-1"])).failure();
+    assert_contains(&e, "tessar-walch-lens.toml: the lens has no [[fitted_ghost]] section");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", &lens, "--light", "0,0,0"])).failure();
+    assert_contains(&e, "the light is at the camera");
+    let e = realcam(&dir, s(&["flare-predict", "--lens", &lens, "--light", "1,2"])).failure();
+    assert_contains(&e, "--light takes three numbers X,Y,Z, not 2");
+}
+
+#[test]
+fn flare_fit_writes_the_fitted_ghosts_into_a_new_lens_file_and_predict_reads_them() {
+    // The tiny case: the Tessar's ghost 4/0 in green at f/2.8 on a 320x180 frame, 2..5 deg.
+    let dir = TestDir::new("flare-fit");
+    let tessar = concat!(env!("CARGO_MANIFEST_DIR"), "/lenses/tessar-walch-lens.toml");
+    let before = std::fs::read_to_string(tessar).unwrap();
+    let out = dir.arg("fitted.toml");
+    let args = |out: &str| {
+        s(&["flare-fit", "--lens", tessar, "--fstop", "2.8", "--sensor", "36x20.25", "--size", "320x180"])
+            .into_iter()
+            .chain(s(&["--angles", "2,3,4,5", "--rays", "24", "--cells", "16", "--channels", "1", "--ghosts", "4/0"]))
+            .chain(s(&["--out", out]))
+            .collect::<Vec<_>>()
+    };
+    let run = realcam(&dir, args(&out)).success();
+    assert_contains(&run.stdout, "| 4/0 | 1 | 4 | ");
+    let lens = realcam::io::lens_file::LensFile::load(Path::new(&out)).unwrap();
+    assert_eq!(lens.fitted_ghosts.len(), 1);
+    let g = &lens.fitted_ghosts[0];
+    assert_eq!((g.ghost.as_str(), g.channel, g.frame_px, g.angles_deg), ("4/0", 1, [320, 180], [2.0, 5.0]));
+    // The rest of the lens is the input's.
+    let original = realcam::io::lens_file::LensFile::load(Path::new(tessar)).unwrap();
+    assert_eq!(realcam::io::lens_file::LensFile { fitted_ghosts: Vec::new(), ..lens }, original);
+    // The written file predicts; the input is never the output, and is left as it was.
+    realcam(&dir, s(&["flare-predict", "--lens", &out, "--light", "0.05,0,-1"])).success();
+    // The report compares the fitted primitives only on the frame they were fitted on.
+    let e =
+        realcam(&dir, s(&["flare", "--lens", &out, "--size", "640x360", "--out-dir", &dir.arg("report")])).failure();
+    assert_contains(&e, "--size 640x360: fitted_ghost \"4/0\" of the lens is of a 320x180 frame");
+    assert!(!dir.join("report").exists());
+    let e = realcam(&dir, args(tessar)).failure();
+    assert_contains(&e, "--out");
+    assert_eq!(std::fs::read_to_string(tessar).unwrap(), before);
+    let e = realcam(&dir, s(&["flare-fit", "--lens", tessar, "--out", &out, "--ghosts", "4-0"])).failure();
+    assert_contains(&e, "--ghosts: \"4-0\" is not FIRST/SECOND (e.g. 4/0)");
+}

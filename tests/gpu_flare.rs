@@ -404,3 +404,46 @@ fn hard_inputs_stay_finite() {
     assert!(rgba.iter().all(|v| v.is_finite()));
     assert!(rgba.iter().skip(4).step_by(4).any(|&v| v > 0.0), "no flare drawn");
 }
+
+#[test]
+fn the_fitted_primitives_stand_beside_the_traced_ghosts_in_the_flare_report_with_their_gpu_time() {
+    // Walch's loop closed with no camera: the Tessar at f/2.8 on a 320x180 frame, its ghost 4/0
+    // in green traced with real rays (32 across per wavelength) with the light towards +x at
+    // 2..5 degrees, fitted (ch. 7, sec. 7.3) and made parabolas of the angle (ch. 8), as
+    // `realcam flare-fit` writes them. The report puts the light towards the upper right corner:
+    // at 3 degrees the primitive, turned by eq 8.2's roll (29.4 degrees), keeps the traced
+    // ghost's energy within 5% (measured 2.2%), its centroid within a fitted cell (45 px;
+    // measured 31, the ghost is ~760 px wide) and its RMS size within 2% (0.2%), and has a GPU
+    // time; at 7 degrees, outside the fitted range, the fitted model compares nothing and
+    // draws nothing.
+    use realcam::tools::accuracy_flare::{run, FlareAccuracyOptions};
+    use realcam::tools::flare_fit::{fit_traced_ghosts, TracedFitOptions};
+    let (w, h) = (320, 180);
+    let camera = realcam::tools::bench_flare::flare_camera(w, h);
+    let fit = TracedFitOptions {
+        channels: vec![1],
+        ghosts: vec![(4, 0)],
+        ..TracedFitOptions::new(w, h, vec![2.0, 3.0, 4.0, 5.0])
+    };
+    let fitted: Vec<_> = fit_traced_ghosts(&camera, &fit, |_| {}).into_iter().map(|f| f.spec).collect();
+    assert_eq!(fitted.len(), 1);
+    let gpu = gpu();
+    let options =
+        FlareAccuracyOptions { width: w, height: h, angles_deg: vec![3.0, 7.0], rays_across: 32, runs: 1, fitted };
+    let rows = run(&gpu, &camera, &options, |_| {}).expect("flare report");
+    assert_validation_clean(&gpu);
+    let models: Vec<_> = rows.iter().map(|r| (r.angle_deg, r.model.as_str())).collect();
+    let names = ["traced reference", "matrix ghosts", "fitted primitives"];
+    assert_eq!(models, names.iter().map(|n| (3.0, *n)).chain(names.iter().map(|n| (7.0, *n))).collect::<Vec<_>>());
+    let at3 = &rows[2];
+    let summary = format!("{at3:?}");
+    assert_eq!((at3.compared, at3.disagree), (1, 0), "{summary}");
+    assert_eq!(at3.worst.map(|g| (g.first, g.second)), Some((4, 0)));
+    assert!(at3.energy_error.max < 0.05 && at3.centroid_error_px.max < 45.0, "{summary}");
+    assert!(at3.size_error.max < 0.02, "{summary}");
+    assert!(at3.gpu_ms.is_some_and(|ms| ms > 0.0), "{summary}");
+    let at7 = &rows[5];
+    assert_eq!((at7.compared, at7.disagree, at7.gpu_ms), (0, 0, None), "{at7:?}");
+    // The matrix ghosts compare every ghost the reference shows.
+    assert!(rows[1].compared >= 60, "{:?}", rows[1]);
+}

@@ -32,6 +32,24 @@ pub const PARAM_NAMES: [&str; PARAMS] = [
     "outer_exponent",
 ];
 
+/// The range each parameter is kept in ([`PARAM_NAMES`] order): positions free, sizes at least
+/// 0.5 px, controls 0..1.2, lights >= 0, fades at least 0.05 px, exponents 0.1..8.
+pub const PARAM_RANGES: [(f64, f64); PARAMS] = [
+    (f64::NEG_INFINITY, f64::INFINITY),
+    (f64::NEG_INFINITY, f64::INFINITY),
+    (0.5, f64::INFINITY),
+    (0.5, f64::INFINITY),
+    (0.5, f64::INFINITY),
+    (0.0, 1.2),
+    (0.0, 1.2),
+    (0.0, f64::INFINITY),
+    (0.0, f64::INFINITY),
+    (0.05, f64::INFINITY),
+    (0.05, f64::INFINITY),
+    (0.1, 8.0),
+    (0.1, 8.0),
+];
+
 /// The control position of four cubic sides that approximate a circle (the ratio of the
 /// control arm to the radius, 4/3 (sqrt 2 - 1)).
 pub const CIRCLE_CONTROL: f64 = 0.552_284_749_830_793_4;
@@ -398,12 +416,15 @@ impl GhostPolynomials {
         GhostPolynomials { angles_deg: [lo, hi], coefficients }
     }
 
-    /// The primitive at `angle_deg` (clamped to the fitted range: no extrapolation).
+    /// The primitive at `angle_deg` (clamped to the fitted range: no extrapolation), each
+    /// parameter kept in its valid range ([`PARAM_RANGES`]: a parabola through sizes, fades or
+    /// lights near their bound may cross it between the samples).
     pub fn at(&self, angle_deg: f64) -> BezierGhost {
         let a = angle_deg.clamp(self.angles_deg[0], self.angles_deg[1]);
         let mut p = [0.0; PARAMS];
         for (k, c) in self.coefficients.iter().enumerate().take(PARAMS) {
-            p[k] = poly_eval(c, a);
+            let (lo, hi) = PARAM_RANGES[k];
+            p[k] = poly_eval(c, a).clamp(lo, hi);
         }
         BezierGhost::from_params(&p)
     }
@@ -569,6 +590,14 @@ mod tests {
                 assert!((x - y).abs() < 1e-8 * y.abs().max(1.0), "{a}: {x} vs {y}");
             }
         }
+        // A least-squares parabola through sizes near their bound dips under it between the
+        // samples (heights 2, 0.5, 0.5, 2 px at 0..3 degrees: 0.3125 + 0.75 (a - 1.5)^2, 0.3125
+        // at 1.5): the primitive keeps 0.5 px there, the parabola's value elsewhere.
+        let near = [2.0, 0.5, 0.5, 2.0].map(|height_px| BezierGhost { height_px, ..circle(10.0) });
+        let dip = GhostPolynomials::fit(&[0.0, 1.0, 2.0, 3.0], &near, 2);
+        assert!((poly_eval(&dip.coefficients[2], 1.5) - 0.3125).abs() < 1e-9);
+        assert_eq!(dip.at(1.5).height_px, 0.5);
+        assert!((dip.at(0.5).height_px - 1.0625).abs() < 1e-9);
         // Fewer samples than coefficients: a constant from one, a line from two (sec. 7.3).
         assert_eq!(polyfit(&[3.0], &[7.0], 2), vec![7.0]);
         let two = polyfit(&[1.0, 3.0], &[2.0, 6.0], 2);

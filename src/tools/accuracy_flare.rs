@@ -4,16 +4,19 @@
 //! model takes. The reference traces real rays (src/optics/flare/traced.rs: f64, both
 //! reflections, Fresnel with the coatings at every ray's own angle, clipped at every
 //! semi-diameter and by the aperture); the matrix ghosts (src/optics/flare/ghosts.rs) are what
-//! the flare pass draws, and are also timed on the GPU. A later model (Walch's fitted Bezier
-//! primitives) is one more [`GhostModel`].
+//! the flare pass draws, and are also timed on the GPU; Walch's fitted primitives (a lens file's
+//! `[[fitted_ghost]]`, ch. 6-8) are drawn as glsl/bezier_ghosts.comp draws them, and timed there.
 
-use crate::gpu::{Gpu, GpuResult, Profile};
+use crate::gpu::shaders::bezier_ghost::BEZIER_BOUNDS;
+use crate::gpu::{Gpu, GpuResult, Kernel, Profile};
+use crate::io::lens_file::FittedGhostSpec;
 use crate::model::camera::Camera;
 use crate::model::flare::FlareLight;
 use crate::model::frame::Frame;
 use crate::optics::flare::ghosts::{GhostCatalogue, GhostPath};
 use crate::optics::flare::traced::{chief_ray, display_px, optical_slope, TracedImage};
 use crate::optics::flare::{channel_nm, FlareLens};
+use crate::passes::bezier_ghosts::{self, primitive_light, BezierGhostsShader, DrawnGhost};
 use crate::passes::flare::{Flare, FlareModel, FlareParams, MIN_GHOST_RADIUS_PX};
 use crate::passes::PlanInput;
 use crate::pipeline::planner::plan;
@@ -40,6 +43,12 @@ pub trait GhostModel {
     /// The ghost of `path` in channel `c` for a light of display slope `u` (the light's image at
     /// the centre + G0 u / pitch); None where no light of it reaches the sensor.
     fn ghost(&self, path: GhostPath, u: [f64; 2], c: usize) -> Option<GhostEstimate>;
+    /// Whether the model has the ghost of `path` in channel `c` for a light of display slope
+    /// `u` at all (a fitted model may carry only some ghosts, over a range of angles); pairs it
+    /// does not cover are not compared.
+    fn covers(&self, _path: GhostPath, _u: [f64; 2], _c: usize) -> bool {
+        true
+    }
 }
 
 /// The frame the models draw on: its pixel pitch and optical centre.
@@ -126,6 +135,119 @@ impl GhostModel for Matrix<'_> {
     }
 }
 
+/// Walch's measured-ghost primitives as a lens file's `[[fitted_ghost]]` carries them (ch. 6-8):
+/// each ghost's polynomials at the light's angle off the axis (eq 8.1's angle; only within the
+/// fitted range, the polynomials do not extrapolate), turned by the light's roll (eq 8.2) about
+/// the frame's centre, drawn as the GPU draws them (the f32 twin of glsl/bezier_ghosts.comp).
+/// The specs must be of the report's frame.
+pub struct Fitted<'a> {
+    pub specs: &'a [FittedGhostSpec],
+    pub sensor: Sensor,
+}
+
+/// Whether a light of display slope `u` lies within the fitted range of `spec`'s angles.
+fn within(spec: &FittedGhostSpec, u: [f64; 2]) -> bool {
+    let [lo, hi] = spec.angles_deg;
+    (lo - 1e-9..=hi + 1e-9).contains(&u[0].hypot(u[1]).atan().to_degrees())
+}
+
+impl Fitted<'_> {
+    fn spec(&self, path: GhostPath, c: usize) -> Option<&FittedGhostSpec> {
+        let label = format!("{}/{}", path.first, path.second);
+        self.specs.iter().find(|s| s.ghost == label && s.channel as usize == c)
+    }
+
+    /// The primitive of `spec` for a light of display slope `u`, in `colour`; None outside the
+    /// fitted range of angles.
+    fn drawn(&self, spec: &FittedGhostSpec, u: [f64; 2], colour: [f64; 3]) -> Option<DrawnGhost> {
+        if !within(spec, u) {
+            return None;
+        }
+        let angle_deg = u[0].hypot(u[1]).atan().to_degrees();
+        // The fit has the light towards +x; on screen (y down) the light's direction u is +x
+        // turned counter-clockwise by atan2(-u_y, u_x).
+        let roll_rad = (-u[1]).atan2(u[0]);
+        Some(DrawnGhost { ghost: spec.polynomials().at(angle_deg), colour, roll_rad, pivot_px: self.sensor.centre_px })
+    }
+}
+
+impl GhostModel for Fitted<'_> {
+    fn name(&self) -> &str {
+        "fitted primitives"
+    }
+
+    fn covers(&self, path: GhostPath, u: [f64; 2], c: usize) -> bool {
+        self.spec(path, c).is_some_and(|s| within(s, u))
+    }
+
+    fn ghost(&self, path: GhostPath, u: [f64; 2], c: usize) -> Option<GhostEstimate> {
+        let drawn = self.drawn(self.spec(path, c)?, u, [1.0; 3])?;
+        let words = drawn.words()?;
+        let b: Vec<f64> = words[BEZIER_BOUNDS as usize..][..4].iter().map(|&v| v as f64).collect();
+        // Pixel centres as the GPU draws them; a ghost over 256 px across on at least 256
+        // samples across, each standing for its square (the intensities are per frame pixel).
+        let step = ((b[2] - b[0]).max(b[3] - b[1]) / 256.0).max(1.0);
+        let origin = [b[0].floor(), b[1].floor()];
+        let n = [((b[2] - origin[0]) / step).ceil() as usize, ((b[3] - origin[1]) / step).ceil() as usize];
+        let samples: Vec<([f64; 2], f64)> = (0..n[1])
+            .flat_map(|j| {
+                (0..n[0]).map(move |i| [origin[0] + (i as f64 + 0.5) * step, origin[1] + (j as f64 + 0.5) * step])
+            })
+            .map(|q| (q, primitive_light(&words, [q[0] as f32, q[1] as f32]) as f64))
+            .collect();
+        let sum: f64 = samples.iter().map(|s| s.1).sum();
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        let c = samples.iter().fold([0.0; 2], |m, (q, v)| [m[0] + v * q[0] / sum, m[1] + v * q[1] / sum]);
+        let m2: f64 = samples.iter().map(|(q, v)| v * ((q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2))).sum();
+        // M, the primitive's centre, turned with it.
+        let r = &drawn;
+        let o = [r.ghost.centre_px[0] - r.pivot_px[0], r.ghost.centre_px[1] - r.pivot_px[1]];
+        let (cos, sin) = (r.roll_rad.cos(), r.roll_rad.sin());
+        Some(GhostEstimate {
+            centre_px: Some([r.pivot_px[0] + cos * o[0] + sin * o[1], r.pivot_px[1] - sin * o[0] + cos * o[1]]),
+            centroid_px: c,
+            energy_ratio: sum * step * step,
+            rms_radius_px: (m2 / sum).sqrt(),
+        })
+    }
+}
+
+/// GPU ms of glsl/bezier_ghosts.comp drawing every fitted ghost (all channels) of a light of
+/// display slope `u` on a black frame (timestamp queries, median of `runs` after a warm-up);
+/// None when no ghost is within its fitted range.
+fn fitted_gpu_ms(
+    gpu: &Gpu,
+    kernel: &Kernel<BezierGhostsShader>,
+    fitted: &Fitted,
+    paths: &[GhostPath],
+    u: [f64; 2],
+    size: [u32; 2],
+    runs: usize,
+) -> GpuResult<Option<f64>> {
+    let ghosts: Vec<DrawnGhost> = paths
+        .iter()
+        .flat_map(|&p| (0..3).map(move |c| (p, c)))
+        .filter_map(|(p, c)| {
+            let mut colour = [0.0; 3];
+            colour[c] = 1.0;
+            fitted.drawn(fitted.spec(p, c)?, u, colour)
+        })
+        .collect();
+    if ghosts.is_empty() {
+        return Ok(None);
+    }
+    let mut times = Vec::new();
+    for run in 0..=runs.max(1) {
+        let (_, profile, _) = bezier_ghosts::draw(kernel, "fitted ghosts", gpu, size[0], size[1], &ghosts, false)?;
+        if run > 0 {
+            times.push(profile.pass_ms(bezier_ghosts::NAME).unwrap_or(0.0));
+        }
+    }
+    Ok(Some(median(times)))
+}
+
 /// One model at one light angle, against the reference.
 #[derive(Clone, Debug)]
 pub struct ModelRow {
@@ -176,7 +298,11 @@ pub fn light_slope(angle_deg: f64, width: u32, height: u32) -> [f64; 2] {
 /// Every ghost of `paths` in every channel by `model`.
 fn estimates(model: &dyn GhostModel, paths: &[GhostPath], u: [f64; 2]) -> (Vec<Option<GhostEstimate>>, f64) {
     let start = Instant::now();
-    let e = paths.iter().flat_map(|&p| (0..3).map(move |c| (p, c))).map(|(p, c)| model.ghost(p, u, c)).collect();
+    let e = paths
+        .iter()
+        .flat_map(|&p| (0..3).map(move |c| (p, c)))
+        .map(|(p, c)| if model.covers(p, u, c) { model.ghost(p, u, c) } else { None })
+        .collect();
     (e, start.elapsed().as_secs_f64() * 1e3)
 }
 
@@ -218,6 +344,59 @@ pub struct FlareAccuracyOptions {
     pub angles_deg: Vec<f64>,
     pub rays_across: usize,
     pub runs: usize,
+    /// Walch's fitted primitives to compare too (a lens file's `[[fitted_ghost]]`, of this
+    /// frame); empty: no such row.
+    pub fitted: Vec<FittedGhostSpec>,
+}
+
+/// One model's row at one angle: its estimates against the reference's (`truth`), over the
+/// (ghost, channel) pairs in `paths` x 0..3 order that the model covers.
+fn compare(
+    model: &dyn GhostModel,
+    (angle_deg, u): (f64, [f64; 2]),
+    paths: &[GhostPath],
+    truth: &[Option<GhostEstimate>],
+    (estimate, cpu_ms): (Vec<Option<GhostEstimate>>, f64),
+    gpu_ms: Option<f64>,
+) -> ModelRow {
+    let (mut centre, mut centroid, mut energy, mut size, mut disagree) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), 0);
+    let mut worst = (0.0, None);
+    for (k, (t, e)) in truth.iter().zip(&estimate).enumerate() {
+        if !model.covers(paths[k / 3], u, k % 3) {
+            continue;
+        }
+        match (t, e) {
+            (Some(t), Some(e)) => {
+                if let (Some(a), Some(b)) = (t.centre_px, e.centre_px) {
+                    centre.push((a[0] - b[0]).hypot(a[1] - b[1]));
+                }
+                let d = (t.centroid_px[0] - e.centroid_px[0]).hypot(t.centroid_px[1] - e.centroid_px[1]);
+                if d >= worst.0 {
+                    worst = (d, Some(paths[k / 3]));
+                }
+                centroid.push(d);
+                energy.push((e.energy_ratio / t.energy_ratio - 1.0).abs());
+                size.push((e.rms_radius_px - t.rms_radius_px).abs() / t.rms_radius_px.max(1e-9));
+            }
+            (None, None) => {}
+            _ => disagree += 1,
+        }
+    }
+    ModelRow {
+        model: model.name().into(),
+        reference: false,
+        angle_deg,
+        compared: centroid.len(),
+        disagree,
+        centre_error_px: Stats::of(&centre),
+        centroid_error_px: Stats::of(&centroid),
+        energy_error: Stats::of(&energy),
+        size_error: Stats::of(&size),
+        worst: worst.1,
+        cpu_ms,
+        gpu_ms,
+    }
 }
 
 /// Every model against the traced reference at every angle. `camera` needs a prescription.
@@ -234,6 +413,8 @@ pub fn run(
     let paths: Vec<GhostPath> = catalogue.ghosts.iter().map(|g| g.path).collect();
     let reference = Traced { lens, catalogue, sensor, rays_across: options.rays_across };
     let matrix = Matrix { lens, catalogue, sensor };
+    let fitted = Fitted { specs: &options.fitted, sensor };
+    let kernel = if options.fitted.is_empty() { None } else { Some(Kernel::<BezierGhostsShader>::new(gpu)?) };
     let g0_mm = catalogue.direct.centre_mm[1];
     let mut rows = Vec::new();
     for &angle_deg in &options.angles_deg {
@@ -256,48 +437,17 @@ pub fn run(
             gpu_ms: None,
         });
         progress(&format!("{angle_deg} degrees: matrix ghosts"));
-        let (estimate, cpu_ms) = estimates(&matrix, &paths, u);
         let light = FlareLight::white(
             sensor.centre_px[0] + g0_mm * u[0] / sensor.pixel_pitch_mm,
             sensor.centre_px[1] + g0_mm * u[1] / sensor.pixel_pitch_mm,
             1.0e6,
         );
         let gpu_ms = ghosts_gpu_ms(gpu, camera, w, h, light, options.runs)?;
-        let (mut centre, mut centroid, mut energy, mut size, mut disagree) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), 0);
-        let mut worst = (0.0, None);
-        for (k, (t, e)) in truth.iter().zip(&estimate).enumerate() {
-            match (t, e) {
-                (Some(t), Some(e)) => {
-                    if let (Some(a), Some(b)) = (t.centre_px, e.centre_px) {
-                        centre.push((a[0] - b[0]).hypot(a[1] - b[1]));
-                    }
-                    let d = (t.centroid_px[0] - e.centroid_px[0]).hypot(t.centroid_px[1] - e.centroid_px[1]);
-                    if d >= worst.0 {
-                        worst = (d, Some(paths[k / 3]));
-                    }
-                    centroid.push(d);
-                    energy.push((e.energy_ratio / t.energy_ratio - 1.0).abs());
-                    size.push((e.rms_radius_px - t.rms_radius_px).abs() / t.rms_radius_px.max(1e-9));
-                }
-                (None, None) => {}
-                _ => disagree += 1,
-            }
+        rows.push(compare(&matrix, (angle_deg, u), &paths, &truth, estimates(&matrix, &paths, u), Some(gpu_ms)));
+        if let Some(kernel) = &kernel {
+            let gpu_ms = fitted_gpu_ms(gpu, kernel, &fitted, &paths, u, [w, h], options.runs)?;
+            rows.push(compare(&fitted, (angle_deg, u), &paths, &truth, estimates(&fitted, &paths, u), gpu_ms));
         }
-        rows.push(ModelRow {
-            model: matrix.name().into(),
-            reference: false,
-            angle_deg,
-            compared: centroid.len(),
-            disagree,
-            centre_error_px: Stats::of(&centre),
-            centroid_error_px: Stats::of(&centroid),
-            energy_error: Stats::of(&energy),
-            size_error: Stats::of(&size),
-            worst: worst.1,
-            cpu_ms,
-            gpu_ms: Some(gpu_ms),
-        });
     }
     Ok(rows)
 }
@@ -316,11 +466,23 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
          median of {} runs).\n\n",
         options.width, options.height, options.rays_across, options.runs
     );
+    if !options.fitted.is_empty() {
+        out += &format!(
+            "Fitted primitives: the lens file's {} [[fitted_ghost]] entries (Walch ch. 6-8; `realcam flare-fit`), each \
+             ghost's polynomials at the light's angle, turned to its direction (eq 8.2), compared at angles within \
+             their fitted range only; their centre is the primitive's M; GPU ms: glsl/bezier_ghosts.comp drawing \
+             them all on the frame (median of {} runs).\n\n",
+            options.fitted.len(),
+            options.runs
+        );
+    }
     out += "| angle deg | model | compared | disagree | centre px (median / max) | centroid px (median / max) | energy (median / max) | size (median / max) | worst centroid | CPU ms | GPU ms |\n";
     out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         let (centre, centroid, energy, size, worst) = if r.reference {
             ("(reference)".to_string(), String::new(), String::new(), String::new(), String::new())
+        } else if r.compared == 0 {
+            ("(none compared)".to_string(), String::new(), String::new(), String::new(), String::new())
         } else {
             (
                 format!("{:.2} / {:.2}", r.centre_error_px.median, r.centre_error_px.max),

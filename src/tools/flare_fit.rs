@@ -10,12 +10,13 @@
 //!
 //! The primitive is drawn as the GPU draws it (the f32 twin of glsl/bezier_ghosts.comp).
 
+use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::bezier_ghost::{
-    poly_eval, polyfit, BezierGhost, GhostPolynomials, Transfer, CIRCLE_CONTROL, PARAMS,
+    poly_eval, polyfit, BezierGhost, GhostPolynomials, Transfer, CIRCLE_CONTROL, PARAMS, PARAM_RANGES,
 };
 use crate::passes::bezier_ghosts::{primitive_light, DrawnGhost};
 
-/// A grey image of a ghost: `values` row by row, its pixel (0, 0) at `origin_px` of the frame,
+/// A grey image of a ghost: `values` (light per frame pixel) row by row, its pixel (0, 0) at `origin_px` of the frame,
 /// each of its pixels `cell_px` frame pixels wide (a ghost larger than the frame is fitted on
 /// a coarser grid).
 #[derive(Clone, Debug, PartialEq)]
@@ -59,9 +60,12 @@ impl GreyImage {
 
 /// The traced ghost `path` in channel `c` for a light of display slope `u` (the reference of
 /// src/optics/flare/traced.rs, real rays) as a grey image: every ray's weight, per unit of the
-/// light's own image, summed in the cell it lands in, over the box of the ghost's rays plus
-/// `margin_px`, in cells of whole pixels at most `max_cells` across. None where no light of it
-/// reaches the sensor.
+/// light's own image, summed in the cell it lands in and divided by the cell's area in frame
+/// pixels (light per frame pixel, whatever the cell: a primitive fitted to it draws the same
+/// light on the frame's pixels, and samples fitted on cells of different sizes agree), over
+/// the box of the ghost's rays grown on every side by `margin` times its larger side (at least
+/// 4 px: room for the primitive's outer fade, which the fit must see), in cells of whole pixels at most `max_cells`
+/// across. None where no light of it reaches the sensor.
 #[allow(clippy::too_many_arguments)]
 pub fn traced_ghost_image(
     lens: &crate::optics::flare::FlareLens,
@@ -70,7 +74,7 @@ pub fn traced_ghost_image(
     c: usize,
     rays_across: usize,
     sensor: crate::tools::accuracy_flare::Sensor,
-    margin_px: f64,
+    margin: f64,
     max_cells: u32,
 ) -> Option<GreyImage> {
     use crate::optics::flare::traced::{display_px, optical_slope, TracedImage};
@@ -90,6 +94,7 @@ pub fn traced_ghost_image(
         .collect();
     let lo = px.iter().fold([f64::INFINITY; 2], |m, (p, _)| [m[0].min(p[0]), m[1].min(p[1])]);
     let hi = px.iter().fold([f64::NEG_INFINITY; 2], |m, (p, _)| [m[0].max(p[0]), m[1].max(p[1])]);
+    let margin_px = (margin * (hi[0] - lo[0]).max(hi[1] - lo[1])).max(4.0);
     let origin = [(lo[0] - margin_px).floor(), (lo[1] - margin_px).floor()];
     let extent = ((hi[0] + margin_px).ceil() - origin[0]).max((hi[1] + margin_px).ceil() - origin[1]).max(1.0);
     let cell_px = (extent / max_cells.max(1) as f64).max(1.0).ceil();
@@ -99,7 +104,7 @@ pub fn traced_ghost_image(
     for (p, w) in px {
         let (x, y) = (((p[0] - origin[0]) / cell_px) as u32, ((p[1] - origin[1]) / cell_px) as u32);
         if x < width && y < height {
-            values[(y * width + x) as usize] += w;
+            values[(y * width + x) as usize] += w / (cell_px * cell_px);
         }
     }
     Some(GreyImage { width, height, origin_px: origin, cell_px, values })
@@ -169,9 +174,16 @@ impl<'a> Cost<'a> {
         Cost { target, target_edges: edge_image(&target.values, w, h), evaluations: 0 }
     }
 
-    /// MSE of the images plus EDGE_WEIGHT times the MSE of their edge images.
+    /// MSE of the images plus EDGE_WEIGHT times the MSE of their edge images; infinite for a
+    /// primitive whose light would reach past the image (the cost could not see it there, and
+    /// a fit would hide light, or whole sides, outside).
     pub fn of(&mut self, ghost: &BezierGhost) -> f64 {
         self.evaluations += 1;
+        let (b, t) = (ghost.bounds_px(), self.target);
+        let end = [t.origin_px[0] + t.width as f64 * t.cell_px, t.origin_px[1] + t.height as f64 * t.cell_px];
+        if !(b[0] >= t.origin_px[0] && b[1] >= t.origin_px[1] && b[2] <= end[0] && b[3] <= end[1]) {
+            return f64::INFINITY;
+        }
         let drawn = self.target.draw(ghost);
         let (w, h) = (self.target.width as usize, self.target.height as usize);
         let c = mse(&drawn, &self.target.values) + EDGE_WEIGHT * mse(&edge_image(&drawn, w, h), &self.target_edges);
@@ -203,22 +215,8 @@ fn steps_and_limits(g: &BezierGhost) -> ([f64; PARAMS], [(f64, f64); PARAMS]) {
         0.2,
         0.2,
     ];
-    let big = f64::INFINITY;
-    let limits = [
-        (-big, big),
-        (-big, big),
-        (0.5, big),
-        (0.5, big),
-        (0.5, big),
-        (0.0, 1.2),
-        (0.0, 1.2),
-        (0.0, big),
-        (0.0, big),
-        (0.05, big),
-        (0.05, big),
-        (0.1, 8.0),
-        (0.1, 8.0),
-    ];
+    let mut limits = PARAM_RANGES;
+    limits[10].1 = MAX_OUTER_FADE * size;
     (steps, limits)
 }
 
@@ -246,15 +244,42 @@ pub struct Fit {
     pub evaluations: usize,
 }
 
+/// `start` within the parameters' limits, shrunk about its centre (sizes and fades) until
+/// the image holds its light (a moments guess of a ring, a seed extrapolated from its
+/// neighbours may reach past it), and its cost.
+fn held(cost: &mut Cost, start: &BezierGhost, limits: &[(f64, f64); PARAMS]) -> ([f64; PARAMS], f64) {
+    let mut p = start.to_params();
+    for (v, (lo, hi)) in p.iter_mut().zip(limits) {
+        *v = v.clamp(*lo, *hi);
+    }
+    let mut c = cost.of(&BezierGhost::from_params(&p));
+    for _ in 0..40 {
+        if c.is_finite() {
+            break;
+        }
+        for k in [2, 3, 4, 9, 10] {
+            p[k] = (p[k] * 0.9).max(limits[k].0);
+        }
+        c = cost.of(&BezierGhost::from_params(&p));
+    }
+    (p, c)
+}
+
+/// Of several starts, the one of least cost (once the image holds it).
+pub fn cheapest_start(target: &GreyImage, starts: &[BezierGhost]) -> Option<BezierGhost> {
+    let mut cost = Cost::new(target);
+    starts
+        .iter()
+        .map(|s| held(&mut cost, s, &steps_and_limits(s).1))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(p, _)| BezierGhost::from_params(&p))
+}
+
 /// Sec. 7.2's coordinate descent from `start`.
 pub fn fit(target: &GreyImage, start: &BezierGhost, options: &FitOptions) -> Fit {
     let mut cost = Cost::new(target);
     let (steps, limits) = steps_and_limits(start);
-    let mut p = start.to_params();
-    for (v, (lo, hi)) in p.iter_mut().zip(limits) {
-        *v = v.clamp(lo, hi);
-    }
-    let mut best = cost.of(&BezierGhost::from_params(&p));
+    let (mut p, mut best) = held(&mut cost, start, &limits);
     let mut rate = 1.0;
     let mut iterations = 0;
     while iterations < options.max_iterations && rate >= options.min_learning_rate {
@@ -345,8 +370,9 @@ pub fn moments_guess(image: &GreyImage) -> Option<BezierGhost> {
 }
 
 /// Sec. 7.3: the samples (angle, image) fitted in order, each started from the least-squares
-/// polynomial (order at most `order`) of the samples fitted before it, evaluated at its angle;
-/// the first from `first` (or its moments).
+/// polynomial (order at most `order`) of the samples fitted before it, evaluated at its angle
+/// (or from the last fit or the image's moments, whichever costs least); the first from
+/// `first` (or its moments).
 pub fn fit_range(
     samples: &[(f64, GreyImage)],
     first: Option<BezierGhost>,
@@ -358,9 +384,14 @@ pub fn fit_range(
         let start = if fits.is_empty() {
             first.or_else(|| moments_guess(image))
         } else {
+            // Sec. 7.3's seed; where the neighbours' polynomial strays (fits of a ghost larger
+            // than the frame trade its centre against its reach), the last fit or the image's
+            // moments may start closer: the cheapest of the three.
             let angles: Vec<f64> = samples[..fits.len()].iter().map(|s| s.0).collect();
             let ghosts: Vec<BezierGhost> = fits.iter().map(|f| f.ghost).collect();
-            Some(seed(&angles, &ghosts, *angle, order))
+            let mut starts = vec![seed(&angles, &ghosts, *angle, order), ghosts[ghosts.len() - 1]];
+            starts.extend(moments_guess(image));
+            cheapest_start(image, &starts)
         };
         let Some(start) = start else { break };
         fits.push(fit(image, &start, options));
@@ -386,6 +417,220 @@ pub fn polynomials(samples: &[(f64, GreyImage)], fits: &[Fit], order: usize) -> 
     let angles: Vec<f64> = samples.iter().map(|s| s.0).take(fits.len()).collect();
     let ghosts: Vec<BezierGhost> = fits.iter().map(|f| f.ghost).collect();
     GhostPolynomials::fit(&angles, &ghosts, order)
+}
+
+/// The light of the polynomials refitted to their own shapes: the coordinate descent trades
+/// I_b, I_i and the fades from one sample to the next, and a polynomial through those loses
+/// energy (22.5% on the Tessar's 4/0 at 2..5 degrees) although every sample keeps it. The
+/// image is linear in I_b and I_i for a given shape and fades (eq 6.4: I_b (1 - w) + I_i w
+/// inside, I_b (1 - w) outside), so at each sample the primitive of the polynomials gets the
+/// least-squares I_b and I_i of its image (kept >= 0), scaled together so that its energy is
+/// the sample's; their polynomials then replace those of I_b and I_i.
+pub fn relight(samples: &[(f64, GreyImage)], poly: &GhostPolynomials, order: usize) -> GhostPolynomials {
+    let (mut angles, mut borders, mut inners) = (Vec::new(), Vec::new(), Vec::new());
+    for (a, image) in samples {
+        let g = poly.at(*a);
+        let with = |border: f64, inner: f64| {
+            image.draw(&BezierGhost { transfer: Transfer { border, inner, ..g.transfer }, ..g })
+        };
+        let (b1, b2, t) = (with(1.0, 0.0), with(0.0, 1.0), &image.values);
+        let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let (a11, a12, a22, r1, r2) = (dot(&b1, &b1), dot(&b1, &b2), dot(&b2, &b2), dot(&b1, t), dot(&b2, t));
+        let det = a11 * a22 - a12 * a12;
+        let (mut ib, mut ii) = if det > 1e-12 * a11 * a22 {
+            ((r1 * a22 - r2 * a12) / det, (r2 * a11 - r1 * a12) / det)
+        } else {
+            (g.transfer.border, g.transfer.inner)
+        };
+        // Kept >= 0: the other one alone then.
+        if ib < 0.0 {
+            (ib, ii) = (0.0, if a22 > 0.0 { (r2 / a22).max(0.0) } else { 0.0 });
+        } else if ii < 0.0 {
+            (ib, ii) = (if a11 > 0.0 { (r1 / a11).max(0.0) } else { 0.0 }, 0.0);
+        }
+        let (e1, e2, e_t) = (b1.iter().sum::<f64>(), b2.iter().sum::<f64>(), t.iter().sum::<f64>());
+        let drawn = ib * e1 + ii * e2;
+        if drawn > 0.0 && drawn.is_finite() {
+            let k = e_t / drawn;
+            (ib, ii) = (k * ib, k * ii);
+        }
+        angles.push(*a);
+        borders.push(ib);
+        inners.push(ii);
+    }
+    let mut out = poly.clone();
+    if !angles.is_empty() {
+        out.coefficients[7] = polyfit(&angles, &borders, order);
+        out.coefficients[8] = polyfit(&angles, &inners, order);
+    }
+    out
+}
+
+/// The worst, over the samples, of the RMS difference over the traced peak plus the relative
+/// energy error of the polynomials' primitive.
+fn worst_error(samples: &[(f64, GreyImage)], poly: &GhostPolynomials) -> f64 {
+    samples
+        .iter()
+        .map(|(a, image)| {
+            let drawn = image.draw(&poly.at(*a));
+            let peak = image.values.iter().copied().fold(0.0, f64::max);
+            let e_t = energy_centroid(image, &image.values).0;
+            mse(&drawn, &image.values).sqrt() / peak + (energy_centroid(image, &drawn).0 / e_t - 1.0).abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// What [`fit_traced_ghosts`] fits: each ghost (all of the lens's when `ghosts` is empty) in
+/// each channel, traced at each angle (light towards +x of the centre, as `[[fitted_ghost]]`
+/// has it) on a `width` x `height` frame.
+#[derive(Clone, Debug)]
+pub struct TracedFitOptions {
+    pub width: u32,
+    pub height: u32,
+    pub angles_deg: Vec<f64>,
+    pub rays_across: usize,
+    /// Cells across a traced image at most (a larger ghost is fitted on coarser cells).
+    pub max_cells: u32,
+    /// The polynomials' order (ch. 8).
+    pub order: usize,
+    pub channels: Vec<usize>,
+    /// Ghosts as (first, second) reflecting surfaces; empty: every ghost of the catalogue.
+    pub ghosts: Vec<(usize, usize)>,
+    pub fit: FitOptions,
+}
+
+impl TracedFitOptions {
+    /// Every ghost in every channel at `angles_deg` on a `width` x `height` frame, with
+    /// `realcam flare-fit`'s defaults: 32 rays across, at most 24 cells, parabolas.
+    pub fn new(width: u32, height: u32, angles_deg: Vec<f64>) -> TracedFitOptions {
+        TracedFitOptions {
+            width,
+            height,
+            angles_deg,
+            rays_across: 32,
+            max_cells: 24,
+            order: 2,
+            channels: vec![0, 1, 2],
+            ghosts: Vec::new(),
+            fit: FitOptions::default(),
+        }
+    }
+}
+
+/// One ghost in one channel fitted over the angles, and how far its polynomials' primitive
+/// is from the traced images (the worst sample): RMS difference over the traced peak, the
+/// relative energy error, the centroid's distance (frame px).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FittedRange {
+    pub spec: FittedGhostSpec,
+    pub samples: usize,
+    pub worst_rmse_over_peak: f64,
+    pub worst_energy_error: f64,
+    pub worst_centroid_px: f64,
+    /// The same two of each sample's own fit (before the polynomials): what ch. 7 reaches, and
+    /// by its difference what ch. 8's polynomials lose.
+    pub worst_fit_rmse_over_peak: f64,
+    pub worst_fit_energy_error: f64,
+}
+
+/// The traced images' margin around the ghost's rays, a share of their box's larger side: room
+/// for the outer fade (at most [`MAX_OUTER_FADE`] of the primitive's size, an eighth of the
+/// ghost's width).
+pub const MARGIN: f64 = 0.2;
+
+/// The primitive's outer fade range F_o at most, a share of its largest half-size.
+pub const MAX_OUTER_FADE: f64 = 0.25;
+
+/// Energy (per unit of the light's own image) and centroid (frame px) of an image of light per
+/// frame pixel on `grid`'s cells.
+fn energy_centroid(grid: &GreyImage, v: &[f64]) -> (f64, [f64; 2]) {
+    let (mut s, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    for y in 0..grid.height {
+        for x in 0..grid.width {
+            let (px, py) = grid.centre_of(x, y);
+            let e = v[(y * grid.width + x) as usize];
+            (s, sx, sy) = (s + e, sx + e * px, sy + e * py);
+        }
+    }
+    (s * grid.cell_px * grid.cell_px, [sx / s, sy / s])
+}
+
+/// The closed loop with no camera (issue 14): the lens's ghosts traced with real rays over a
+/// range of angles, each fitted (ch. 7, sec. 7.3's seeding) and made polynomials of the angle
+/// (ch. 8), with each polynomial primitive's error against the traced images. A ghost with
+/// fewer traced samples than the order needs is left out. `progress` hears each ghost.
+pub fn fit_traced_ghosts(
+    camera: &crate::model::camera::Camera,
+    options: &TracedFitOptions,
+    mut progress: impl FnMut(&str),
+) -> Vec<FittedRange> {
+    use crate::passes::flare::FlareModel;
+    use crate::tools::accuracy_flare::Sensor;
+    let (w, h) = (options.width, options.height);
+    let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [w as f64 / 2.0, h as f64 / 2.0] };
+    let model = FlareModel::new(camera, sensor.pixel_pitch_mm, sensor.centre_px);
+    let (Some(lens), Some(catalogue)) = (model.lens.as_ref(), model.catalogue.as_ref()) else { return Vec::new() };
+    let mut angles = options.angles_deg.clone();
+    angles.sort_by(f64::total_cmp);
+    let mut out = Vec::new();
+    for g in &catalogue.ghosts {
+        let path = g.path;
+        if !options.ghosts.is_empty() && !options.ghosts.contains(&(path.first, path.second)) {
+            continue;
+        }
+        let label = format!("{}/{}", path.first, path.second);
+        for &c in &options.channels {
+            progress(&format!("ghost {label} channel {c}"));
+            let samples: Vec<(f64, GreyImage)> = angles
+                .iter()
+                .filter_map(|&a| {
+                    let u = [a.to_radians().tan(), 0.0];
+                    traced_ghost_image(lens, path, u, c, options.rays_across, sensor, MARGIN, options.max_cells)
+                        .map(|im| (a, im))
+                })
+                .collect();
+            if samples.len() <= options.order {
+                continue;
+            }
+            let fits = fit_range(&samples, None, options.order, &options.fit);
+            if fits.len() <= options.order {
+                continue;
+            }
+            // `relight` where it helps: a polynomial shape far from a sample's (a failed fit
+            // among them) can draw little of it, and scaling that up misleads the others.
+            let plain = polynomials(&samples, &fits, options.order);
+            let relit = relight(&samples[..fits.len()], &plain, options.order);
+            let poly = if worst_error(&samples[..fits.len()], &relit) <= worst_error(&samples[..fits.len()], &plain) {
+                relit
+            } else {
+                plain
+            };
+            let (mut rmse, mut energy, mut moved) = (0.0f64, 0.0f64, 0.0f64);
+            let (mut fit_rmse, mut fit_energy) = (0.0f64, 0.0f64);
+            for ((a, image), fit1) in samples[..fits.len()].iter().zip(&fits) {
+                let drawn = image.draw(&poly.at(*a));
+                let own = image.draw(&fit1.ghost);
+                let peak = image.values.iter().copied().fold(0.0, f64::max);
+                let e_t = energy_centroid(image, &image.values).0;
+                fit_rmse = fit_rmse.max(mse(&own, &image.values).sqrt() / peak);
+                fit_energy = fit_energy.max((energy_centroid(image, &own).0 / e_t - 1.0).abs());
+                let ((e_t, c_t), (e_f, c_f)) = (energy_centroid(image, &image.values), energy_centroid(image, &drawn));
+                rmse = rmse.max(mse(&drawn, &image.values).sqrt() / peak);
+                energy = energy.max((e_f / e_t - 1.0).abs());
+                moved = moved.max((c_t[0] - c_f[0]).hypot(c_t[1] - c_f[1]));
+            }
+            out.push(FittedRange {
+                spec: FittedGhostSpec::new(&label, c as u32, [w, h], &poly),
+                samples: fits.len(),
+                worst_rmse_over_peak: rmse,
+                worst_energy_error: energy,
+                worst_centroid_px: moved,
+                worst_fit_rmse_over_peak: fit_rmse,
+                worst_fit_energy_error: fit_energy,
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -447,6 +692,32 @@ mod tests {
     }
 
     #[test]
+    fn relight_gives_the_lights_of_images_drawn_with_the_polynomials_shapes() {
+        // Three samples of the same shape whose I_b and I_i drift linearly with the angle; the
+        // polynomials carry the shape and wrong lights (constant 1 and 1). Eq 6.4 is linear in
+        // I_b and I_i, so the least-squares lights of each image are its own (then scaled to
+        // its energy, already equal), and the lines through them give every sample back.
+        let g = truth();
+        let lights = |a: f64| (4.0 + 0.5 * a, 1.5 - 0.25 * a);
+        let samples: Vec<(f64, GreyImage)> = [1.0, 2.0, 3.0]
+            .iter()
+            .map(|&a| {
+                let (border, inner) = lights(a);
+                (a, image_of(&BezierGhost { transfer: Transfer { border, inner, ..g.transfer }, ..g }))
+            })
+            .collect();
+        let wrong = BezierGhost { transfer: Transfer { border: 1.0, inner: 1.0, ..g.transfer }, ..g };
+        let poly = GhostPolynomials::fit(&[1.0, 2.0, 3.0], &[wrong; 3], 2);
+        let relit = relight(&samples, &poly, 2);
+        for a in [1.0, 2.0, 2.5, 3.0] {
+            let (border, inner) = lights(a);
+            let t = relit.at(a).transfer;
+            assert!((t.border - border).abs() < 1e-4 && (t.inner - inner).abs() < 1e-4, "{a}: {t:?}");
+        }
+        assert!(worst_error(&samples, &relit) < 1e-4 && worst_error(&samples, &poly) > 0.3);
+    }
+
+    #[test]
     fn each_sample_starts_from_its_neighbours_polynomial() {
         // Sec. 7.3: after one sample a constant, after two a line, after three a parabola.
         let g = truth();
@@ -465,10 +736,11 @@ mod tests {
     fn a_fitted_primitive_reproduces_a_traced_ghost_of_the_tessar() {
         // The closed loop with no camera: the Tessar at f/2.8 on a 320x180 frame, a light 4
         // degrees off the axis, ghost 4/0 in green traced with real rays (96 across the front
-        // lens per wavelength: the reference), binned into 39x39 cells of 20 px (the ghost is
-        // 780 px wide), fitted from its moments. The primitive keeps the energy within 1% and
-        // the centroid within a cell; its RMS difference is under 15% of the traced peak (the
-        // rays' binning noise is most of it: 0.107 measured).
+        // lens per wavelength: the reference), binned into 40x40 cells of 27 px (the ghost is
+        // 780 px wide, the image 20% wider on each side), fitted from its moments. The
+        // primitive keeps the energy within 1% (measured 0.04%) and the centroid within a cell
+        // (13 px); its RMS difference is under 15% of the traced peak (the rays' binning noise
+        // is most of it: 0.122 measured).
         use crate::passes::flare::FlareModel;
         use crate::tools::accuracy_flare::{light_slope, Sensor};
         let (w, h) = (320, 180);
@@ -477,27 +749,59 @@ mod tests {
         let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
         let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
         let path = catalogue.ghosts.iter().map(|g| g.path).find(|p| (p.first, p.second) == (4, 0)).unwrap();
-        let image = traced_ghost_image(lens, path, light_slope(4.0, w, h), 1, 96, sensor, 4.0, 40).unwrap();
-        assert_eq!((image.width, image.height, image.cell_px), (39, 39, 20.0));
+        let image = traced_ghost_image(lens, path, light_slope(4.0, w, h), 1, 96, sensor, MARGIN, 40).unwrap();
+        assert_eq!((image.width, image.height, image.cell_px), (40, 40, 27.0));
         let f = fit(&image, &moments_guess(&image).unwrap(), &FitOptions::default());
         let drawn = image.draw(&f.ghost);
-        let centroid = |v: &[f64]| {
-            let (mut s, mut sx, mut sy) = (0.0, 0.0, 0.0);
-            for y in 0..image.height {
-                for x in 0..image.width {
-                    let (px, py) = image.centre_of(x, y);
-                    let e = v[(y * image.width + x) as usize];
-                    (s, sx, sy) = (s + e, sx + e * px, sy + e * py);
-                }
-            }
-            (s, [sx / s, sy / s])
-        };
-        let ((e_t, c_t), (e_f, c_f)) = (centroid(&image.values), centroid(&drawn));
+        let ((e_t, c_t), (e_f, c_f)) = (energy_centroid(&image, &image.values), energy_centroid(&image, &drawn));
         let peak = image.values.iter().copied().fold(0.0, f64::max);
         let rmse = mse(&drawn, &image.values).sqrt() / peak;
         let moved = (c_t[0] - c_f[0]).hypot(c_t[1] - c_f[1]);
         let summary = format!("energy {:+.4}, centroid {moved:.2} px, rmse/peak {rmse:.3}", e_f / e_t - 1.0);
-        assert!((e_f / e_t - 1.0).abs() < 0.01 && moved < 20.0 && rmse < 0.15, "{summary}");
+        assert!((e_f / e_t - 1.0).abs() < 0.01 && moved < 27.0 && rmse < 0.15, "{summary}");
+    }
+
+    #[test]
+    fn the_traced_ghosts_of_a_range_become_a_lens_file_section_that_round_trips() {
+        // The tiny case of `realcam flare-fit`: the Tessar's ghost 4/0 in green on a 320x180
+        // frame at 2..5 degrees (48 rays across per wavelength, at most 24 cells across: cells of
+        // 45 px), fitted and made parabolas of the angle, their light refitted to their shapes
+        // (`relight`). Each sample's own fit keeps its energy within 1% (measured 0.41%), RMS
+        // over the traced peak under 0.15 (0.102: mostly the rays' binning noise); the
+        // parabolas lose little more: energy within 2% (0.74%; 22.5% before `relight`), RMS
+        // 0.15 (0.103), centroid within a cell (18 px).
+        use crate::io::lens_file::{LensFile, LensFileWriter};
+        let camera = crate::tools::bench_flare::flare_camera(320, 180);
+        let options = TracedFitOptions {
+            rays_across: 48,
+            channels: vec![1],
+            ghosts: vec![(4, 0)],
+            ..TracedFitOptions::new(320, 180, vec![5.0, 2.0, 3.0, 4.0])
+        };
+        let mut heard = Vec::new();
+        let fitted = fit_traced_ghosts(&camera, &options, |m| heard.push(m.to_string()));
+        assert_eq!(heard, ["ghost 4/0 channel 1"]);
+        assert_eq!(fitted.len(), 1);
+        let f = &fitted[0];
+        let summary = format!(
+            "fits: rmse/peak {:.3}, energy {:.4}; polynomials: rmse/peak {:.3}, energy {:.4}, centroid {:.2} px",
+            f.worst_fit_rmse_over_peak,
+            f.worst_fit_energy_error,
+            f.worst_rmse_over_peak,
+            f.worst_energy_error,
+            f.worst_centroid_px
+        );
+        assert_eq!((f.samples, f.spec.angles_deg, f.spec.frame_px, f.spec.channel), (4, [2.0, 5.0], [320, 180], 1));
+        assert!(f.worst_fit_rmse_over_peak < 0.15 && f.worst_fit_energy_error < 0.01, "{summary}");
+        assert!(
+            f.worst_rmse_over_peak < 0.15 && f.worst_energy_error < 0.02 && f.worst_centroid_px < 45.0,
+            "{summary}"
+        );
+        let tessar = include_str!("../../lenses/tessar-walch-lens.toml");
+        let mut w = LensFileWriter::edit(tessar).unwrap();
+        w.fitted_ghosts(std::slice::from_ref(&f.spec), None);
+        let lens = LensFile::parse(&w.finish(), std::path::Path::new("fitted.toml")).unwrap();
+        assert_eq!(lens.fitted_ghosts, std::slice::from_ref(&f.spec));
     }
 
     #[test]

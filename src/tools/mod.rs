@@ -10,6 +10,7 @@ pub mod bench_motion;
 pub mod bench_sequence;
 pub mod error_budget;
 pub mod flare_fit;
+pub mod flare_predict;
 pub mod fuzz;
 pub mod metrics;
 pub mod synth;

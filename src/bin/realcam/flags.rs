@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 34] = [
+const FLAGS: [(&str, &str); 35] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -31,6 +31,7 @@ const FLAGS: [(&str, &str); 34] = [
     ("focus_min_m", "--focus-min-m"),
     ("sensor_diagonal_mm", "--sensor-diagonal-mm"),
     ("output", "--output"),
+    ("out", "--out"),
     ("png", "--png"),
     ("trace", "--trace"),
     ("max_pixels", "--max-pixels"),

@@ -47,6 +47,14 @@ pub fn run(args: &FlareArgs) -> Result<()> {
     }
     let request = args.lens.request(CameraRequest { flare: true, ..CameraRequest::blur_only() });
     let camera = Camera::new(&lens_file, &request).name_flags()?;
+    if let Some(g) = lens_file.fitted_ghosts.iter().find(|g| g.frame_px != [width, height]) {
+        anyhow::bail!(
+            "--size {width}x{height}: fitted_ghost {:?} of the lens is of a {}x{} frame (fit again with flare-fit --size)",
+            g.ghost,
+            g.frame_px[0],
+            g.frame_px[1]
+        );
+    }
     let gpu = args.gpu.open()?;
     let options = FlareAccuracyOptions {
         width,
@@ -54,6 +62,7 @@ pub fn run(args: &FlareArgs) -> Result<()> {
         angles_deg: args.angles_deg.clone(),
         rays_across: args.rays,
         runs: args.runs,
+        fitted: lens_file.fitted_ghosts.clone(),
     };
     let bar = progress_bar(2 * options.angles_deg.len() as u64);
     let rows = run_report(&gpu, &camera, &options, |m| {

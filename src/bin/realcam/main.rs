@@ -10,6 +10,8 @@ mod devices;
 mod dof;
 mod flags;
 mod flare;
+mod flare_fit;
+mod flare_predict;
 mod lens;
 mod motion_args;
 mod render;
@@ -49,6 +51,13 @@ enum Command {
     /// prescription, for a point light at several angles: centroid, energy and size errors, and
     /// the CPU and GPU time of each.
     Flare(flare::FlareArgs),
+    /// Walch's occurrence estimators (min, max, sum, average, log-average of the flare, and
+    /// the contrast it leaves, eq 9.3) of a lens's [[fitted_ghost]] section for a light.
+    FlarePredict(flare_predict::FlarePredictArgs),
+    /// Trace a lens's ghosts over a range of light angles, fit Walch's primitive to each (ch.
+    /// 7) and write each parameter as a polynomial of the angle (ch. 8) into a lens file's
+    /// [[fitted_ghost]] section, with the error of the fits and of the polynomials.
+    FlareFit(Box<flare_fit::FlareFitArgs>),
     /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
     /// defocused), with the fast path's error against the reference.
     Bench(bench::BenchArgs),
@@ -82,6 +91,8 @@ fn main() {
         Command::Lens { command } => lens::run(&command),
         Command::Accuracy(args) => accuracy::run(&args),
         Command::Flare(args) => flare::run(&args),
+        Command::FlarePredict(args) => flare_predict::run(&args),
+        Command::FlareFit(args) => flare_fit::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Compare { test, reference } => compare::run(&test, &reference),
         Command::Synth { out } => synth::run(&out),
