@@ -123,6 +123,17 @@ impl Prescription {
             if s.semi_diameter_mm <= 0.0 {
                 return Err(invalid(i, format!("semi_diameter_mm = {} must be positive", s.semi_diameter_mm)));
             }
+            // No camera lens has a clear aperture under a micrometre; a stop that small (1e-308
+            // from a fuzzed file) made the pupils 0 and the pupil magnification 0/0.
+            if s.semi_diameter_mm < MIN_SEMI_DIAMETER_MM {
+                return Err(invalid(
+                    i,
+                    format!(
+                        "semi_diameter_mm = {} must be at least {MIN_SEMI_DIAMETER_MM} mm (no camera lens is narrower)",
+                        Num(s.semi_diameter_mm)
+                    ),
+                ));
+            }
             if s.n_d < 1.0 {
                 return Err(invalid(i, format!("n_d = {} must be >= 1", s.n_d)));
             }
@@ -170,6 +181,9 @@ impl Prescription {
         Ok(Prescription { name: name.to_string(), surfaces })
     }
 }
+
+/// The smallest semi-diameter a surface may have: a micrometre.
+const MIN_SEMI_DIAMETER_MM: f64 = 0.001;
 
 #[cfg(test)]
 mod tests {
@@ -230,6 +244,12 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(e.to_string().contains("surface 1"), "{e}");
+        // A stop of 1e-308 mm (found by the fuzz test) would make the pupils 0 and P = 0/0.
+        let tiny = text.replace("semi_diameter_mm = 2\nstop", "semi_diameter_mm = 1e-308\nstop");
+        assert_eq!(
+            Prescription::parse_toml(&tiny, "tiny.toml").unwrap_err().to_string(),
+            "tiny.toml:2: surface 0: semi_diameter_mm = 1e-308 must be at least 0.001 mm (no camera lens is narrower)"
+        );
         let low_n = text.replace("n_d = 1.5", "n_d = 0.9");
         assert!(matches!(
             Prescription::parse_toml(&low_n, "n.toml"),
