@@ -8,7 +8,7 @@ use realcam::io::IoError;
 use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-const FLAGS: [(&str, &str); 35] = [
+pub(crate) const FLAGS: [(&str, &str); 35] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -132,25 +132,6 @@ pub fn error_text(e: &anyhow::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
-
-    /// Every long flag of the command line, all subcommands.
-    fn long_flags(command: &clap::Command, out: &mut Vec<String>) {
-        out.extend(command.get_arguments().filter_map(|a| a.get_long()).map(|l| format!("--{l}")));
-        command.get_subcommands().for_each(|c| long_flags(c, out));
-    }
-
-    #[test]
-    fn every_field_has_a_flag_of_the_command_line() {
-        let mut flags = Vec::new();
-        long_flags(&crate::Cli::command(), &mut flags);
-        for (field, flag) in FLAGS {
-            assert!(flags.iter().any(|f| f == flag), "{field}: {flag} is no flag of realcam");
-        }
-        for field in CameraField::ALL {
-            assert_ne!(flag(field.name()), field.name(), "{field:?} has no flag");
-        }
-    }
 
     #[test]
     fn errors_show_the_flag() {

@@ -122,6 +122,27 @@ fn keep_freed_memory() {
 
 #[cfg(test)]
 mod tests {
+    use clap::CommandFactory;
+
+    /// Every long flag of the command line, all subcommands.
+    fn long_flags(command: &clap::Command, out: &mut Vec<String>) {
+        out.extend(command.get_arguments().filter_map(|a| a.get_long()).map(|l| format!("--{l}")));
+        command.get_subcommands().for_each(|c| long_flags(c, out));
+    }
+
+    /// Here, not in flags.rs, which the Python package shares without the command line.
+    #[test]
+    fn every_field_has_a_flag_of_the_command_line() {
+        let mut flags = Vec::new();
+        long_flags(&super::Cli::command(), &mut flags);
+        for (field, flag) in super::flags::FLAGS {
+            assert!(flags.iter().any(|f| f == flag), "{field}: {flag} is no flag of realcam");
+        }
+        for field in realcam::model::camera::CameraField::ALL {
+            assert_ne!(super::flags::flag(field.name()), field.name(), "{field:?} has no flag");
+        }
+    }
+
     #[test]
     fn each_cause_is_said_once() {
         let io = std::io::Error::other("it is a directory");
