@@ -17,6 +17,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 if ! command -v cargo >/dev/null 2>&1; then
-  echo "error: cargo not found. Install a current Rust toolchain (rustup, https://rustup.rs; Rust 1.80 or newer)." >&2
+  echo "error: cargo not found. Install a current Rust toolchain (rustup, https://rustup.rs; Rust 1.89 or newer)." >&2
   exit 1
 fi
