@@ -110,7 +110,7 @@ pub(crate) use flags::error_text;
 /// memory), the EXR encoder's. By default glibc maps each such block afresh and unmaps it when
 /// freed, so every one costs its page faults again (64,000 faults, 0.25 s of system time for
 /// scene A). Served from the heap and kept there, freed blocks are reused: 43,000 faults, and
-/// the whole process 15-20 % faster on lavapipe.
+/// 0.12 s of system time instead of 0.22.
 fn keep_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     unsafe {

@@ -432,8 +432,9 @@ impl Session {
         Session { gpu: None, opening: opening.ok(), startup: None }
     }
 
-    /// The GPU: the one opening on another thread, else opened now; prints it.
-    fn open_gpu(&mut self, args: &RenderArgs) -> Result<Gpu> {
+    /// The GPU: the one opening on another thread, else opened now; prints it. With it, what
+    /// the wait for it was, for the start-up line.
+    fn open_gpu(&mut self, args: &RenderArgs) -> Result<(Gpu, String)> {
         let waited = Instant::now();
         let (gpu, how) = match self.opening.take().map(std::thread::JoinHandle::join) {
             Some(Ok(opened)) => (opened?, "waited for the GPU opened beside the read"),
@@ -441,14 +442,13 @@ impl Session {
             None => (args.gpu.open_quietly()?, "opened the GPU"),
         };
         eprintln!("device: {}", gpu.info());
-        self.startup = Some(format!("{how} {:.1} ms", ms_since(waited)));
-        Ok(gpu)
+        Ok((gpu, format!("{how} {:.1} ms", ms_since(waited))))
     }
 
     /// The start-up line of `--profile` after the first frame: when its GPU work was submitted,
     /// counted from the process's start (None before, and after it was taken).
     pub fn take_startup(&mut self) -> Option<String> {
-        self.startup.take().filter(|line| line.starts_with("start-up: "))
+        self.startup.take()
     }
 
     /// The GPU, once a frame has opened it (the Python package's `Camera.device`).
@@ -460,12 +460,13 @@ impl Session {
     /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
     /// Vulkan validation messages are an error.
     fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
-        let mut created = None;
+        // The first frame: how its GPU was waited for, and when its pipelines began.
+        let mut first = None;
         let opened = match self.gpu.take() {
             Some(opened) => opened,
             None => {
-                let gpu = self.open_gpu(args)?;
-                created = Some(Instant::now());
+                let (gpu, waited) = self.open_gpu(args)?;
+                first = Some((waited, Instant::now()));
                 let renderer = Renderer::new(&gpu, plan)?;
                 (gpu, renderer)
             }
@@ -474,16 +475,16 @@ impl Session {
         let messages_before = gpu.validation_message_count();
         let rendered = renderer.render(frame, plan, false)?;
         // The first frame: from the process's start to its submit, and what came between.
-        if let (Some(created), Some(submitted), Some(start), Some(line)) =
-            (created, rendered.profile.submitted_at, PROCESS_START.get(), &mut self.startup)
+        if let (Some((waited, created)), Some(submitted), Some(start)) =
+            (first, rendered.profile.submitted_at, PROCESS_START.get())
         {
             let ms = |from: Instant| submitted.saturating_duration_since(from).as_secs_f64() * 1e3;
-            *line = format!(
-                "start-up: the first frame's GPU work submitted {:.1} ms after the process started ({line}; \
+            self.startup = Some(format!(
+                "start-up: the first frame's GPU work submitted {:.1} ms after the process started ({waited}; \
                  pipelines and recording {:.1} ms)",
                 ms(*start),
                 ms(created)
-            );
+            ));
         }
         let messages = gpu.validation_message_count() - messages_before;
         if messages > 0 {
