@@ -16,7 +16,7 @@ use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPA
 use realcam::pipeline::planner::{self, Plan};
 use realcam::pipeline::render::{Rendered, Renderer};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 /// When the process started (`main` sets it first), for `--profile`'s start-up line.
@@ -704,8 +704,13 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
 fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<(String, Option<Arc<DisplayView>>)> {
     let from_file = frame.working_space;
     let config = match &args.config {
-        Some(path) => Some(ColourConfig::load(path).context("--config")?),
-        None => ColourConfig::from_env().context("$OCIO")?,
+        Some(path) => Some(memo(&CONFIG, path.clone(), || ColourConfig::load(path).context("--config"))?),
+        None => match std::env::var("OCIO") {
+            Ok(path) if !path.is_empty() => Some(memo(&CONFIG, format!("$OCIO={path}"), || {
+                ColourConfig::from_env().context("$OCIO")?.context("$OCIO is empty")
+            })?),
+            _ => None,
+        },
     };
     let mut config_space = None;
     let (name, how) = match (&args.colorspace, &config) {
@@ -753,11 +758,14 @@ fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<(String,
     let wants_view = args.png.is_some() || args.display.is_some() || args.view.is_some();
     let display_view = match (&config, config_space) {
         (Some(config), Some(space)) if wants_view => {
-            let dv = config.display_view(&space, args.display.as_deref(), args.view.as_deref()).map_err(|e| {
-                let flag = if matches!(e, ColourConfigError::UnknownDisplay { .. }) { "--display" } else { "--view" };
-                anyhow::Error::new(e).context(flag)
-            })?;
-            Some(Arc::new(dv))
+            let key = (config.name.clone(), space.clone(), args.display.clone(), args.view.clone());
+            Some(memo(&VIEW, key, || {
+                config.display_view(&space, args.display.as_deref(), args.view.as_deref()).map_err(|e| {
+                    let flag =
+                        if matches!(e, ColourConfigError::UnknownDisplay { .. }) { "--display" } else { "--view" };
+                    anyhow::Error::new(e).context(flag)
+                })
+            })?)
         }
         (Some(config), None) if args.display.is_some() || args.view.is_some() => bail!(
             "--display/--view: OpenColorIO config {} has no colour space of the input's primaries ({name}); \
@@ -770,6 +778,26 @@ fn choose_working_space(args: &RenderArgs, frame: &mut Frame) -> Result<(String,
         _ => None,
     };
     Ok((line, display_view))
+}
+
+/// The OpenColorIO config and the preview's view of the run, made once: a sequence plans every
+/// frame with the same ones (reading the config and building the view took about 18 ms a frame).
+type Memo<K, V> = Mutex<Option<(K, Arc<V>)>>;
+static CONFIG: Memo<String, ColourConfig> = Mutex::new(None);
+static VIEW: Memo<(String, String, Option<String>, Option<String>), DisplayView> = Mutex::new(None);
+
+/// `cell`'s value if it was made for `key`, else `make`'s, kept for the next call.
+fn memo<K: PartialEq, V>(cell: &Memo<K, V>, key: K, make: impl FnOnce() -> Result<V>) -> Result<Arc<V>> {
+    // A poisoned lock only means another thread panicked while holding it: make it again.
+    let mut kept = cell.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((k, v)) = kept.as_ref() {
+        if *k == key {
+            return Ok(v.clone());
+        }
+    }
+    let value = Arc::new(make()?);
+    *kept = Some((key, value.clone()));
+    Ok(value)
 }
 
 /// The same primaries and white within 1e-6 (a file stores them as 32-bit floats).
