@@ -243,7 +243,9 @@ impl Pass for Film {
         };
         let response = match (camera.film_on_output, &camera.film) {
             (true, _) | (_, FilmMode::Linear) => curve_name,
-            (false, _) => format!("linear (scene-referred; the {curve_name} makes the preview only)"),
+            // Where the curve goes instead (the PNG preview, or nowhere when an OpenColorIO view
+            // makes the preview) is the command line's to say: its `film curve:` line.
+            (false, _) => "linear (scene-referred)".into(),
         };
         let grain = if noise_sigma > 0.0 {
             format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
