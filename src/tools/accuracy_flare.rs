@@ -678,6 +678,13 @@ mod tests {
     use super::*;
     use crate::tools::bench_flare::flare_camera;
 
+    /// The report's Tessar at f/2.8 with the pixels of a `w` x `h` frame, its centre at `centre_px`.
+    fn tessar_on(w: u32, h: u32, centre_px: [f64; 2]) -> (FlareModel, Sensor) {
+        let camera = flare_camera(w, h);
+        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px };
+        (FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px), sensor)
+    }
+
     #[test]
     fn the_light_sits_at_its_angle_and_the_models_agree_on_the_centres() {
         // A light 2 degrees off the axis lies G0 tan(2 deg) from the centre towards the upper
@@ -691,9 +698,7 @@ mod tests {
         assert!(u[0] > 0.0 && u[1] < 0.0 && (u[1] / u[0] + 720.0 / 1280.0).abs() < 1e-12);
         // The centres at 1 degree (the error grows as the cube of the angle: 2.6 px at 2).
         let u = light_slope(1.0, w, h);
-        let camera = flare_camera(w, h);
-        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [640.0, 360.0] };
-        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
+        let (model, sensor) = tessar_on(w, h, [640.0, 360.0]);
         let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
         let traced = Traced { lens, catalogue, sensor, rays_across: 16 };
         let matrix = Matrix { lens, catalogue, sensor };
@@ -732,9 +737,7 @@ mod tests {
         // in cells of 80 px: the traced rays binned exactly, the matrix ghosts sampled at the
         // cells' centres within 3% (their edges).
         let (w, h) = (1280, 720);
-        let camera = flare_camera(w, h);
-        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [6400.0, 3600.0] };
-        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
+        let (model, sensor) = tessar_on(w, h, [6400.0, 3600.0]);
         let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
         let traced = Traced { lens, catalogue, sensor, rays_across: 16 };
         let matrix = Matrix { lens, catalogue, sensor };
