@@ -13,7 +13,7 @@ use crate::io::lens_file::FittedGhostSpec;
 use crate::model::camera::Camera;
 use crate::model::flare::FlareLight;
 use crate::model::frame::Frame;
-use crate::optics::flare::ghosts::{GhostCatalogue, GhostPath};
+use crate::optics::flare::ghosts::{GhostCatalogue, GhostPath, GhostShape};
 use crate::optics::flare::traced::{chief_ray, display_px, optical_slope, TracedImage};
 use crate::optics::flare::{channel_nm, FlareLens};
 use crate::passes::bezier_ghosts::{self, primitive_light, BezierGhostsShader, DrawnGhost};
@@ -49,6 +49,73 @@ pub trait GhostModel {
     fn covers(&self, _path: GhostPath, _u: [f64; 2], _c: usize) -> bool {
         true
     }
+    /// Adds the light of the ghost of `path` in channel `c` (per unit of the light's own image,
+    /// per frame pixel) to `cells`, as the model draws it.
+    fn draw(&self, path: GhostPath, u: [f64; 2], c: usize, cells: &mut FrameCells);
+}
+
+/// A frame in square cells of `cell_px` frame pixels, row by row: light per frame pixel, each
+/// cell sampled at its centre (a model) or the mean over it (the traced rays binned).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameCells {
+    pub cell_px: f64,
+    pub width: usize,
+    pub height: usize,
+    pub values: Vec<f64>,
+}
+
+/// The report's image error: at most this many cells across the frame (80 px at 1280 px). The
+/// Tessar's ghosts are washes 600-3600 px across (RMS radii at 2 degrees), and the traced rays'
+/// binning noise grows as the cells shrink: 64 rays across the lens put about one ray of a
+/// ghost in a cell of 40 px.
+pub const IMAGE_CELLS_ACROSS: u32 = 16;
+
+impl FrameCells {
+    /// A black frame of `size_px` in cells of whole pixels, at most `cells_across` across.
+    pub fn new(size_px: [u32; 2], cells_across: u32) -> FrameCells {
+        let cell_px = (size_px[0].max(size_px[1]) as f64 / cells_across.max(1) as f64).ceil().max(1.0);
+        let width = (size_px[0] as f64 / cell_px).ceil() as usize;
+        let height = (size_px[1] as f64 / cell_px).ceil() as usize;
+        FrameCells { cell_px, width, height, values: vec![0.0; width * height] }
+    }
+
+    /// Adds `light(centre)` to every cell whose centre lies within the box `lo`..`hi` (frame px).
+    fn add_over(&mut self, lo: [f64; 2], hi: [f64; 2], light: impl Fn([f64; 2]) -> f64) {
+        let cell = self.cell_px;
+        let range = |a: f64, b: f64, n: usize| {
+            let first = (a / cell - 0.5).ceil().clamp(0.0, n as f64) as usize;
+            let end = ((b / cell - 0.5).floor() + 1.0).clamp(0.0, n as f64) as usize;
+            first..end.max(first)
+        };
+        for j in range(lo[1], hi[1], self.height) {
+            for i in range(lo[0], hi[0], self.width) {
+                let q = [(i as f64 + 0.5) * cell, (j as f64 + 0.5) * cell];
+                self.values[j * self.width + i] += light(q);
+            }
+        }
+    }
+
+    /// Adds `energy` (per unit of the light's own image) landing at frame point `p` to its cell.
+    fn add_at(&mut self, p: [f64; 2], energy: f64) {
+        let (i, j) = ((p[0] / self.cell_px).floor(), (p[1] / self.cell_px).floor());
+        if i >= 0.0 && j >= 0.0 && (i as usize) < self.width && (j as usize) < self.height && energy.is_finite() {
+            self.values[j as usize * self.width + i as usize] += energy / (self.cell_px * self.cell_px);
+        }
+    }
+}
+
+/// The RMS difference of a model's frames from the reference's over the reference's RMS (the
+/// relative L2 error: 0 for the same light, 1 for a black frame); None where the reference is
+/// black.
+pub fn relative_image_error(model: &[FrameCells], reference: &[FrameCells]) -> Option<f64> {
+    let (mut diff, mut norm) = (0.0, 0.0);
+    for (m, r) in model.iter().zip(reference) {
+        for (a, b) in m.values.iter().zip(&r.values) {
+            diff += (a - b) * (a - b);
+            norm += b * b;
+        }
+    }
+    (norm > 0.0 && diff.is_finite()).then(|| (diff / norm).sqrt())
 }
 
 /// The frame the models draw on: its pixel pitch and optical centre.
@@ -71,6 +138,26 @@ impl Traced<'_> {
     fn image(&self, path: Option<GhostPath>, u: [f64; 2], c: usize) -> TracedImage {
         TracedImage::trace(self.lens, path, optical_slope(u), c, self.rays_across)
     }
+
+    fn to_image(&self, mm: [f64; 2]) -> [f64; 2] {
+        let d = display_px(mm, self.sensor.pixel_pitch_mm);
+        [self.sensor.centre_px[0] + d[0], self.sensor.centre_px[1] + d[1]]
+    }
+
+    /// The ghost's rays binned as [`GhostModel::draw`] does, and its alternate rays (even, odd)
+    /// binned apart with twice their weight: two images of the same light whose difference is
+    /// the binning noise.
+    fn draw_halves(&self, path: GhostPath, u: [f64; 2], c: usize, cells: &mut [FrameCells; 3]) {
+        let direct = self.image(None, u, c).energy();
+        if direct.is_nan() || direct <= 0.0 {
+            return;
+        }
+        for (k, h) in self.image(Some(path), u, c).hits.iter().enumerate() {
+            let p = self.to_image(h.position);
+            cells[0].add_at(p, h.weight / direct);
+            cells[1 + k % 2].add_at(p, 2.0 * h.weight / direct);
+        }
+    }
 }
 
 impl GhostModel for Traced<'_> {
@@ -82,10 +169,7 @@ impl GhostModel for Traced<'_> {
         let direct = self.image(None, u, c).energy();
         let ghost = self.image(Some(path), u, c);
         let centroid = ghost.centroid()?;
-        let to_image = |mm: [f64; 2]| {
-            let d = display_px(mm, self.sensor.pixel_pitch_mm);
-            [self.sensor.centre_px[0] + d[0], self.sensor.centre_px[1] + d[1]]
-        };
+        let to_image = |mm: [f64; 2]| self.to_image(mm);
         let crossing = self.catalogue.ghosts.iter().find(|g| g.path == path)?.channels[c].aperture_crossing;
         let events = path.events(self.lens.prescription.surfaces.len());
         let chief = chief_ray(self.lens, &events, crossing, optical_slope(u), channel_nm(c));
@@ -95,6 +179,16 @@ impl GhostModel for Traced<'_> {
             energy_ratio: ghost.energy() / direct,
             rms_radius_px: ghost.rms_radius_mm()? / self.sensor.pixel_pitch_mm,
         })
+    }
+
+    fn draw(&self, path: GhostPath, u: [f64; 2], c: usize, cells: &mut FrameCells) {
+        let direct = self.image(None, u, c).energy();
+        if direct.is_nan() || direct <= 0.0 {
+            return;
+        }
+        for h in &self.image(Some(path), u, c).hits {
+            cells.add_at(self.to_image(h.position), h.weight / direct);
+        }
     }
 }
 
@@ -112,6 +206,30 @@ impl GhostModel for Matrix<'_> {
     }
 
     fn ghost(&self, path: GhostPath, u: [f64; 2], c: usize) -> Option<GhostEstimate> {
+        let shape = self.shape(path, u, c)?;
+        // At least 256 samples across the ghost, at most 32 per pixel.
+        let m = shape.moments_step(&self.lens.aperture, (2.0 * shape.radius_px / 256.0).max(1.0 / 32.0))?;
+        Some(GhostEstimate {
+            centre_px: Some(shape.centre_px),
+            centroid_px: m.centroid_px,
+            energy_ratio: shape.irradiance_per_energy * m.area_px2,
+            rms_radius_px: m.rms_radius_px,
+        })
+    }
+
+    fn draw(&self, path: GhostPath, u: [f64; 2], c: usize, cells: &mut FrameCells) {
+        let Some(shape) = self.shape(path, u, c) else { return };
+        let r = shape.radius_px;
+        let lo = [shape.centre_px[0] - r, shape.centre_px[1] - r];
+        let hi = [shape.centre_px[0] + r, shape.centre_px[1] + r];
+        let aperture = &self.lens.aperture;
+        cells.add_over(lo, hi, |q| if shape.sdf(q, aperture) < 0.0 { shape.irradiance_per_energy } else { 0.0 });
+    }
+}
+
+impl Matrix<'_> {
+    /// The ghost as the flare pass draws it; None where a surface blocks it.
+    fn shape(&self, path: GhostPath, u: [f64; 2], c: usize) -> Option<GhostShape> {
         let g = self.catalogue.ghosts.iter().find(|g| g.path == path)?;
         let s = self.sensor;
         let shape = g.channels[c].shape(
@@ -121,17 +239,7 @@ impl GhostModel for Matrix<'_> {
             MIN_GHOST_RADIUS_PX,
             self.catalogue.aperture_area_factor,
         );
-        if shape.blocked {
-            return None;
-        }
-        // At least 256 samples across the ghost, at most 32 per pixel.
-        let m = shape.moments_step(&self.lens.aperture, (2.0 * shape.radius_px / 256.0).max(1.0 / 32.0))?;
-        Some(GhostEstimate {
-            centre_px: Some(shape.centre_px),
-            centroid_px: m.centroid_px,
-            energy_ratio: shape.irradiance_per_energy * m.area_px2,
-            rms_radius_px: m.rms_radius_px,
-        })
+        (!shape.blocked).then_some(shape)
     }
 }
 
@@ -212,6 +320,14 @@ impl GhostModel for Fitted<'_> {
             rms_radius_px: (m2 / sum).sqrt(),
         })
     }
+
+    fn draw(&self, path: GhostPath, u: [f64; 2], c: usize, cells: &mut FrameCells) {
+        let Some(words) = self.spec(path, c).and_then(|s| self.drawn(s, u, [1.0; 3])).and_then(|d| d.words()) else {
+            return;
+        };
+        let b: Vec<f64> = words[BEZIER_BOUNDS as usize..][..4].iter().map(|&v| v as f64).collect();
+        cells.add_over([b[0], b[1]], [b[2], b[3]], |q| primitive_light(&words, [q[0] as f32, q[1] as f32]) as f64);
+    }
 }
 
 /// GPU ms of glsl/bezier_ghosts.comp drawing every fitted ghost (all channels) of a light of
@@ -266,6 +382,12 @@ pub struct ModelRow {
     pub energy_error: Stats,
     /// |model - reference| of the RMS radius, relative to the reference's.
     pub size_error: Stats,
+    /// The model's frame of these ghosts against the traced rays' frame (per channel, in
+    /// [`IMAGE_CELLS_ACROSS`] cells across): RMS difference over the traced frame's RMS ([`relative_image_error`]).
+    /// The reference's own row: an estimate of its binning noise, the same measure between
+    /// the frames of its alternate rays, halved (a model's error holds this noise in
+    /// quadrature). None where nothing is compared.
+    pub image_error: Option<f64>,
     /// The ghost with the largest centroid error.
     pub worst: Option<GhostPath>,
     /// Time to compute every ghost of the light on the CPU (ms).
@@ -358,6 +480,7 @@ fn compare(
     truth: &[Option<GhostEstimate>],
     (estimate, cpu_ms): (Vec<Option<GhostEstimate>>, f64),
     gpu_ms: Option<f64>,
+    image_error: Option<f64>,
 ) -> ModelRow {
     let (mut centre, mut centroid, mut energy, mut size, mut disagree) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), 0);
@@ -393,6 +516,7 @@ fn compare(
         centroid_error_px: Stats::of(&centroid),
         energy_error: Stats::of(&energy),
         size_error: Stats::of(&size),
+        image_error,
         worst: worst.1,
         cpu_ms,
         gpu_ms,
@@ -422,6 +546,32 @@ pub fn run(
         progress(&format!("{angle_deg} degrees: tracing"));
         let (truth, traced_ms) = estimates(&reference, &paths, u);
         let shown = truth.iter().filter(|t| t.is_some()).count();
+        // Each (ghost, channel)'s traced frame, and every ghost's alternate rays apart.
+        let black = || FrameCells::new([w, h], IMAGE_CELLS_ACROSS);
+        let mut halves: [[FrameCells; 3]; 2] = [std::array::from_fn(|_| black()), std::array::from_fn(|_| black())];
+        let traced_cells: Vec<FrameCells> = (0..3 * paths.len())
+            .map(|k| {
+                let mut cells = std::array::from_fn(|_| black());
+                reference.draw_halves(paths[k / 3], u, k % 3, &mut cells);
+                let [full, even, odd] = cells;
+                for (half, own) in halves.iter_mut().zip([even, odd]) {
+                    half[k % 3].values.iter_mut().zip(&own.values).for_each(|(a, b)| *a += b);
+                }
+                full
+            })
+            .collect();
+        let image_error = |model: &dyn GhostModel| {
+            let (mut drawn, mut traced): ([FrameCells; 3], [FrameCells; 3]) =
+                (std::array::from_fn(|_| black()), std::array::from_fn(|_| black()));
+            for (k, cells) in traced_cells.iter().enumerate() {
+                let (p, c) = (paths[k / 3], k % 3);
+                if model.covers(p, u, c) {
+                    model.draw(p, u, c, &mut drawn[c]);
+                    traced[c].values.iter_mut().zip(&cells.values).for_each(|(a, b)| *a += b);
+                }
+            }
+            relative_image_error(&drawn, &traced)
+        };
         rows.push(ModelRow {
             model: reference.name().into(),
             reference: true,
@@ -432,6 +582,7 @@ pub fn run(
             centroid_error_px: Stats::default(),
             energy_error: Stats::default(),
             size_error: Stats::default(),
+            image_error: relative_image_error(&halves[0], &halves[1]).map(|e| 0.5 * e),
             worst: None,
             cpu_ms: traced_ms,
             gpu_ms: None,
@@ -443,10 +594,12 @@ pub fn run(
             1.0e6,
         );
         let gpu_ms = ghosts_gpu_ms(gpu, camera, w, h, light, options.runs)?;
-        rows.push(compare(&matrix, (angle_deg, u), &paths, &truth, estimates(&matrix, &paths, u), Some(gpu_ms)));
+        let (estimate, error) = (estimates(&matrix, &paths, u), image_error(&matrix));
+        rows.push(compare(&matrix, (angle_deg, u), &paths, &truth, estimate, Some(gpu_ms), error));
         if let Some(kernel) = &kernel {
             let gpu_ms = fitted_gpu_ms(gpu, kernel, &fitted, &paths, u, [w, h], options.runs)?;
-            rows.push(compare(&fitted, (angle_deg, u), &paths, &truth, estimates(&fitted, &paths, u), gpu_ms));
+            let (estimate, error) = (estimates(&fitted, &paths, u), image_error(&fitted));
+            rows.push(compare(&fitted, (angle_deg, u), &paths, &truth, estimate, gpu_ms, error));
         }
     }
     Ok(rows)
@@ -454,6 +607,7 @@ pub fn run(
 
 /// The report as Markdown.
 pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracyOptions, rows: &[ModelRow]) -> String {
+    let cells = FrameCells::new([options.width, options.height], IMAGE_CELLS_ACROSS);
     let mut out = format!("Device: {device}\n\nCommand: `{command}`\n\n");
     out += &format!(
         "{lens}: every ghost (two reflections) in each colour channel for a point light at each angle off the axis \
@@ -461,10 +615,19 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
          lens per wavelength, three wavelengths per channel, f64; each model's ghost against it: the distance of the \
          centres (the real chief ray through the stop's centre against the matrices' centre; px), the distance of \
          the centroids (px), |energy / traced - 1| and |RMS radius - traced| / traced, median and largest over the \
-         (ghost, channel) pairs both show; 'disagree': pairs only one of them shows. CPU ms: every ghost of the light \
+         (ghost, channel) pairs both show; 'disagree': pairs only one of them shows. Image: the model's frame of the ghosts it \
+         covers against the traced rays' frame of the same ghosts, each channel in cells of {cell} px ({cells} across, \
+         the rays binned, the models sampled at each cell's centre): RMS difference over the traced frame's RMS (0: the \
+         same light; 1: a black frame); on the reference's row, its binning noise (half that measure between the \
+         frames of its alternate rays), which every model's figure holds in quadrature. CPU ms: every ghost of the light \
          on one core; GPU ms: the flare passes drawing the light's ghosts (no starburst or halo; timestamp queries, \
          median of {} runs).\n\n",
-        options.width, options.height, options.rays_across, options.runs
+        options.width,
+        options.height,
+        options.rays_across,
+        options.runs,
+        cell = cells.cell_px,
+        cells = cells.width,
     );
     if !options.fitted.is_empty() {
         out += &format!(
@@ -476,8 +639,8 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
             options.runs
         );
     }
-    out += "| angle deg | model | compared | disagree | centre px (median / max) | centroid px (median / max) | energy (median / max) | size (median / max) | worst centroid | CPU ms | GPU ms |\n";
-    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    out += "| angle deg | model | compared | disagree | centre px (median / max) | centroid px (median / max) | energy (median / max) | size (median / max) | image | worst centroid | CPU ms | GPU ms |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         let (centre, centroid, energy, size, worst) = if r.reference {
             ("(reference)".to_string(), String::new(), String::new(), String::new(), String::new())
@@ -493,11 +656,16 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
             )
         };
         out += &format!(
-            "| {} | {} | {} | {} | {centre} | {centroid} | {energy} | {size} | {worst} | {:.1} | {} |\n",
+            "| {} | {} | {} | {} | {centre} | {centroid} | {energy} | {size} | {} | {worst} | {:.1} | {} |\n",
             r.angle_deg,
             r.model,
             r.compared,
             r.disagree,
+            r.image_error.map_or(String::new(), |e| format!(
+                "{:.0}%{}",
+                100.0 * e,
+                if r.reference { " (noise)" } else { "" }
+            )),
             r.cpu_ms,
             r.gpu_ms.map_or(String::new(), |ms| format!("{ms:.2}")),
         );
@@ -509,6 +677,13 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
 mod tests {
     use super::*;
     use crate::tools::bench_flare::flare_camera;
+
+    /// The report's Tessar at f/2.8 with the pixels of a `w` x `h` frame, its centre at `centre_px`.
+    fn tessar_on(w: u32, h: u32, centre_px: [f64; 2]) -> (FlareModel, Sensor) {
+        let camera = flare_camera(w, h);
+        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px };
+        (FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px), sensor)
+    }
 
     #[test]
     fn the_light_sits_at_its_angle_and_the_models_agree_on_the_centres() {
@@ -523,9 +698,7 @@ mod tests {
         assert!(u[0] > 0.0 && u[1] < 0.0 && (u[1] / u[0] + 720.0 / 1280.0).abs() < 1e-12);
         // The centres at 1 degree (the error grows as the cube of the angle: 2.6 px at 2).
         let u = light_slope(1.0, w, h);
-        let camera = flare_camera(w, h);
-        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [640.0, 360.0] };
-        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
+        let (model, sensor) = tessar_on(w, h, [640.0, 360.0]);
         let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
         let traced = Traced { lens, catalogue, sensor, rays_across: 16 };
         let matrix = Matrix { lens, catalogue, sensor };
@@ -544,5 +717,48 @@ mod tests {
         }
         // Ghost 2/0 has no real chief ray (src/optics/flare/traced.rs).
         assert!(centres >= 60, "{centres}");
+    }
+
+    #[test]
+    fn the_image_error_is_relative_to_the_traced_frame_and_each_frame_holds_its_ghosts_energy() {
+        // The measure: 0 for the reference's own frame, 1 for a black frame and for one of twice
+        // the light (|2T - T| = |T|), 1/2 for half of it.
+        let mut t = FrameCells::new([1280, 720], IMAGE_CELLS_ACROSS);
+        assert_eq!((t.cell_px, t.width, t.height), (80.0, 16, 9));
+        t.add_at([100.0, 50.0], 3.0);
+        t.add_at([900.0, 700.0], 1.0);
+        let scaled = |k: f64| FrameCells { values: t.values.iter().map(|v| k * v).collect(), ..t.clone() };
+        let error = |k: f64| relative_image_error(std::slice::from_ref(&scaled(k)), std::slice::from_ref(&t)).unwrap();
+        assert_eq!((error(1.0), error(0.0), error(2.0), error(0.5)), (0.0, 1.0, 1.0, 0.5));
+        assert_eq!(relative_image_error(&[t.clone()], &[scaled(0.0)]), None);
+        // Each model's frame of a ghost holds the energy it reports (light per frame pixel
+        // times the cells' area): the Tessar's ghosts at 2 degrees, in green, all of them on a
+        // frame ten times the 1280x720 one's size (same pixels; the ghosts span 600-3600 px),
+        // in cells of 80 px: the traced rays binned exactly, the matrix ghosts sampled at the
+        // cells' centres within 3% (their edges).
+        let (w, h) = (1280, 720);
+        let (model, sensor) = tessar_on(w, h, [6400.0, 3600.0]);
+        let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
+        let traced = Traced { lens, catalogue, sensor, rays_across: 16 };
+        let matrix = Matrix { lens, catalogue, sensor };
+        let u = light_slope(2.0, w, h);
+        let mut checked = 0;
+        for g in &catalogue.ghosts {
+            for (m, tolerance) in [(&traced as &dyn GhostModel, 1e-9), (&matrix, 0.03)] {
+                let Some(e) = m.ghost(g.path, u, 1) else { continue };
+                let r = 3.0 * e.rms_radius_px;
+                let [x, y] = e.centroid_px;
+                if x - r < 0.0 || y - r < 0.0 || x + r > 12800.0 || y + r > 7200.0 {
+                    continue;
+                }
+                let mut cells = FrameCells::new([12800, 7200], 160);
+                m.draw(g.path, u, 1, &mut cells);
+                let drawn = cells.values.iter().sum::<f64>() * 80.0 * 80.0;
+                let summary = format!("{} {:?}: drawn {drawn:.4e}, reported {:.4e}", m.name(), g.path, e.energy_ratio);
+                assert!((drawn / e.energy_ratio - 1.0).abs() < tolerance, "{summary}");
+                checked += 1;
+            }
+        }
+        assert!(checked >= 20, "{checked}");
     }
 }
