@@ -4,7 +4,7 @@
 // fill rate of integrated GPUs). One workgroup per 16x16 tile, reading its tile's bin words
 // (flare_bins.comp sorted every sprite against the tiles its bounds touch): in sprite order,
 // a covering channel's light is summed once (the same at every pixel of the tile), a crossing
-// one evaluated per pixel; the same sums every run, with no barrier. The light's own pixels
+// one evaluated per pixel; the same sums every run, with one barrier. The light's own pixels
 // give up the share of their light its starburst and halo took.
 // A later primitive (Walch's fitted Bezier ghosts) is one more kind here.
 #include "common.glsl"
@@ -28,6 +28,8 @@ layout(binding = 7, std430) readonly buffer FlareBins { uint bins[]; };
 layout(push_constant) uniform Push { ivec2 size; int words_per_tile; } pc;
 
 #include "ghost_sprite.glsl"
+
+shared float s_covering[3];
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
 vec3 spike_light(uint b, vec2 lo) {
@@ -58,27 +60,40 @@ void main() {
     uint total = args[ARGS_LIGHTS] * uint(fc.slots_per_light);
     uint words = min((total + BIN_SPRITES_PER_WORD - 1) / BIN_SPRITES_PER_WORD, uint(pc.words_per_tile));
     uint base = (uint(tile.y) * uint(fc.tiles_x) + uint(tile.x)) * uint(pc.words_per_tile);
-    // Covering light, summed apart from the crossing light as before the bins (the same bits).
-    vec3 covering = vec3(0.0);
     vec3 sum = vec3(0.0);
+    // The covering light, the same at every pixel: summed once per tile, invocation c summing
+    // channel c in sprite order (the same bits as before the bins), shared after one barrier.
+    if (gl_LocalInvocationIndex < 3u) {
+        uint c = gl_LocalInvocationIndex;
+        float acc = 0.0;
+        for (uint w = 0; w < words; ++w) {
+            uint bits = (bins[base + w] >> (BIN_COVERING_SHIFT + c)) & 0x01010101u;
+            while (bits != 0u) {
+                uint k = uint(findLSB(bits)) / 8u;
+                bits &= bits - 1u;
+                acc += sprite_data[(w * BIN_SPRITES_PER_WORD + k) * SPRITE_WORDS + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
+            }
+        }
+        s_covering[c] = acc;
+    }
+    barrier();
     for (uint w = 0; w < words; ++w) {
         uint word = bins[base + w];
-        // Its sprites in order: the lowest byte first.
-        while (word != 0u) {
-            uint k = uint(findLSB(word)) / 8u;
-            uint mode = (word >> (8u * k)) & 0xFFu;
-            word &= ~(0xFFu << (8u * k));
+        // The crossing sprites in order (the lowest byte first), each crossing channel alone.
+        uint cross = word & 0x07070707u;
+        while (cross != 0u) {
+            uint k = uint(findLSB(cross)) / 8u;
+            uint channels = (cross >> (8u * k)) & 7u;
+            cross &= ~(0xFFu << (8u * k));
             uint b = (w * BIN_SPRITES_PER_WORD + k) * SPRITE_WORDS;
             int kind = int(sprite_data[b + SPRITE_KIND]);
             if (kind == KIND_GHOST) {
                 float ramp = sprite_data[b + SPRITE_SOFTNESS];
-                for (uint c = 0; c < 3; ++c) {
+                while (channels != 0u) {
+                    uint c = uint(findLSB(channels));
+                    channels &= channels - 1u;
                     float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
-                    if ((mode & (1u << (c + BIN_COVERING_SHIFT))) != 0u) {
-                        covering[c] += value;
-                    } else if ((mode & (1u << c)) != 0u) {
-                        sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
-                    }
+                    sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
                 }
             } else if (kind == KIND_SPIKE) {
                 sum += spike_light(b, vec2(p));
@@ -95,5 +110,5 @@ void main() {
         uint lb = uint(light) * LIGHT_WORDS + LIGHT_MOVED;
         c.rgb *= vec3(1.0) - vec3(light_data[lb], light_data[lb + 1], light_data[lb + 2]);
     }
-    imageStore(color_out, p, vec4(c.rgb + covering + sum, c.a));
+    imageStore(color_out, p, vec4(c.rgb + vec3(s_covering[0], s_covering[1], s_covering[2]) + sum, c.a));
 }
