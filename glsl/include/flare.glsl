@@ -127,3 +127,9 @@ float disk_overlap(float r1, float r2, float d) {
 }
 
 #endif
+
+// Sprite bins (flare_bins -> ghost_sprites): per tile, one byte per sprite, four sprites a
+// word in sprite order: bits 0-2 channel c evaluated per pixel (the sprite crosses the tile),
+// bits 3-5 channel c's light the same at every pixel of the tile (covers it), 0: away.
+#define BIN_SPRITES_PER_WORD 4
+#define BIN_COVERING_SHIFT 3

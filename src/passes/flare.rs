@@ -1,23 +1,26 @@
 //! Lens flare (Walch 2017 sec. 3.2): the ghosts of the lens's inner reflections, the starburst
 //! of its aperture's diffraction and the halo of its scattering, around the lights of the frame
 //! (pixels the exposure saturates by the chosen factor) and the lights given explicitly. One
-//! pass of three shaders, each a module:
+//! pass of four shaders, each a module:
 //!   1. `flare_tiles`: per 16x16 tile, the light pixels' energy, count and position;
 //!   2. `flare_lights`: the tiles gathered into a short list of lights, and each light's flare
 //!      elements as sprites with tight bounds (the ghosts of the matrix model,
 //!      src/optics/flare/ghosts.rs; the starburst's spikes and glow and the halo,
 //!      src/optics/flare/starburst.rs), none where an element would not show;
-//!   3. `ghost_sprites`: the ghost-sprite kernel, the sprites binned per tile and added, every
-//!      output pixel written once.
+//!   3. `flare_bins`: each sprite sorted against the tiles its bounds touch (away, covering,
+//!      crossing), once per frame, into per-tile bin words;
+//!   4. `ghost_sprites`: the ghost-sprite kernel, each tile's binned sprites added, every output
+//!      pixel written once.
 //!
 //! The plan skips the pass when no light in the frame could make an element add a thousandth of
 //! the sensor's saturation, and says how bright a light would have to be.
 
+use super::flare_bins::{FlareBinsBindings, FlareBinsShader};
 use super::flare_lights::{FlareLightsBindings, FlareLightsShader};
 use super::flare_tiles::{light_weight, FlareTilesShader};
 use super::ghost_sprites::{GhostSpritesBindings, GhostSpritesShader};
 use super::scene::PlanInput;
-use super::{flare_lights, flare_tiles, ghost_sprites, Decision, FrameImages, Pass, TILE_SIZE};
+use super::{flare_bins, flare_lights, flare_tiles, ghost_sprites, Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::flare::{
     ARGS_WORDS, EXPLICIT_WORDS, GHOST_CLIP0, GHOST_WORDS, LIGHT_WORDS, MAX_CLIPS, SPRITE_WORDS, TILE_WORDS,
 };
@@ -357,6 +360,7 @@ fn energy_text(e: f64) -> String {
 pub struct Flare {
     tiles: Kernel<FlareTilesShader>,
     lights: Kernel<FlareLightsShader>,
+    bins: Kernel<FlareBinsShader>,
     sprites: Kernel<GhostSpritesShader>,
 }
 
@@ -431,7 +435,12 @@ impl Pass for Flare {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(Flare { tiles: Kernel::new(gpu)?, lights: Kernel::new(gpu)?, sprites: Kernel::new(gpu)? })
+        Ok(Flare {
+            tiles: Kernel::new(gpu)?,
+            lights: Kernel::new(gpu)?,
+            bins: Kernel::new(gpu)?,
+            sprites: Kernel::new(gpu)?,
+        })
     }
 
     /// The colour in, a new colour with the flare added (and the lights' starburst and halo
@@ -449,10 +458,14 @@ impl Pass for Flare {
         let tiles = rec.create_buffer("flare tiles", tile_count * TILE_WORDS as u64 * 4, storage)?;
         let lit = rec.create_buffer("flare lit tiles", tile_count * 4, storage)?;
         let lights = rec.create_buffer("flare lights", p.max_lights as u64 * LIGHT_WORDS as u64 * 4, storage)?;
-        let sprites = rec.create_buffer(
-            "flare sprites",
-            (p.max_lights as u64 * slots).max(1) * SPRITE_WORDS as u64 * 4,
-            storage,
+        let sprite_slots = (p.max_lights as u64 * slots).max(1);
+        let sprites = rec.create_buffer("flare sprites", sprite_slots * SPRITE_WORDS as u64 * 4, storage)?;
+        // One byte per sprite slot per tile (1280x720, 32 lights of 22 sprites: 2.5 MB).
+        let words_per_tile = flare_bins::words_per_tile(sprite_slots);
+        let bins = rec.create_buffer(
+            "flare bins",
+            tile_count * words_per_tile * 4,
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
         let args = rec.create_buffer("flare counts", ARGS_WORDS as u64 * 4, storage)?;
         let output = rec.create_image("color (flare)", color.width, color.height, color.format)?;
@@ -469,6 +482,8 @@ impl Pass for Flare {
             lit: &lit,
         };
         flare_lights::record(&self.lights, rec, &light_bindings, p.max_lights as i32)?;
+        let bin_bindings = FlareBinsBindings { constants: &constants, sprites: &sprites, args: &args, bins: &bins };
+        flare_bins::record(&self.bins, rec, &bin_bindings, sprite_slots as u32)?;
         let sprite_bindings = GhostSpritesBindings {
             color_in: &color,
             color_out: &output,
@@ -477,8 +492,9 @@ impl Pass for Flare {
             lights: &lights,
             sprites: &sprites,
             args: &args,
+            bins: &bins,
         };
-        ghost_sprites::record(&self.sprites, rec, &sprite_bindings, [tx, ty])?;
+        ghost_sprites::record(&self.sprites, rec, &sprite_bindings, [tx, ty], words_per_tile)?;
         images.set_color(None, output);
         Ok(())
     }

@@ -5,6 +5,7 @@
 
 use super::barriers::{buffer_after_compute_write, overwrite};
 use super::flare::constants_of;
+use super::flare_bins::ghost_channel;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
@@ -12,7 +13,6 @@ use crate::gpu::shaders::flare::{
     SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use crate::optics::flare::ghosts::GhostShape;
 use crate::optics::flare::AperturePolygon;
 
 pub const NAME: &str = "ghost_sprites";
@@ -27,16 +27,18 @@ crate::shader_bindings! {
         lights: buffer(FlareLights),
         sprites: buffer(FlareSprites),
         args: buffer(FlareArgs),
+        bins: buffer(FlareBins),
     }
 }
 
-/// glsl/ghost_sprites.comp: one workgroup per tile; its push constants are the image size.
+/// glsl/ghost_sprites.comp: one workgroup per tile; its push constants are the image size and
+/// the bin words of one tile.
 pub struct GhostSpritesShader;
 
 impl Shader for GhostSpritesShader {
     const NAME: &'static str = NAME;
     type Bindings<'a> = GhostSpritesBindings<'a>;
-    type Push = [i32; 2];
+    type Push = [i32; 3];
 }
 
 /// The part [t0, t1] of the ray o + t d, t in [t_min, t_max], inside the box lo..hi (t0 >= t1:
@@ -65,21 +67,11 @@ pub fn sprite_light(s: &[f32], aperture: &AperturePolygon, x: u32, y: u32) -> [f
         KIND_GHOST => {
             let ramp = s[SPRITE_SOFTNESS as usize] as f64;
             std::array::from_fn(|c| {
-                let g = |k: u32| f(c as u32 * GHOST_SPRITE_CHANNEL_WORDS + k);
-                let shape = GhostShape {
-                    centre_px: [g(0), g(1)],
-                    radius_px: g(2).abs(),
-                    flip: if g(2) < 0.0 { -1.0 } else { 1.0 },
-                    clip_centre_px: [g(4), g(5)],
-                    clip_radius_px: g(6),
-                    irradiance_per_energy: 0.0,
-                    clip_surface: None,
-                    blocked: false,
-                };
-                if g(3) <= 0.0 {
+                let value = f(c as u32 * GHOST_SPRITE_CHANNEL_WORDS + 3);
+                if value <= 0.0 {
                     0.0
                 } else {
-                    g(3) * (0.5 - shape.sdf(q, aperture) / ramp).clamp(0.0, 1.0)
+                    value * (0.5 - ghost_channel(s, c).sdf(q, aperture) / ramp).clamp(0.0, 1.0)
                 }
             })
         }
@@ -111,9 +103,9 @@ pub fn sprite_light(s: &[f32], aperture: &AperturePolygon, x: u32, y: u32) -> [f
 }
 
 impl Twin for GhostSpritesShader {
-    /// Every sprite at every pixel of its bounds (the shader's tile sorting only skips sprites
-    /// whose light there is 0, and adds covering ones once per tile: the same light).
-    fn cpu(size: &[i32; 2], groups: [u32; 3], b: &mut [HostData]) {
+    /// Every sprite at every pixel of its bounds (the bins only skip sprites whose light there is
+    /// 0, and add covering ones once per tile: the same light).
+    fn cpu(size: &[i32; 3], groups: [u32; 3], b: &mut [HostData]) {
         let fc = constants_of(&b[2]);
         let aperture = AperturePolygon {
             blades: fc.blades.max(0) as u32,
@@ -171,19 +163,21 @@ pub fn record(
     rec: &mut Recorder,
     b: &GhostSpritesBindings<'_>,
     tile_grid: [u32; 2],
+    words_per_tile: u64,
 ) -> GpuResult<()> {
     rec.begin_pass(NAME);
     // tiles (their light), lights, sprites and the counts: written by flare_lights
-    //   (read-after-write). color_in: already waited for by flare_tiles, only read since.
+    //   (read-after-write); the bins: written by flare_bins (read-after-write). color_in: already waited for by flare_tiles, only read since.
     // color_out: written from scratch; its old contents are discarded.
     rec.buffer_barriers(&[
         buffer_after_compute_write(b.tiles),
         buffer_after_compute_write(b.lights),
         buffer_after_compute_write(b.sprites),
         buffer_after_compute_write(b.args),
+        buffer_after_compute_write(b.bins),
     ]);
     rec.image_barriers(&[overwrite(b.color_out)]);
-    let size = [b.color_in.width as i32, b.color_in.height as i32];
+    let size = [b.color_in.width as i32, b.color_in.height as i32, words_per_tile as i32];
     kernel.dispatch(rec, b, &size, [tile_grid[0], tile_grid[1], 1])?;
     rec.end_pass();
     Ok(())

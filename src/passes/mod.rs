@@ -34,6 +34,7 @@ pub mod dof_tiles;
 pub mod film;
 pub mod filter;
 pub mod flare;
+pub mod flare_bins;
 pub mod flare_lights;
 pub mod flare_tiles;
 pub mod ghost_sprites;

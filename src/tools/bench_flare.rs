@@ -9,7 +9,7 @@ use crate::io::lens_file::LensFile;
 use crate::model::camera::{Camera, CameraRequest};
 use crate::model::frame::Frame;
 use crate::passes::flare::{Flare, FlareModel, FlareParams};
-use crate::passes::{flare_lights, flare_tiles, ghost_sprites, PlanInput};
+use crate::passes::{flare_bins, flare_lights, flare_tiles, ghost_sprites, PlanInput};
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
 use crate::tools::bench::{bare_pass_ms, median};
@@ -26,7 +26,7 @@ pub const LIGHT_VALUE: f32 = 1.0e5;
 pub const LIGHT_SIDE_PX: u32 = 3;
 
 /// The flare passes, in recording order.
-pub const FLARE_PASSES: [&str; 3] = [flare_tiles::NAME, flare_lights::NAME, ghost_sprites::NAME];
+pub const FLARE_PASSES: [&str; 4] = [flare_tiles::NAME, flare_lights::NAME, flare_bins::NAME, ghost_sprites::NAME];
 
 /// One measured configuration.
 #[derive(Clone, Debug)]
@@ -40,7 +40,7 @@ pub struct FlareBenchRow {
     pub sprites: usize,
     /// The profile nearest the median.
     pub profile: Profile,
-    /// Median GPU ms of the three flare passes together.
+    /// Median GPU ms of the flare passes together.
     pub flare_ms: f64,
     pub bare_ms: f64,
 }
@@ -163,8 +163,8 @@ pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
          the same run. Sprites: per light its ghosts, its starburst's spikes and one glow; the cost per sprite is \
          the kernel's time over one light's, per sprite added.\n\n"
     );
-    out += "| resolution | bare pass ms | lights | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | ghost_sprites | ghost_sprites ms per added sprite |\n";
-    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    out += "| resolution | bare pass ms | lights | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | flare_bins | ghost_sprites | ghost_sprites ms per added sprite |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         let one = rows.iter().find(|o| (o.width, o.height) == (r.width, r.height) && o.lights == 1);
         let ratio = one.map_or(String::new(), |o| format!("{:.2}x", r.flare_ms / o.flare_ms));
