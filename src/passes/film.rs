@@ -245,7 +245,7 @@ impl Pass for Film {
             (true, _) | (_, FilmMode::Linear) => curve_name,
             // Where the curve goes instead (the PNG preview, or nowhere when an OpenColorIO view
             // makes the preview) is the command line's to say: its `film curve:` line.
-            (false, _) => "linear (scene-referred)".into(),
+            (false, _) => format!("linear (scene-referred; the {curve_name} is not applied to the output)"),
         };
         let grain = if noise_sigma > 0.0 {
             format!(", sensor noise sigma {noise_sigma:.4} at ISO {} (seed {})", camera.iso, camera.seed)
