@@ -12,13 +12,19 @@
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
 layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
-// [log10 sensor values (n), log10 outputs (n)] when use_curve == 2.
+// [log10 sensor values (n), log10 outputs (n)] when RESPONSE == 2.
 layout(binding = 2, std430) readonly buffer Table { float table[]; };
+
+// The run's path, specialised (src/passes/film.rs, FilmPush::specialization) so the pipeline
+// holds only it: lavapipe runs both sides of every branch, and the curve and the noise cost
+// more than the rest of the pass.
+layout(constant_id = 0) const int RESPONSE = 1;  // 0: linear (scene-referred), 1: characteristic curve, 2: table
+layout(constant_id = 1) const bool NOISE = true; // noise_sigma > 0
 
 layout(push_constant) uniform Push {
     ivec2 size;
     float exposure_gain;
-    int use_curve;                  // 0: linear (scene-referred), 1: characteristic curve, 2: table
+    int use_curve;                  // the value RESPONSE is specialised to
     float log10_mid_in;
     float log10_mid_out;
     float contrast;
@@ -87,12 +93,12 @@ void main() {
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));
     vec3 h = c.rgb * pc.exposure_gain;
-    if (pc.noise_sigma > 0.0) {
+    if (NOISE) {
         for (int k = 0; k < 3; ++k) h[k] += pc.noise_sigma * sqrt(max(h[k], 0.0)) * gaussian(p, k);
     }
-    if (pc.use_curve == 1) {
+    if (RESPONSE == 1) {
         h = vec3(characteristic_curve(h.r), characteristic_curve(h.g), characteristic_curve(h.b));
-    } else if (pc.use_curve == 2) {
+    } else if (RESPONSE == 2) {
         h = vec3(table_curve(h.r), table_curve(h.g), table_curve(h.b));
     }
     imageStore(color_out, p, vec4(h, c.a));

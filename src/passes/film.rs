@@ -6,7 +6,7 @@
 use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
 use super::{Decision, FrameImages, Pass};
-use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::model::camera::FilmMode;
 use crate::optics::film::FilmCurve;
 
@@ -31,6 +31,14 @@ pub struct FilmPush {
     pub seed: u32,
     /// Entries of the characteristic-curve table (use_curve 2); 0: none.
     pub table_entries: i32,
+}
+
+impl FilmPush {
+    /// The shader's specialization constants for these constants: `RESPONSE` (`use_curve`) and
+    /// `NOISE` (whether `noise_sigma` > 0), so each run's pipeline holds only its own path.
+    pub fn specialization(&self) -> [u32; 2] {
+        [self.use_curve as u32, u32::from(self.noise_sigma > 0.0)]
+    }
 }
 
 /// The table buffer: log10 sensor values, then log10 outputs ([0] when there is no table).
@@ -207,7 +215,7 @@ pub struct FilmParams {
 }
 
 pub struct Film {
-    kernel: Kernel<FilmShader>,
+    kernel: SpecializedKernel<FilmShader>,
 }
 
 impl Pass for Film {
@@ -260,10 +268,15 @@ impl Pass for Film {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(Film { kernel: Kernel::new(gpu)? })
+        Ok(Film { kernel: SpecializedKernel::new(gpu)? })
+    }
+
+    fn prepare(&self, p: &FilmParams) -> GpuResult<()> {
+        self.kernel.prepare(&p.push.specialization())
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &FilmParams) -> GpuResult<()> {
-        filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
+        let constants = p.push.specialization();
+        filter::record(&(&self.kernel, &constants[..]), rec, images, NAME, &p.table, &p.push)
     }
 }

@@ -5,8 +5,44 @@
 
 use super::barriers::{after_compute_write, overwrite};
 use super::{groups_for, FrameImages};
-use crate::gpu::{GpuImage, GpuResult, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuImage, GpuResult, Kernel, Recorder, Shader, SpecializedKernel, Twin};
 use std::sync::Arc;
+
+/// A filter's pipeline for one run: its kernel, or its specialised kernel with the run's
+/// constants (a filter whose paths are switched per run, e.g. film's response and noise).
+pub trait FilterKernel<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> {
+    fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        bindings: &FilterBindings<'_>,
+        push: &S::Push,
+        groups: [u32; 3],
+    ) -> GpuResult<()>;
+}
+
+impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterKernel<S> for Kernel<S> {
+    fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        bindings: &FilterBindings<'_>,
+        push: &S::Push,
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        Kernel::dispatch(self, rec, bindings, push, groups)
+    }
+}
+
+impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterKernel<S> for (&SpecializedKernel<S>, &[u32]) {
+    fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        bindings: &FilterBindings<'_>,
+        push: &S::Push,
+        groups: [u32; 3],
+    ) -> GpuResult<()> {
+        self.0.dispatch(rec, self.1, bindings, push, groups)
+    }
+}
 
 crate::shader_bindings! {
     /// The bindings of a filter shader.
@@ -20,7 +56,7 @@ crate::shader_bindings! {
 /// Record one filter pass named `label`: the table uploaded, the colour filtered into a new
 /// image (`color (<label>)`), which becomes the colour.
 pub fn record<S>(
-    kernel: &Kernel<S>,
+    kernel: &impl FilterKernel<S>,
     rec: &mut Recorder,
     images: &mut FrameImages,
     label: &str,
@@ -41,7 +77,7 @@ where
 
 /// One dispatch of a filter from `input` into a new image `output_name`, returned.
 pub fn dispatch<S>(
-    kernel: &Kernel<S>,
+    kernel: &impl FilterKernel<S>,
     rec: &mut Recorder,
     input: &GpuImage,
     table: &crate::gpu::GpuBuffer,
