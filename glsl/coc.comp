@@ -14,6 +14,11 @@
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
+// The run's paths, specialised (src/passes/coc.rs, CocPush::specialization): lavapipe runs both
+// sides of every branch, so a pipeline without them skips the edge resolve's and the field
+// curvature's work.
+layout(constant_id = 0) const bool RESOLVE_EDGES = true;   // pc.resolve_edges != 0
+layout(constant_id = 1) const bool FIELD_CURVATURE = true; // pc.entries > 0
 layout(binding = 0, r32f) uniform readonly image2D depth_m;
 layout(binding = 1, r32f) uniform writeonly image2D coc_px;
 // Field curvature: [heights mm (entries), film-plane offset mm of the sharp image surface].
@@ -32,11 +37,11 @@ layout(push_constant) uniform Push {
     float image_distance_mm;   // v
     float inv_focal_length_per_mm;
     float aperture_px;         // v / (N' P) / pixel pitch
-    int entries;               // field-curvature table entries; 0: none
+    int entries;               // field-curvature table entries; 0: none (FIELD_CURVATURE)
     // Longitudinal colour: this run's channel focuses elsewhere than green, which shifts its
     // signed CoC by a constant (Camera::longitudinal_color_coc_px); 0 for green.
     float coc_offset_px;
-    int resolve_edges;         // 1: the anti-aliased-edge depth resolve above; 0: depth as stored
+    int resolve_edges;         // 1: the anti-aliased-edge depth resolve above; 0: depth as stored (RESOLVE_EDGES)
 } pc;
 
 #include "height_table.glsl"
@@ -48,28 +53,14 @@ float inverse_depth(ivec2 q) {
 
 float brightness(vec3 c) { return max(c.r, 0.0) + max(c.g, 0.0) + max(c.b, 0.0); }
 
-// The inverse depth (1/mm) whose light pixel p mostly holds (see the top of the file).
-float resolved_inverse_depth(ivec2 p) {
-    float w_p = inverse_depth(p);
-    if (pc.resolve_edges == 0) return w_p;
-    float w[9];
-    float w_near = w_p, w_far = w_p;
-    for (int i = 0; i < 9; ++i) {
-        w[i] = inverse_depth(p + ivec2(i % 3 - 1, i / 3 - 1));
-        w_near = max(w_near, w[i]);
-        w_far = min(w_far, w[i]);
-    }
-    // Two layers only matter if their CoCs differ by more than a pixel. The neighbourhood's
-    // loops run over `n` pixels, 0 away from edges: lavapipe runs the code after an early
-    // return anyway, but it leaves a loop that no lane of the SIMD group is still in, so
-    // groups without an edge skip the colour reads.
-    if (pc.coc_scale_px_mm * (w_near - w_far) <= 1.0) return w_p;
-    int n = pc.coc_scale_px_mm * (w_near - w_far) > 1.0 ? 9 : 0;
+// The inverse depth (1/mm) whose light pixel p holds at an edge between two layers, the
+// nearest w_near and farthest w_far of its neighbourhood w (see the top of the file).
+float edge_inverse_depth(ivec2 p, float w[9], float w_p, float w_near, float w_far) {
     float w_mid = 0.5 * (w_near + w_far);
     vec3 near_sum = vec3(0.0), far_sum = vec3(0.0);
     float near_n = 0.0, far_n = 0.0, near_w = 0.0, far_w = 0.0;
     vec3 c9[9];
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < 9; ++i) {
         if (i == 4) continue;
         vec3 c = finite_or_zero(imageLoad(color_in, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1))).rgb;
         c9[i] = c;
@@ -93,7 +84,7 @@ float resolved_inverse_depth(ivec2 p) {
     // layer's pixels span a range: a near pixel inside it is explained by its own surface.
     bool own_near = w_p > w_mid;
     float lo = 1.0e30, hi = -1.0e30;
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < 9; ++i) {
         if (i == 4 || (w[i] > w_mid) != own_near) continue;
         float a = dot(c9[i] - c_far, d) / dd;
         lo = min(lo, a);
@@ -108,6 +99,29 @@ float resolved_inverse_depth(ivec2 p) {
     return near ? near_w / near_n : far_w / far_n;
 }
 
+// The inverse depth (1/mm) whose light pixel p mostly holds (see the top of the file).
+float resolved_inverse_depth(ivec2 p) {
+    float w_p = inverse_depth(p);
+    if (!RESOLVE_EDGES) return w_p;
+    float w[9];
+    float w_near = w_p, w_far = w_p;
+    for (int i = 0; i < 9; ++i) {
+        w[i] = inverse_depth(p + ivec2(i % 3 - 1, i / 3 - 1));
+        w_near = max(w_near, w[i]);
+        w_far = min(w_far, w[i]);
+    }
+    // Two layers only matter if their CoCs differ by more than a pixel. lavapipe runs the code
+    // after an early return or inside a false `if` anyway, but it leaves a loop that no lane of
+    // the SIMD group is still in: the edge resolve is a loop of one trip at an edge and none
+    // elsewhere, so groups without an edge skip its colour reads and arithmetic.
+    int trips = pc.coc_scale_px_mm * (w_near - w_far) > 1.0 ? 1 : 0;
+    float resolved = w_p;
+    for (int once = 0; once < trips; ++once) {
+        resolved = edge_inverse_depth(p, w, w_p, w_near, w_far);
+    }
+    return resolved;
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
@@ -115,7 +129,7 @@ void main() {
     // (1/inf = 0), and -inf (then clamped) at u = 0. Depth was validated (no NaN, >= 0) on load.
     float inv_u = resolved_inverse_depth(p);
     float coc = pc.coc_scale_px_mm * (pc.inv_focus_distance_per_mm - inv_u);
-    if (pc.entries > 0) {
+    if (FIELD_CURVATURE) {
         // Field curvature (Kyaw 2013 sec 6.3.4, 7.6): at image height h the sharp image surface
         // lies delta(h) behind the film, so the point focuses at v_u + delta instead of v_u.
         // Eq 5.3 in the same terms: C = D' (v w / (1 + delta w) - 1), w = 1/v_u = 1/f - 1/u.

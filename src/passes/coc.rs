@@ -5,7 +5,7 @@ use super::barriers::overwrite;
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::{finite_or_zero, floats};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
-use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 use crate::model::camera::{BokehMode, Camera, CocModel};
 use crate::model::frame::Frame;
 use crate::optics::ThinLens;
@@ -105,6 +105,12 @@ impl CocPush {
             coc_offset_px: 0.0,
             resolve_edges: 0,
         }
+    }
+
+    /// The shader's specialization constants for these constants: `RESOLVE_EDGES` and
+    /// `FIELD_CURVATURE` (a table of entries), so a run's pipeline holds only its own paths.
+    pub fn specialization(&self) -> [u32; 2] {
+        [u32::from(self.resolve_edges != 0), u32::from(self.entries > 0)]
     }
 
     /// The inverse depth (1/mm) of a depth value as the shader reads it.
@@ -273,7 +279,7 @@ impl CocParams {
 }
 
 pub struct Coc {
-    kernel: Kernel<CocShader>,
+    kernel: SpecializedKernel<CocShader>,
 }
 
 impl Pass for Coc {
@@ -320,7 +326,11 @@ impl Pass for Coc {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(Coc { kernel: Kernel::new(gpu)? })
+        Ok(Coc { kernel: SpecializedKernel::new(gpu)? })
+    }
+
+    fn prepare(&self, p: &CocParams) -> GpuResult<()> {
+        self.kernel.prepare(&p.push.specialization())
     }
 
     /// Depth (R32F metres) -> a new CoC image (R32F signed px) for the run's channel.
@@ -342,7 +352,8 @@ impl Pass for Coc {
         // color: the upload's own barrier made it visible to compute reads (the CoC pass runs
         //   before any pass that writes the colour).
         let bindings = CocBindings { depth_m: &depth, coc_px: &coc, field_curvature: &table, color_in: &color };
-        self.kernel.dispatch(rec, &bindings, &p.push, groups_for(images.width, images.height))?;
+        let constants = p.push.specialization();
+        self.kernel.dispatch(rec, &constants, &bindings, &p.push, groups_for(images.width, images.height))?;
         rec.end_pass();
         images.set_coc(p.channel, coc);
         Ok(())
