@@ -71,24 +71,28 @@ impl AperturePolygon {
     }
 
     /// Area of the aperture of circumradius 1: (n/2) sin(2 pi / n) for straight blades, pi for
-    /// a circle, between them (curved blades) integrated on a fine grid.
+    /// a circle. Curved blades: along a ray at angle phi from a blade's normal, [`Self::sdf`] is
+    /// linear in the distance, so the edge lies at
+    ///     R(phi) = ((1 - k) cos(s/2) + k) / ((1 - k) cos(phi) + k),  s = 2 pi / n, k the curvature,
+    /// and the area is (n/2) times the integral of R^2 over -s/2..s/2 (Simpson's rule: R is smooth
+    /// there, 512 intervals leave an error under 1e-12).
     pub fn area_factor(&self) -> f64 {
         if !self.is_polygon() {
             return std::f64::consts::PI;
         }
-        if self.curvature <= 0.0 {
-            let n = self.blades as f64;
-            return 0.5 * n * (2.0 * std::f64::consts::PI / n).sin();
+        let (n, k) = (self.blades as f64, self.curvature);
+        let sector = 2.0 * std::f64::consts::PI / n;
+        if k <= 0.0 {
+            return 0.5 * n * sector.sin();
         }
-        let steps = 1024;
-        let h = 2.0 / steps as f64;
-        let inside = (0..steps * steps)
-            .filter(|i| {
-                let (x, y) = ((i % steps) as f64 + 0.5, (i / steps) as f64 + 0.5);
-                self.sdf([x * h - 1.0, y * h - 1.0], 1.0) < 0.0
-            })
-            .count();
-        inside as f64 * h * h
+        let rim = (1.0 - k) * (0.5 * sector).cos() + k;
+        let r2 = |phi: f64| (rim / ((1.0 - k) * phi.cos() + k)).powi(2);
+        let intervals = 512;
+        let h = sector / intervals as f64;
+        let inner: f64 =
+            (1..intervals).map(|i| if i % 2 == 1 { 4.0 } else { 2.0 } * r2(-0.5 * sector + i as f64 * h)).sum();
+        let integral = h / 3.0 * (r2(-0.5 * sector) + inner + r2(0.5 * sector));
+        0.5 * n * integral
     }
 
     /// The unit normals (x right, y down) of the blades' edges, outward, one per blade.
@@ -198,12 +202,32 @@ mod tests {
         let hexagon = AperturePolygon { blades: 6, rotation_rad: 0.0, curvature: 0.0 };
         assert!((hexagon.area_factor() - 1.5 * 3f64.sqrt()).abs() < 1e-12);
         assert_eq!(AperturePolygon::CIRCLE.area_factor(), std::f64::consts::PI);
-        // Half-curved blades lie between the polygon and the circle, and the grid integral of
-        // the straight polygon agrees with its formula.
-        let half = AperturePolygon { curvature: 0.5, ..hexagon }.area_factor();
-        assert!(half > hexagon.area_factor() && half < std::f64::consts::PI, "{half}");
+        // Curved blades lie between the polygon and the circle, and their polar integral agrees
+        // with a count of the sdf's inside on a grid of 1024 x 1024 over the unit square (the
+        // count's own error: a few 1e-4; 6 blades at k = 0.5 give 2.86591 there, 2.866028 on a
+        // grid of 6000 x 6000, 2.8660254 integrated).
+        let grid_area = |a: AperturePolygon| {
+            let steps = 1024;
+            let h = 2.0 / steps as f64;
+            let inside = (0..steps * steps)
+                .filter(|i| {
+                    let (x, y) = ((i % steps) as f64 + 0.5, (i / steps) as f64 + 0.5);
+                    a.sdf([x * h - 1.0, y * h - 1.0], 1.0) < 0.0
+                })
+                .count();
+            inside as f64 * h * h
+        };
+        for (blades, curvature) in [(6, 0.5), (9, 0.3), (5, 0.9)] {
+            let a = AperturePolygon { blades, rotation_rad: 0.4, curvature };
+            let straight = AperturePolygon { curvature: 0.0, ..a }.area_factor();
+            let area = a.area_factor();
+            assert!(area > straight && area < std::f64::consts::PI, "{blades} blades, k {curvature}: {area}");
+            assert!((area - grid_area(a)).abs() < 5e-4, "{blades} blades, k {curvature}: {area} vs {}", grid_area(a));
+        }
         let nearly_straight = AperturePolygon { curvature: 1e-9, ..hexagon }.area_factor();
-        assert!((nearly_straight - hexagon.area_factor()).abs() < 2e-3, "{nearly_straight}");
+        assert!((nearly_straight - hexagon.area_factor()).abs() < 1e-8, "{nearly_straight}");
+        let nearly_round = AperturePolygon { curvature: 1.0 - 1e-9, ..hexagon }.area_factor();
+        assert!((nearly_round - std::f64::consts::PI).abs() < 1e-8, "{nearly_round}");
         // Rotation 0 puts a corner straight up: (0, -1) is on the edge, the first normal is
         // half a sector (30 degrees) to the left of straight up.
         assert!(hexagon.sdf([0.0, -1.0], 1.0).abs() < 1e-12);
