@@ -30,6 +30,12 @@ layout(push_constant) uniform Push { ivec2 size; int words_per_tile; } pc;
 
 #include "ghost_sprite.glsl"
 
+// Specialization constants (src/passes/ghost_sprites.rs `specialization`; 0 and 1 are
+// aperture.glsl's): whether the frame has ghost sprites and spike sprites. A pipeline without
+// them has no loop for them, whose body lavapipe would run once per batch even with none listed.
+layout(constant_id = 2) const bool SPRITE_GHOSTS = true;
+layout(constant_id = 3) const bool SPRITE_SPIKES = true;
+
 #define GROUP (TILE_SIZE * TILE_SIZE)
 shared float s_covering[3];
 // The crossing sprites of a batch by kind (0 ghosts, 1 spikes, 2 glows), in sprite order.
@@ -104,7 +110,7 @@ void main() {
             for (uint k = 0; k < 3; ++k) s_listed[k] = n[k];
         }
         barrier();
-        for (uint i = 0; i < s_listed[0]; ++i) {
+        for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
             uint entry = s_list[0][i];
             uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
             float ramp = sprite_data[b + SPRITE_SOFTNESS];
@@ -115,7 +121,7 @@ void main() {
                 sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
             }
         }
-        for (uint i = 0; i < s_listed[1]; ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
+        for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
         for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
     }
     if (outside(p, pc.size)) return;
