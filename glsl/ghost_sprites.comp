@@ -74,10 +74,11 @@ void main() {
     vec3 sum = vec3(0.0);
     // The covering light, the same at every pixel: summed once per tile, invocation c summing
     // channel c in sprite order (the same bits as before the bins), shared after a barrier.
+    // Only ghosts cover a tile: without them, no walk over the bin words.
     if (gl_LocalInvocationIndex < 3u) {
         uint c = gl_LocalInvocationIndex;
         float acc = 0.0;
-        for (uint w = 0; w < words; ++w) {
+        for (uint w = 0; w < (SPRITE_GHOSTS ? words : 0u); ++w) {
             uint bits = (bins[base + w] >> (BIN_COVERING_SHIFT + c)) & 0x01010101u;
             while (bits != 0u) {
                 uint k = uint(findLSB(bits)) / 8u;
