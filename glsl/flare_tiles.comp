@@ -15,27 +15,46 @@ layout(binding = 2, std430) writeonly buffer FlareTiles { float tile_data[]; };
 layout(push_constant) uniform Push { ivec2 size; } pc;
 
 #define SUMS 7
-shared float s_sum[SUMS][TILE_SIZE * TILE_SIZE];
+#define GROUP (TILE_SIZE * TILE_SIZE)
+shared float s_sum[SUMS][GROUP];
+// The tile's light pixels lie in s_first .. s_end - 1 (none: s_end 0).
+shared uint s_first;
+shared uint s_end;
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     uint i = gl_LocalInvocationIndex;
+    if (i == 0u) {
+        s_first = GROUP;
+        s_end = 0u;
+    }
     float v[SUMS] = float[SUMS](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    bool lit = false;
     if (!outside(p, pc.size)) {
         vec3 c = imageLoad(color_in, p).rgb;
         bool finite = !any(isnan(c)) && !any(isinf(c));
         if (finite && max(c.r, max(c.g, c.b)) >= fc.threshold) {
             float w = max(c.r + c.g + c.b, 0.0);
             v = float[SUMS](c.r, c.g, c.b, w * (float(p.x) + 0.5), w * (float(p.y) + 0.5), w, 1.0);
+            lit = true;
         }
     }
     for (int k = 0; k < SUMS; ++k) s_sum[k][i] = v[k];
+    // s_first and s_end set before any invocation narrows them.
+    barrier();
+    if (lit) {
+        atomicMin(s_first, i);
+        atomicMax(s_end, i + 1u);
+    }
+    // The sums and the range written before invocation 0 reads them.
     barrier();
     // One invocation sums, in pixel order (the same sums every run; few barriers, which CPU
-    // drivers pay for).
-    if (i == 0) {
+    // drivers pay for). Lavapipe runs the body of an `if` whatever the condition, but leaves a
+    // loop that no lane is still in: over the range of light pixels only, a tile without any
+    // (nearly all) costs one pass through the loop, not one per pixel.
+    if (i == 0u) {
         float total[SUMS] = float[SUMS](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        for (uint j = 0; j < TILE_SIZE * TILE_SIZE; ++j) {
+        for (uint j = s_first; j < s_end; ++j) {
             if (s_sum[SUMS - 1][j] > 0.0) {
                 for (int k = 0; k < SUMS; ++k) total[k] += s_sum[k][j];
             }

@@ -30,10 +30,17 @@ layout(push_constant) uniform Push { ivec2 size; int words_per_tile; } pc;
 
 #include "ghost_sprite.glsl"
 
+// Specialization constants (src/passes/ghost_sprites.rs `specialization`; 0 and 1 are
+// aperture.glsl's): whether the frame has ghost sprites and spike sprites. A pipeline without
+// them has no loop for them, whose body lavapipe would run once per batch even with none listed.
+layout(constant_id = 2) const bool SPRITE_GHOSTS = true;
+layout(constant_id = 3) const bool SPRITE_SPIKES = true;
+
 #define GROUP (TILE_SIZE * TILE_SIZE)
 shared float s_covering[3];
-shared uint s_list[GROUP];
-shared uint s_listed;
+// The crossing sprites of a batch by kind (0 ghosts, 1 spikes, 2 glows), in sprite order.
+shared uint s_list[3][GROUP];
+shared uint s_listed[3];
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
 vec3 spike_light(uint b, vec2 lo) {
@@ -67,10 +74,11 @@ void main() {
     vec3 sum = vec3(0.0);
     // The covering light, the same at every pixel: summed once per tile, invocation c summing
     // channel c in sprite order (the same bits as before the bins), shared after a barrier.
+    // Only ghosts cover a tile: without them, no walk over the bin words.
     if (gl_LocalInvocationIndex < 3u) {
         uint c = gl_LocalInvocationIndex;
         float acc = 0.0;
-        for (uint w = 0; w < words; ++w) {
+        for (uint w = 0; w < (SPRITE_GHOSTS ? words : 0u); ++w) {
             uint bits = (bins[base + w] >> (BIN_COVERING_SHIFT + c)) & 0x01010101u;
             while (bits != 0u) {
                 uint k = uint(findLSB(bits)) / 8u;
@@ -82,41 +90,40 @@ void main() {
     }
     barrier();
     // The crossing sprites, listed in batches of up to GROUP by invocation 0 from the bins (in
-    // sprite order), then shaded by every pixel from the list.
+    // sprite order), one list per kind, then shaded by every pixel from the lists. Lavapipe
+    // runs both sides of every `if`, but leaves a loop no lane is still in: one loop per kind
+    // runs only its kind's code (a branch on the kind would run all three per sprite).
     for (uint first = 0; first < words; first += GROUP / BIN_SPRITES_PER_WORD) {
         barrier();
         if (gl_LocalInvocationIndex == 0u) {
-            uint n = 0;
+            uint n[3] = uint[3](0u, 0u, 0u);
             for (uint w = first; w < min(words, first + GROUP / BIN_SPRITES_PER_WORD); ++w) {
                 uint cross = bins[base + w] & 0x07070707u;
                 while (cross != 0u) {
                     uint k = uint(findLSB(cross)) / 8u;
-                    s_list[n++] = (w * BIN_SPRITES_PER_WORD + k) | (((cross >> (8u * k)) & 7u) << 24);
+                    uint s = w * BIN_SPRITES_PER_WORD + k;
+                    int kind = int(sprite_data[s * SPRITE_WORDS + SPRITE_KIND]);
+                    uint list = kind == KIND_GHOST ? 0u : (kind == KIND_SPIKE ? 1u : 2u);
+                    s_list[list][n[list]++] = s | (((cross >> (8u * k)) & 7u) << 24);
                     cross &= ~(0xFFu << (8u * k));
                 }
             }
-            s_listed = n;
+            for (uint k = 0; k < 3; ++k) s_listed[k] = n[k];
         }
         barrier();
-        uint listed = s_listed;
-        for (uint i = 0; i < listed; ++i) {
-            uint entry = s_list[i];
+        for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
+            uint entry = s_list[0][i];
             uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
-            uint channels = entry >> 24;
-            int kind = int(sprite_data[b + SPRITE_KIND]);
-            if (kind == KIND_GHOST) {
-                float ramp = sprite_data[b + SPRITE_SOFTNESS];
-                for (uint c = 0; c < 3; ++c) {
-                    if ((channels & (1u << c)) == 0u) continue;
-                    float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
-                    sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
-                }
-            } else if (kind == KIND_SPIKE) {
-                sum += spike_light(b, vec2(p));
-            } else {
-                sum += glow_light(b, q);
+            float ramp = sprite_data[b + SPRITE_SOFTNESS];
+            // The crossing channels only (each costs an aperture distance), in channel order.
+            for (uint channels = entry >> 24; channels != 0u; channels &= channels - 1u) {
+                uint c = uint(findLSB(channels));
+                float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
+                sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
             }
         }
+        for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
+        for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
     }
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));

@@ -139,7 +139,16 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     cases.push(("diffraction", busy_frame(24, 16), camera));
     // Lens flare: the Tessar's ghosts, a 5-bladed starburst and the halo, from two lights in
     // the frame (one of 3x3 px spanning two tiles) and one given just outside it.
-    cases.push(("flare", flare_frame(72, 40), flare_camera(5)));
+    cases.push(("flare", flare_frame(72, 40), flare_camera("tessar-walch-lens.toml", 5)));
+    // Neither ghosts (a lens file without a prescription) nor spikes (a round aperture): the
+    // ghost-sprite kernel's pipeline specialised without both loops.
+    let glow_only = flare_camera("default.toml", 0);
+    let model = realcam::passes::flare::FlareModel::new(&glow_only, 0.01, [36.0, 20.0]);
+    assert!(
+        model.catalogue.is_none() && model.starburst.spikes().is_empty(),
+        "the glow-only case has ghosts or spikes"
+    );
+    cases.push(("flare, glow only", flare_frame(72, 40), glow_only));
     cases
 }
 
@@ -154,14 +163,11 @@ fn flare_frame(w: u32, h: u32) -> Frame {
     Frame::new(w, h, color, vec![3.0; (w * h) as usize])
 }
 
-/// The Tessar with flare on, scene values kept (no exposure, vignetting or film curve), a
-/// 10.8 mm wide sensor and a light just outside the frame.
-fn flare_camera(blades: u32) -> Camera {
-    let lens = realcam::io::lens_file::LensFile::load(std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/lenses/tessar-walch-lens.toml"
-    )))
-    .expect("the Tessar's lens file");
+/// A shipped lens (lenses/`file`) with flare on, scene values kept (no exposure, vignetting or
+/// film curve), a 10.8 mm wide sensor and a light just outside the frame.
+fn flare_camera(file: &str, blades: u32) -> Camera {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lenses").join(file);
+    let lens = realcam::io::lens_file::LensFile::load(&path).expect("a shipped lens file");
     let request = realcam::model::camera::CameraRequest {
         sensor: Some("10.8x6".into()),
         blades: Some(blades),

@@ -24,7 +24,7 @@ use super::{flare_bins, flare_lights, flare_tiles, ghost_sprites, Decision, Fram
 use crate::gpu::shaders::flare::{
     ARGS_WORDS, EXPLICIT_WORDS, GHOST_CLIP0, GHOST_WORDS, LIGHT_WORDS, MAX_CLIPS, SPRITE_WORDS, TILE_WORDS,
 };
-use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder};
+use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, SpecializedKernel};
 use crate::model::camera::Camera;
 use crate::optics::flare::ghosts::{Clip, GhostCatalogue, GhostChannel, GhostPath, MatrixGhost};
 use crate::optics::flare::starburst::{Halo, Starburst};
@@ -361,7 +361,7 @@ pub struct Flare {
     tiles: Kernel<FlareTilesShader>,
     lights: Kernel<FlareLightsShader>,
     bins: Kernel<FlareBinsShader>,
-    sprites: Kernel<GhostSpritesShader>,
+    sprites: SpecializedKernel<GhostSpritesShader>,
 }
 
 impl Pass for Flare {
@@ -439,8 +439,13 @@ impl Pass for Flare {
             tiles: Kernel::new(gpu)?,
             lights: Kernel::new(gpu)?,
             bins: Kernel::new(gpu)?,
-            sprites: Kernel::new(gpu)?,
+            sprites: SpecializedKernel::new(gpu)?,
         })
+    }
+
+    /// The ghost-sprite kernel's pipeline for the kinds of sprite this frame has.
+    fn prepare(&self, p: &FlareParams) -> GpuResult<()> {
+        self.sprites.prepare(&ghost_sprites::specialization(&p.constants))
     }
 
     /// The colour in, a new colour with the flare added (and the lights' starburst and halo
@@ -494,7 +499,8 @@ impl Pass for Flare {
             args: &args,
             bins: &bins,
         };
-        ghost_sprites::record(&self.sprites, rec, &sprite_bindings, [tx, ty], words_per_tile)?;
+        let kinds = ghost_sprites::specialization(&p.constants);
+        ghost_sprites::record(&self.sprites, rec, &kinds, &sprite_bindings, [tx, ty], words_per_tile)?;
         images.set_color(None, output);
         Ok(())
     }

@@ -4,7 +4,7 @@
 //! (Walch's fitted Bezier shapes) are further kinds of sprite here.
 
 use super::barriers::{buffer_after_compute_write, overwrite};
-use super::flare::constants_of;
+use super::flare::{constants_of, FlareConstants};
 use super::flare_bins::ghost_channel;
 use super::twin::floats;
 use super::TILE_SIZE;
@@ -12,7 +12,7 @@ use crate::gpu::shaders::flare::{
     ARGS_LIGHTS, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS,
     SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
 
 pub const NAME: &str = "ghost_sprites";
@@ -157,10 +157,20 @@ impl Twin for GhostSpritesShader {
     const TOLERANCE: f32 = 2e-4;
 }
 
-/// Record the kernel: the frame's colour and the sprites in, a new colour out.
+/// The specialization constants of glsl/ghost_sprites.comp for a frame of `constants`:
+/// aperture.glsl's two (at their defaults: ghost_sdf uses neither path), then whether it has
+/// ghost sprites and spike sprites (a pipeline without a kind has no loop for it, which
+/// lavapipe would run once per batch of every tile).
+pub fn specialization(constants: &FlareConstants) -> [u32; 4] {
+    [1, 1, (constants.ghost_count > 0) as u32, (constants.spike_count > 0) as u32]
+}
+
+/// Record the kernel: the frame's colour and the sprites in, a new colour out; `constants`
+/// from [`specialization`].
 pub fn record(
-    kernel: &Kernel<GhostSpritesShader>,
+    kernel: &SpecializedKernel<GhostSpritesShader>,
     rec: &mut Recorder,
+    constants: &[u32; 4],
     b: &GhostSpritesBindings<'_>,
     tile_grid: [u32; 2],
     words_per_tile: u64,
@@ -178,7 +188,7 @@ pub fn record(
     ]);
     rec.image_barriers(&[overwrite(b.color_out)]);
     let size = [b.color_in.width as i32, b.color_in.height as i32, words_per_tile as i32];
-    kernel.dispatch(rec, b, &size, [tile_grid[0], tile_grid[1], 1])?;
+    kernel.dispatch(rec, constants, b, &size, [tile_grid[0], tile_grid[1], 1])?;
     rec.end_pass();
     Ok(())
 }
