@@ -4,9 +4,10 @@
 // fill rate of integrated GPUs). One workgroup per 16x16 tile, reading its tile's bin words
 // (flare_bins.comp sorted every sprite against the tiles its bounds touch): invocations 0-2 sum
 // the covering channels once (in sprite order: the same bits every run), invocation 0 lists
-// the crossing sprites in batches of 256, every pixel shades the list (each pixel decoding the
-// bin words itself measured 2.7x slower on lavapipe at 16 lights). The light's own pixels give
-// up the share of their light its starburst and halo took.
+// the crossing sprites by kind (in batches where they may be more than a list holds), every
+// pixel shades the lists (each pixel decoding the bin words itself measured 2.7x slower on
+// lavapipe at 16 lights). The light's own pixels give up the share of their light its
+// starburst and halo took.
 // A later primitive (Walch's fitted Bezier ghosts) is one more kind here.
 #include "common.glsl"
 #include "flare.glsl"
@@ -35,11 +36,16 @@ layout(push_constant) uniform Push { ivec2 size; int words_per_tile; } pc;
 // them has no loop for them, whose body lavapipe would run once per batch even with none listed.
 layout(constant_id = 2) const bool SPRITE_GHOSTS = true;
 layout(constant_id = 3) const bool SPRITE_SPIKES = true;
+// Whether a tile's sprites may be more than one list holds (SPRITE_LIST per kind): then they
+// are listed and shaded in batches. Without, there is no loop around the barriers and the
+// shading: with it, the kernel took 1.8x as long on lavapipe with the Tessar's ghosts in frame,
+// and 1.1x where no light was found and the loop never ran.
+layout(constant_id = 4) const bool SPRITE_BATCHES = true;
 
 #define GROUP (TILE_SIZE * TILE_SIZE)
 shared float s_covering[3];
-// The crossing sprites of a batch by kind (0 ghosts, 1 spikes, 2 glows), in sprite order.
-shared uint s_list[3][GROUP];
+// The crossing sprites (of a batch) by kind (0 ghosts, 1 spikes, 2 glows), in sprite order.
+shared uint s_list[3][SPRITE_LIST];
 shared uint s_listed[3];
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
@@ -61,6 +67,45 @@ vec3 glow_light(uint b, vec2 q) {
     float x = rho > 0.0 ? 1.0 / (1.0 + r * r / (rho * rho)) : 0.0;
     vec3 halo = vec3(sprite_data[d + 7], sprite_data[d + 8], sprite_data[d + 9]) * (x * sqrt(x));
     return diffraction + halo;
+}
+
+// Invocation 0 lists the crossing sprites of the tile's bin words first .. last - 1 (at most
+// SPRITE_LIST sprites) by kind, in sprite order.
+void list_sprites(uint base, uint first, uint last) {
+    if (gl_LocalInvocationIndex == 0u) {
+        uint n[3] = uint[3](0u, 0u, 0u);
+        for (uint w = first; w < last; ++w) {
+            uint cross = bins[base + w] & 0x07070707u;
+            while (cross != 0u) {
+                uint k = uint(findLSB(cross)) / 8u;
+                uint s = w * BIN_SPRITES_PER_WORD + k;
+                int kind = int(sprite_data[s * SPRITE_WORDS + SPRITE_KIND]);
+                uint list = kind == KIND_GHOST ? 0u : (kind == KIND_SPIKE ? 1u : 2u);
+                s_list[list][n[list]++] = s | (((cross >> (8u * k)) & 7u) << 24);
+                cross &= ~(0xFFu << (8u * k));
+            }
+        }
+        for (uint k = 0; k < 3; ++k) s_listed[k] = n[k];
+    }
+}
+
+// The listed sprites' light at pixel p (centre q) added to `sum`, one loop per kind: lavapipe
+// runs both sides of every `if`, but leaves a loop no lane is still in (a branch on the kind
+// would run all three per sprite).
+void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
+    for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
+        uint entry = s_list[0][i];
+        uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
+        float ramp = sprite_data[b + SPRITE_SOFTNESS];
+        // The crossing channels only (each costs an aperture distance), in channel order.
+        for (uint channels = entry >> 24; channels != 0u; channels &= channels - 1u) {
+            uint c = uint(findLSB(channels));
+            float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
+            sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
+        }
+    }
+    for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
+    for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
 }
 
 void main() {
@@ -89,41 +134,20 @@ void main() {
         s_covering[c] = acc;
     }
     barrier();
-    // The crossing sprites, listed in batches of up to GROUP by invocation 0 from the bins (in
-    // sprite order), one list per kind, then shaded by every pixel from the lists. Lavapipe
-    // runs both sides of every `if`, but leaves a loop no lane is still in: one loop per kind
-    // runs only its kind's code (a branch on the kind would run all three per sprite).
-    for (uint first = 0; first < words; first += GROUP / BIN_SPRITES_PER_WORD) {
-        barrier();
-        if (gl_LocalInvocationIndex == 0u) {
-            uint n[3] = uint[3](0u, 0u, 0u);
-            for (uint w = first; w < min(words, first + GROUP / BIN_SPRITES_PER_WORD); ++w) {
-                uint cross = bins[base + w] & 0x07070707u;
-                while (cross != 0u) {
-                    uint k = uint(findLSB(cross)) / 8u;
-                    uint s = w * BIN_SPRITES_PER_WORD + k;
-                    int kind = int(sprite_data[s * SPRITE_WORDS + SPRITE_KIND]);
-                    uint list = kind == KIND_GHOST ? 0u : (kind == KIND_SPIKE ? 1u : 2u);
-                    s_list[list][n[list]++] = s | (((cross >> (8u * k)) & 7u) << 24);
-                    cross &= ~(0xFFu << (8u * k));
-                }
-            }
-            for (uint k = 0; k < 3; ++k) s_listed[k] = n[k];
+    // The crossing sprites, listed by invocation 0 from the bins (in sprite order), then shaded
+    // by every pixel from the lists; in batches of SPRITE_LIST sprites where they may be more.
+    if (SPRITE_BATCHES) {
+        for (uint first = 0; first < words; first += SPRITE_LIST / BIN_SPRITES_PER_WORD) {
+            list_sprites(base, first, min(words, first + SPRITE_LIST / BIN_SPRITES_PER_WORD));
+            barrier();
+            shade_listed(p, q, sum);
+            // Every pixel has read the lists before the next batch's replace them.
+            barrier();
         }
+    } else {
+        list_sprites(base, 0u, words);
         barrier();
-        for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
-            uint entry = s_list[0][i];
-            uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
-            float ramp = sprite_data[b + SPRITE_SOFTNESS];
-            // The crossing channels only (each costs an aperture distance), in channel order.
-            for (uint channels = entry >> 24; channels != 0u; channels &= channels - 1u) {
-                uint c = uint(findLSB(channels));
-                float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
-                sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
-            }
-        }
-        for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
-        for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
+        shade_listed(p, q, sum);
     }
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));

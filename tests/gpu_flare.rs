@@ -5,6 +5,7 @@
 
 mod support;
 
+use realcam::gpu::shaders::flare::SPRITE_LIST;
 use realcam::io::lens_file::LensFile;
 use realcam::model::camera::{Camera, CameraRequest};
 use realcam::model::flare::FlareLight;
@@ -15,7 +16,9 @@ use realcam::optics::flare::traced::{chief_ray, display_px, optical_slope};
 use realcam::optics::flare::{channel_nm, BANDS_NM, BAND_WEIGHTS};
 use realcam::passes::flare::{Flare, FlareModel, FlareParams};
 use realcam::passes::PlanInput;
+use realcam::passes::{flare_bins, flare_lights, flare_tiles, ghost_sprites};
 use realcam::pipeline::planner::plan;
+use realcam::pipeline::render::Renderer;
 use std::path::Path;
 use support::*;
 
@@ -452,4 +455,45 @@ fn the_fitted_primitives_stand_beside_the_traced_ghosts_in_the_flare_report_with
     assert_eq!((at7.compared, at7.disagree, at7.gpu_ms, at7.image_error), (0, 0, None, None), "{at7:?}");
     // The matrix ghosts compare every ghost the reference shows.
     assert!(rows[1].compared >= 60, "{:?}", rows[1]);
+}
+
+#[test]
+fn sprites_past_one_list_are_shaded_in_batches_as_their_cpu_twin_does() {
+    // 50 lights, each one bright pixel three tiles from the next (so each is its own light),
+    // through the Tessar with room for 64: 50 x 22 sprite slots, more than ghost_sprites lists at
+    // once (SPRITE_LIST per kind), so its pipeline lists and shades them in batches, the lights
+    // after the 46th in the second. Every dispatch matches its CPU twin, and the last light's
+    // glow is drawn (its pixel's neighbour brighter than a pixel between lights).
+    let tessar = lens("tessar-walch-lens.toml");
+    let (w, h, step) = (480u32, 240u32, 48u32);
+    let mut frame = black(w, h);
+    let spots: Vec<(u32, u32)> = (0..5).flat_map(|j| (0..10).map(move |i| (24 + step * i, 24 + step * j))).collect();
+    for &(x, y) in &spots {
+        frame.color[((y * w + x) * 4) as usize..][..3].copy_from_slice(&[1.0e4; 3]);
+    }
+    let camera = flare_camera(&tessar, 8.0, "36x18", vec![]);
+    let input = PlanInput::new(&frame, &camera);
+    let model = FlareModel::new(&camera, input.facts.pixel_pitch_mm, frame.centre_px);
+    let mut params = FlareParams::new(&input, &model, None);
+    params.max_lights = 64;
+    let slots = params.constants.slots_per_light as u32;
+    assert!(spots.len() as u32 * slots > SPRITE_LIST && 46 * slots <= SPRITE_LIST + slots, "{slots} slots a light");
+    let kinds = ghost_sprites::specialization(&params.constants, flare_bins::words_per_tile(params.sprite_slots()));
+    assert_eq!(kinds[4], 1, "the batched pipeline: {kinds:?}");
+    let gpu = gpu();
+    let mut p = plan(&frame, &camera);
+    p.force::<Flare>(params);
+    let renderer = Renderer::new(&gpu, &p).expect("pipelines");
+    let (rendered, checks) = renderer.render_with_twin_checks(&frame, &p).expect("render");
+    let rgba = rendered.rgba;
+    assert_validation_clean(&gpu);
+    // The flare's dispatches (the lens's other passes have their own twin cases).
+    let steps = [flare_tiles::NAME, flare_lights::NAME, flare_bins::NAME, ghost_sprites::NAME];
+    let flare: Vec<_> = checks.iter().filter(|c| steps.contains(&c.shader)).collect();
+    assert!(flare.iter().any(|c| c.shader == ghost_sprites::NAME), "ghost_sprites was not checked");
+    let failures: Vec<String> = flare.iter().filter_map(|c| c.result.as_ref().err().map(|e| e.to_string())).collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let (x, y) = *spots.last().unwrap();
+    let at = |x: u32, y: u32| rgba[((y * w + x) * 4) as usize..][..3].iter().sum::<f32>();
+    assert!(at(x + 2, y) > at(x - step / 2, y) && at(x + 2, y) > 0.0, "{} {}", at(x + 2, y), at(x - step / 2, y));
 }

@@ -133,3 +133,6 @@ float disk_overlap(float r1, float r2, float d) {
 // bits 3-5 channel c's light the same at every pixel of the tile (covers it), 0: away.
 #define BIN_SPRITES_PER_WORD 4
 #define BIN_COVERING_SHIFT 3
+// ghost_sprites lists a tile's crossing sprites per kind, up to this many of each at once
+// (batches when the sprite slots are more).
+#define SPRITE_LIST 1024

@@ -350,6 +350,11 @@ impl FlareParams {
     pub fn tile_grid(&self) -> [u32; 2] {
         [self.constants.tiles_x as u32, self.constants.tiles_y as u32]
     }
+
+    /// The sprites' slots: every element of as many lights as the list holds.
+    pub fn sprite_slots(&self) -> u64 {
+        (self.max_lights as u64 * self.constants.slots_per_light.max(0) as u64).max(1)
+    }
 }
 
 /// An energy as the plan prints it.
@@ -445,7 +450,7 @@ impl Pass for Flare {
 
     /// The ghost-sprite kernel's pipeline for the kinds of sprite this frame has.
     fn prepare(&self, p: &FlareParams) -> GpuResult<()> {
-        self.sprites.prepare(&ghost_sprites::specialization(&p.constants))
+        self.sprites.prepare(&ghost_sprites::specialization(&p.constants, flare_bins::words_per_tile(p.sprite_slots())))
     }
 
     /// The colour in, a new colour with the flare added (and the lights' starburst and halo
@@ -454,7 +459,6 @@ impl Pass for Flare {
         let color = images.color().clone();
         let [tx, ty] = p.tile_grid();
         let tile_count = (tx * ty) as u64;
-        let slots = p.constants.slots_per_light as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Uploads record their own copy -> compute-read barriers.
         let constants = rec.upload_buffer("flare constants", &constants_words(&p.constants))?;
@@ -463,7 +467,7 @@ impl Pass for Flare {
         let tiles = rec.create_buffer("flare tiles", tile_count * TILE_WORDS as u64 * 4, storage)?;
         let lit = rec.create_buffer("flare lit tiles", tile_count * 4, storage)?;
         let lights = rec.create_buffer("flare lights", p.max_lights as u64 * LIGHT_WORDS as u64 * 4, storage)?;
-        let sprite_slots = (p.max_lights as u64 * slots).max(1);
+        let sprite_slots = p.sprite_slots();
         let sprites = rec.create_buffer("flare sprites", sprite_slots * SPRITE_WORDS as u64 * 4, storage)?;
         // One byte per sprite slot per tile (1280x720, 32 lights of 22 sprites: 2.5 MB).
         let words_per_tile = flare_bins::words_per_tile(sprite_slots);
@@ -499,7 +503,7 @@ impl Pass for Flare {
             args: &args,
             bins: &bins,
         };
-        let kinds = ghost_sprites::specialization(&p.constants);
+        let kinds = ghost_sprites::specialization(&p.constants, words_per_tile);
         ghost_sprites::record(&self.sprites, rec, &kinds, &sprite_bindings, [tx, ty], words_per_tile)?;
         images.set_color(None, output);
         Ok(())

@@ -9,8 +9,9 @@ use super::flare_bins::ghost_channel;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS,
-    SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
+    ARGS_LIGHTS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW, KIND_SPIKE, LIGHT_MOVED,
+    LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT,
+    TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
@@ -157,12 +158,14 @@ impl Twin for GhostSpritesShader {
     const TOLERANCE: f32 = 2e-4;
 }
 
-/// The specialization constants of glsl/ghost_sprites.comp for a frame of `constants`:
-/// aperture.glsl's two (at their defaults: ghost_sdf uses neither path), then whether it has
-/// ghost sprites and spike sprites (a pipeline without a kind has no loop for it, which
-/// lavapipe would run once per batch of every tile).
-pub fn specialization(constants: &FlareConstants) -> [u32; 4] {
-    [1, 1, (constants.ghost_count > 0) as u32, (constants.spike_count > 0) as u32]
+/// The specialization constants of glsl/ghost_sprites.comp for a frame of `constants` with
+/// `words_per_tile` bin words per tile: aperture.glsl's two (at their defaults: ghost_sdf uses
+/// neither path), whether it has ghost sprites and spike sprites (a pipeline without a kind has
+/// no loop for it, which lavapipe would run once per tile), and whether a tile's sprites may
+/// be more than one list holds (only then the batches' loop, whose mere presence costs lavapipe).
+pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 5] {
+    let batches = words_per_tile * BIN_SPRITES_PER_WORD as u64 > SPRITE_LIST as u64;
+    [1, 1, (constants.ghost_count > 0) as u32, (constants.spike_count > 0) as u32, batches as u32]
 }
 
 /// Record the kernel: the frame's colour and the sprites in, a new colour out; `constants`
@@ -170,7 +173,7 @@ pub fn specialization(constants: &FlareConstants) -> [u32; 4] {
 pub fn record(
     kernel: &SpecializedKernel<GhostSpritesShader>,
     rec: &mut Recorder,
-    constants: &[u32; 4],
+    constants: &[u32; 5],
     b: &GhostSpritesBindings<'_>,
     tile_grid: [u32; 2],
     words_per_tile: u64,
