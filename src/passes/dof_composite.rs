@@ -180,7 +180,7 @@ pub fn record(
     // output: the full-resolution tile passes (and the other levels' composites) wrote other
     //   tiles of it; the write-after-write dependency keeps sync validation (which tracks whole
     //   images) and any driver honest.
-    // bins, bin counts: written by dof_bin (read-after-write).
+    // bins, bin counts: written by dof_bin and put in order by dof_bin_order (read-after-write).
     rec.image_barriers(&[
         after_compute_write(b.color),
         after_compute_write(b.coc_level),

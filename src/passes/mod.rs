@@ -22,6 +22,7 @@ pub mod copy;
 pub mod diffraction;
 pub mod distortion;
 pub mod dof_bin;
+pub mod dof_bin_order;
 pub mod dof_classify;
 pub mod dof_composite;
 pub mod dof_downsample;

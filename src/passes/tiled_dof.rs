@@ -11,6 +11,7 @@
 use super::aperture::{shape_radius_for, ApertureConstants, ApertureData};
 use super::barriers::{buffer_after_compute_write, overwrite};
 use super::dof_bin::{args_for_indirect, BinBindings, BinPush, BinShader};
+use super::dof_bin_order::{BinOrderBindings, BinOrderShader};
 use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
 use super::dof_downsample::{
@@ -23,7 +24,9 @@ use super::dof_pyramid::{PyramidBindings, PyramidShader};
 use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShader};
 use super::dof_tiles::{TilesPush, TilesShader};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
-use super::{dof_bin, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid};
+use super::{
+    dof_bin, dof_bin_order, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid,
+};
 use super::{dof_highlights, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
@@ -110,6 +113,7 @@ pub struct TiledDof {
     highlights: Kernel<HighlightsShader>,
     pyramid: Kernel<PyramidShader>,
     bin: Kernel<BinShader>,
+    bin_order: Kernel<BinOrderShader>,
     level_lists: Kernel<LevelListsShader>,
     level_gather: SpecializedKernel<LevelGatherShader>,
     composite: SpecializedKernel<CompositeShader>,
@@ -170,6 +174,7 @@ impl Pass for TiledDof {
             highlights: Kernel::new(gpu)?,
             pyramid: Kernel::new(gpu)?,
             bin: Kernel::new(gpu)?,
+            bin_order: Kernel::new(gpu)?,
             level_lists: Kernel::new(gpu)?,
             level_gather: SpecializedKernel::new(gpu)?,
             composite: SpecializedKernel::new(gpu)?,
@@ -324,6 +329,8 @@ impl Pass for TiledDof {
         };
         let bin_push = BinPush { tiles, sprite_capacity: p.sprite_capacity as i32 };
         dof_bin::record(&self.bin, rec, &bin_bindings, &bin_push, ARGS_BIN_DISPATCH as u64 * 4)?;
+        let order_bindings = BinOrderBindings { sprites: &sprites, bin_counts: &bin_counts, bins: &bins };
+        dof_bin_order::record(&self.bin_order, rec, &order_bindings, (tiles[0] * tiles[1]) as u32)?;
 
         for (level, l) in (1..).zip(&levels) {
             let to_level = 1.0 / (1u32 << level) as f32;
