@@ -75,7 +75,7 @@ impl AperturePolygon {
     /// linear in the distance, so the edge lies at
     ///     R(phi) = ((1 - k) cos(s/2) + k) / ((1 - k) cos(phi) + k),  s = 2 pi / n, k the curvature,
     /// and the area is (n/2) times the integral of R^2 over -s/2..s/2 (Simpson's rule: R is smooth
-    /// there, 512 intervals leave an error under 1e-12).
+    /// there; 512 intervals are within 1e-9 of 8192 for 3 to 9 blades).
     pub fn area_factor(&self) -> f64 {
         if !self.is_polygon() {
             return std::f64::consts::PI;
