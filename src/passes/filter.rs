@@ -8,9 +8,14 @@ use super::{groups_for, FrameImages};
 use crate::gpu::{GpuImage, GpuResult, Kernel, Recorder, Shader, SpecializedKernel, Twin};
 use std::sync::Arc;
 
+/// A filter shader: a twin whose bindings are [`FilterBindings`].
+pub trait FilterShader: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>> {}
+
+impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterShader for S {}
+
 /// A filter's pipeline for one run: its kernel, or its specialised kernel with the run's
 /// constants (a filter whose paths are switched per run, e.g. film's response and noise).
-pub trait FilterKernel<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> {
+pub trait FilterKernel<S: FilterShader> {
     fn dispatch(
         &self,
         rec: &mut Recorder,
@@ -20,7 +25,7 @@ pub trait FilterKernel<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a
     ) -> GpuResult<()>;
 }
 
-impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterKernel<S> for Kernel<S> {
+impl<S: FilterShader> FilterKernel<S> for Kernel<S> {
     fn dispatch(
         &self,
         rec: &mut Recorder,
@@ -32,7 +37,7 @@ impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterKernel<S
     }
 }
 
-impl<S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>> FilterKernel<S> for (&SpecializedKernel<S>, &[u32]) {
+impl<S: FilterShader> FilterKernel<S> for (&SpecializedKernel<S>, &[u32]) {
     fn dispatch(
         &self,
         rec: &mut Recorder,
@@ -64,7 +69,7 @@ pub fn record<S>(
     push: &S::Push,
 ) -> GpuResult<()>
 where
-    S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>,
+    S: FilterShader,
 {
     rec.begin_pass(label);
     // The table: `Recorder::upload_buffer` records its copy -> compute-read barrier.
@@ -85,7 +90,7 @@ pub fn dispatch<S>(
     output_name: &str,
 ) -> GpuResult<Arc<GpuImage>>
 where
-    S: Twin + for<'a> Shader<Bindings<'a> = FilterBindings<'a>>,
+    S: FilterShader,
 {
     let output = rec.create_image(output_name, input.width, input.height, input.format)?;
     // input: written by the previous compute pass (or by the upload, whose own barrier made it
