@@ -497,3 +497,39 @@ fn sprites_past_one_list_are_shaded_in_batches_as_their_cpu_twin_does() {
     let at = |x: u32, y: u32| rgba[((y * w + x) * 4) as usize..][..3].iter().sum::<f32>();
     assert!(at(x + 2, y) > at(x - step / 2, y) && at(x + 2, y) > 0.0, "{} {}", at(x + 2, y), at(x - step / 2, y));
 }
+
+#[test]
+fn a_light_the_depth_of_field_spreads_below_the_threshold_draws_nothing_and_the_frame_is_only_copied() {
+    // One pixel of 50 (the threshold is 2) a metre away with the focus at 10 km: the plan reads
+    // the input and runs the flare, but the depth of field spreads the pixel over a disc of
+    // about 9 px, so on the GPU no pixel is a light: flare_lights asks the sprite kernel for no
+    // group and the copy for every tile, and the frame is the one without flare, bit for bit.
+    // The same pixel at 1e5 stays a light: the other way round, and the flare drawn.
+    let default = LensFile::default_lens();
+    let camera = flare_camera(&default, 2.0, "9.6x5.4", Vec::new());
+    let (w, h) = (64u32, 36u32);
+    let tiles = [w.div_ceil(16), h.div_ceil(16), 1];
+    let mut no_flare = camera.clone();
+    no_flare.flare.enabled = false;
+    let gpu = gpu();
+    for (value, lit) in [(50.0f32, false), (1.0e5, true)] {
+        let mut frame = Frame::new(w, h, vec![0.05; (w * h * 4) as usize], vec![1.0; (w * h) as usize]);
+        frame.color[((18 * w + 32) * 4) as usize..][..3].copy_from_slice(&[value; 3]);
+        let p = plan(&frame, &camera);
+        assert!(p.runs("flare") && p.runs("bokeh_tiled"), "{}", p.explain());
+        let renderer = Renderer::new(&gpu, &p).expect("pipelines");
+        let (rendered, checks) = renderer.render_with_twin_checks(&frame, &p).expect("render");
+        assert_validation_clean(&gpu);
+        let groups = |pass: &str| {
+            let c = checks.iter().find(|c| c.pass == pass).unwrap_or_else(|| panic!("no dispatch in {pass}"));
+            assert!(c.result.is_ok(), "{pass}: {:?}", c.result);
+            c.groups
+        };
+        let (sprites, copy) = (groups(ghost_sprites::NAME), groups(ghost_sprites::COPY_NAME));
+        let (expect_sprites, expect_copy) = if lit { (tiles, [0, 1, 1]) } else { ([0, 1, 1], tiles) };
+        assert_eq!((sprites, copy), (expect_sprites, expect_copy), "value {value}");
+        let (without, _, _) = render(&gpu, &frame, &no_flare);
+        let same = rendered.rgba.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits());
+        assert_eq!(same, !lit, "value {value}: the frame with flare equals the one without");
+    }
+}

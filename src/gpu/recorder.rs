@@ -34,6 +34,8 @@ pub struct TwinCheck {
     /// The pass (span) the dispatch was recorded in.
     pub pass: String,
     pub shader: &'static str,
+    /// The workgroups it ran (an indirect dispatch's as read from its arguments; 0 in x: none).
+    pub groups: [u32; 3],
     /// `Err` names the first binding and texel or word where GPU and twin differ.
     pub result: Result<(), String>,
 }
@@ -285,7 +287,7 @@ impl Recorder {
             let result = compare_with_twin(pipeline.name, &pipeline.bindings, &gpu_data, &twin_data, twin.tolerance);
             let pass = self.open_span.and_then(|i| self.spans.get(i)).cloned().unwrap_or_default();
             if let Some(checks) = self.twin_checks.as_mut() {
-                checks.push(TwinCheck { pass, shader: pipeline.name, result });
+                checks.push(TwinCheck { pass, shader: pipeline.name, groups: counts, result });
             }
         }
         Ok(())

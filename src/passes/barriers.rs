@@ -72,3 +72,20 @@ pub fn buffer_after_fill(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static
         .offset(0)
         .size(vk::WHOLE_SIZE)
 }
+
+/// The args buffer after a compute pass wrote it, read as indirect dispatch arguments and by
+/// shaders (and updated: it holds counters).
+pub fn args_for_indirect(args: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
+    vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(
+            vk::AccessFlags2::INDIRECT_COMMAND_READ
+                | vk::AccessFlags2::SHADER_STORAGE_READ
+                | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        )
+        .buffer(args.buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)
+}

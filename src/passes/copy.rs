@@ -1,9 +1,11 @@
 //! The bare pass: reads the frame's colour and writes it to a new image, nothing else
-//! (glsl/copy.comp). Not part of a render: `realcam bench` times it in the same run as the other
-//! passes and gives every figure as a multiple of it, so the numbers carry over between devices.
+//! (glsl/copy.comp). `realcam bench` times it in the same run as the other passes and gives
+//! every figure as a multiple of it, so the numbers carry over between devices. In a render it
+//! is the flare's output where the frame holds no light (an indirect dispatch of every tile or
+//! none, src/passes/ghost_sprites.rs).
 
 use super::barriers::{after_compute_write, overwrite};
-use super::{groups_for, FrameImages};
+use super::{groups_for, FrameImages, TILE_SIZE};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "copy";
@@ -26,8 +28,18 @@ impl Shader for CopyShader {
 }
 
 impl Twin for CopyShader {
-    fn cpu(_size: &[i32; 2], _groups: [u32; 3], b: &mut [HostData]) {
-        b[1].image_mut().texels = b[0].image().texels.clone();
+    /// The texels of the dispatched groups (an indirect dispatch may have none).
+    fn cpu(size: &[i32; 2], groups: [u32; 3], b: &mut [HostData]) {
+        let input = b[0].image().clone();
+        let w = (groups[0] * TILE_SIZE).min(size[0].max(0) as u32);
+        let h = (groups[1] * TILE_SIZE).min(size[1].max(0) as u32);
+        let out = b[1].image_mut();
+        let c = input.channels as usize;
+        for y in 0..h {
+            for x in 0..w {
+                out.texel_mut(x, y).copy_from_slice(&input.texels[(y * input.width + x) as usize * c..][..c]);
+            }
+        }
     }
 
     /// A copy is exact.

@@ -1,10 +1,9 @@
 //! Tiled depth of field: the highlight sprites binned to the level tiles their disks reach, one
 //! invocation per sprite. Shader: glsl/dof_bin.comp.
 
-use super::barriers::{buffer_after_compute_write, buffer_after_fill};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, buffer_after_fill};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_OVERFLOWS, ARGS_SPRITE_COUNT, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
-use crate::gpu::{GpuBuffer, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use ash::vk;
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_bin";
 
@@ -103,21 +102,4 @@ pub fn record(
     kernel.dispatch_indirect(rec, b, push, b.args, dispatch_offset_bytes)?;
     rec.end_pass();
     Ok(())
-}
-
-/// The args buffer after a compute pass wrote it, read as indirect dispatch arguments and by
-/// shaders (and updated: it holds counters).
-pub fn args_for_indirect(args: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
-    vk::BufferMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(
-            vk::AccessFlags2::INDIRECT_COMMAND_READ
-                | vk::AccessFlags2::SHADER_STORAGE_READ
-                | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        )
-        .buffer(args.buffer)
-        .offset(0)
-        .size(vk::WHOLE_SIZE)
 }

@@ -2,8 +2,8 @@
 //! sprites, their excess over the background taken out of the colour the gathers and the
 //! pyramid read. Shader: glsl/dof_highlights.comp.
 
+use super::barriers::args_for_indirect;
 use super::barriers::{buffer_after_compute_write, write_after_write};
-use super::dof_bin::args_for_indirect;
 use super::dof_downsample::{luminance, texel_pixels};
 use super::twin::finite_or_zero;
 use crate::gpu::shaders::dof_tiles::{

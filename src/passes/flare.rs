@@ -15,6 +15,7 @@
 //! The plan skips the pass when no light in the frame could make an element add a thousandth of
 //! the sensor's saturation, and says how bright a light would have to be.
 
+use super::copy::CopyShader;
 use super::flare_bins::{FlareBinsBindings, FlareBinsShader};
 use super::flare_lights::{FlareLightsBindings, FlareLightsShader};
 use super::flare_tiles::{light_weight, FlareTilesShader};
@@ -367,6 +368,7 @@ pub struct Flare {
     lights: Kernel<FlareLightsShader>,
     bins: Kernel<FlareBinsShader>,
     sprites: SpecializedKernel<GhostSpritesShader>,
+    copy: Kernel<CopyShader>,
 }
 
 impl Pass for Flare {
@@ -445,6 +447,7 @@ impl Pass for Flare {
             lights: Kernel::new(gpu)?,
             bins: Kernel::new(gpu)?,
             sprites: SpecializedKernel::new(gpu)?,
+            copy: Kernel::new(gpu)?,
         })
     }
 
@@ -476,7 +479,8 @@ impl Pass for Flare {
             tile_count * words_per_tile * 4,
             storage | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
-        let args = rec.create_buffer("flare counts", ARGS_WORDS as u64 * 4, storage)?;
+        let args =
+            rec.create_buffer("flare counts", ARGS_WORDS as u64 * 4, storage | vk::BufferUsageFlags::INDIRECT_BUFFER)?;
         let output = rec.create_image("color (flare)", color.width, color.height, color.format)?;
 
         flare_tiles::record(&self.tiles, rec, &color, &constants, &tiles, [tx, ty])?;
@@ -504,7 +508,7 @@ impl Pass for Flare {
             bins: &bins,
         };
         let kinds = ghost_sprites::specialization(&p.constants, words_per_tile);
-        ghost_sprites::record(&self.sprites, rec, &kinds, &sprite_bindings, [tx, ty], words_per_tile)?;
+        ghost_sprites::record(&self.sprites, &self.copy, rec, &kinds, &sprite_bindings, words_per_tile)?;
         images.set_color(None, output);
         Ok(())
     }

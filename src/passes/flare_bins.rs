@@ -3,14 +3,14 @@
 //! channel by channel), OR-ing one byte per sprite into the tile's bin words; `ghost_sprites`
 //! then reads only its tile's words. Shader: glsl/flare_bins.comp.
 
-use super::barriers::{buffer_after_compute_write, buffer_after_fill};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, buffer_after_fill};
 use super::flare::constants_of;
 use super::ghost_sprites::ray_in_box;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, BIN_COVERING_SHIFT, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW,
-    KIND_SPIKE, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS, SPRITE_WORDS,
+    ARGS_BIN_GROUPS, ARGS_LIGHTS, BIN_COVERING_SHIFT, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST,
+    KIND_GLOW, KIND_SPIKE, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS, SPRITE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::flare::ghosts::GhostShape;
@@ -134,8 +134,9 @@ impl Twin for FlareBinsShader {
     }
 }
 
-/// Record the binning: the bins cleared, then every sprite OR-ed into the tiles it reaches.
-/// `slots`: the sprite buffer's capacity in sprites.
+/// Record the binning: the bins cleared, then every sprite OR-ed into the tiles it reaches;
+/// one group per sprite flare_lights made (none without a light), `slots` the sprite buffer's
+/// capacity in sprites.
 pub fn record(
     kernel: &Kernel<FlareBinsShader>,
     rec: &mut Recorder,
@@ -145,14 +146,11 @@ pub fn record(
     rec.begin_pass(NAME);
     // bins: a new buffer, cleared by a transfer fill before the atomic ORs (write-after-write).
     rec.fill_buffer(b.bins, 0);
-    // sprites and the counts: written by flare_lights (read-after-write).
-    rec.buffer_barriers(&[
-        buffer_after_fill(b.bins),
-        buffer_after_compute_write(b.sprites),
-        buffer_after_compute_write(b.args),
-    ]);
+    // sprites: written by flare_lights (read-after-write); the counts too, and read here also
+    //   as this dispatch's group counts.
+    rec.buffer_barriers(&[buffer_after_fill(b.bins), buffer_after_compute_write(b.sprites), args_for_indirect(b.args)]);
     let words = words_per_tile(slots as u64) as i32;
-    kernel.dispatch(rec, b, &words, [slots.max(1), 1, 1])?;
+    kernel.dispatch_indirect(rec, b, &words, b.args, ARGS_BIN_GROUPS as u64 * 4)?;
     rec.end_pass();
     Ok(())
 }

@@ -7,11 +7,11 @@ use super::flare::{constants_of, ghost_from_table, FlareConstants};
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, ARGS_LIT_TILES, EXPLICIT_AREA, EXPLICIT_ENERGY, EXPLICIT_WORDS, EXPLICIT_X, EXPLICIT_Y,
-    GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST, KIND_GLOW, KIND_NONE, KIND_SPIKE, LIGHT_AREA,
-    LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0, LIGHT_SPIKE_REACH, LIGHT_TILES, LIGHT_WORDS,
-    LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIGHT, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_COUNT,
-    TILE_LIGHT, TILE_WORDS,
+    ARGS_BIN_GROUPS, ARGS_COPY_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY,
+    EXPLICIT_WORDS, EXPLICIT_X, EXPLICIT_Y, GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST,
+    KIND_GLOW, KIND_NONE, KIND_SPIKE, LIGHT_AREA, LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0,
+    LIGHT_SPIKE_REACH, LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND,
+    SPRITE_LIGHT, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use std::f64::consts::PI;
@@ -277,6 +277,13 @@ impl Twin for FlareLightsShader {
         let args = b[6].words_mut();
         args[ARGS_LIGHTS as usize] = acc.len() as u32;
         args[ARGS_LIT_TILES as usize] = lit.len() as u32;
+        let tiles = [fc.tiles_x.max(0) as u32, fc.tiles_y.max(0) as u32, 1];
+        let none = [0, 1, 1];
+        let (sprites, copy) = if acc.is_empty() { (none, tiles) } else { (tiles, none) };
+        let bins = [acc.len() as u32 * fc.slots_per_light.max(0) as u32, 1, 1];
+        for (at, groups) in [(ARGS_BIN_GROUPS, bins), (ARGS_SPRITE_GROUPS, sprites), (ARGS_COPY_GROUPS, copy)] {
+            args[at as usize..][..3].copy_from_slice(&groups);
+        }
         // 3. Each light.
         let mut lights: Vec<Vec<f32>> = Vec::new();
         for a in &acc {

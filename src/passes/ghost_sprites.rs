@@ -3,20 +3,23 @@
 //! whatever the number of sprites. Shader: glsl/ghost_sprites.comp. Further ghost primitives
 //! (Walch's fitted Bezier shapes) are further kinds of sprite here.
 
-use super::barriers::{buffer_after_compute_write, overwrite};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, overwrite, write_after_write};
+use super::copy::{CopyBindings, CopyShader};
 use super::flare::{constants_of, FlareConstants};
 use super::flare_bins::ghost_channel;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW, KIND_SPIKE, LIGHT_MOVED,
-    LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT,
-    TILE_WORDS,
+    ARGS_COPY_GROUPS, ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST,
+    KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST,
+    SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
-use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
+use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
 
 pub const NAME: &str = "ghost_sprites";
+/// The profile's name of the copy that stands in for the kernel in a frame without a light.
+pub const COPY_NAME: &str = "flare_copy";
 
 crate::shader_bindings! {
     /// The bindings of glsl/ghost_sprites.comp.
@@ -169,29 +172,41 @@ pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 
 }
 
 /// Record the kernel: the frame's colour and the sprites in, a new colour out; `constants`
-/// from [`specialization`].
+/// from [`specialization`]. flare_lights chose the group counts: with a light every tile runs
+/// the sprites, without one the frame's colour is only copied (`copy`, every tile), so a frame
+/// with nothing to draw costs one copy.
 pub fn record(
     kernel: &SpecializedKernel<GhostSpritesShader>,
+    copy: &Kernel<CopyShader>,
     rec: &mut Recorder,
     constants: &[u32; 5],
     b: &GhostSpritesBindings<'_>,
-    tile_grid: [u32; 2],
     words_per_tile: u64,
 ) -> GpuResult<()> {
+    let size = [b.color_in.width as i32, b.color_in.height as i32];
+    rec.begin_pass(COPY_NAME);
+    // color_out: written from scratch (by the copy or by the sprites); its old contents are
+    //   discarded. color_in: already waited for by flare_tiles, only read since. The counts:
+    //   made visible to indirect reads by flare_bins's barrier, not written since.
+    rec.image_barriers(&[overwrite(b.color_out)]);
+    let copy_bindings = CopyBindings { color_in: b.color_in, color_out: b.color_out };
+    copy.dispatch_indirect(rec, &copy_bindings, &size, b.args, ARGS_COPY_GROUPS as u64 * 4)?;
+    rec.end_pass();
     rec.begin_pass(NAME);
     // tiles (their light), lights, sprites and the counts: written by flare_lights
-    //   (read-after-write); the bins: written by flare_bins (read-after-write). color_in: already waited for by flare_tiles, only read since.
-    // color_out: written from scratch; its old contents are discarded.
+    //   (read-after-write); the bins: written by flare_bins (read-after-write).
+    // color_out: the copy's writes before these (write-after-write as recorded; at run time
+    //   only one of the two dispatches has groups).
     rec.buffer_barriers(&[
         buffer_after_compute_write(b.tiles),
         buffer_after_compute_write(b.lights),
         buffer_after_compute_write(b.sprites),
-        buffer_after_compute_write(b.args),
+        args_for_indirect(b.args),
         buffer_after_compute_write(b.bins),
     ]);
-    rec.image_barriers(&[overwrite(b.color_out)]);
-    let size = [b.color_in.width as i32, b.color_in.height as i32, words_per_tile as i32];
-    kernel.dispatch(rec, constants, b, &size, [tile_grid[0], tile_grid[1], 1])?;
+    rec.image_barriers(&[write_after_write(b.color_out)]);
+    let push = [size[0], size[1], words_per_tile as i32];
+    kernel.dispatch_indirect(rec, constants, b, &push, b.args, ARGS_SPRITE_GROUPS as u64 * 4)?;
     rec.end_pass();
     Ok(())
 }

@@ -9,8 +9,8 @@
 //! share and the barriers between the classification and its indirect dispatches.
 
 use super::aperture::{shape_radius_for, ApertureConstants, ApertureData};
-use super::barriers::{buffer_after_compute_write, overwrite};
-use super::dof_bin::{args_for_indirect, BinBindings, BinPush, BinShader};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, overwrite};
+use super::dof_bin::{BinBindings, BinPush, BinShader};
 use super::dof_bin_order::{BinOrderBindings, BinOrderShader};
 use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::dof_composite::{CompositeBindings, CompositePush, CompositeShader};
