@@ -1,10 +1,13 @@
-//! What the device cannot hold is an error naming it, before Vulkan is asked (lavapipe in CI,
-//! validation on: creating such an image would be invalid usage).
+//! The device's resources: what it cannot hold is an error naming it, before Vulkan is asked
+//! (lavapipe in CI, validation on: creating such an image would be invalid usage); what a frame
+//! let go of serves the next frame of the same size.
 
 mod support;
 
 use ash::vk;
-use support::{assert_validation_clean, gpu};
+use realcam::pipeline::planner::plan;
+use realcam::pipeline::render::Renderer;
+use support::{assert_validation_clean, dof_camera, gpu};
 
 #[test]
 fn an_image_beyond_the_device_limit_is_an_error_naming_it() {
@@ -27,4 +30,35 @@ fn an_image_beyond_the_device_limit_is_an_error_naming_it() {
     );
     drop(rec);
     assert_validation_clean(&gpu);
+}
+
+#[test]
+fn the_next_frame_of_the_same_size_reuses_the_last_frames_images_and_buffers_and_gives_the_same_bits() {
+    // A defocused frame with highlights (the tiled path's many images and buffers, counters
+    // cleared per frame), rendered four times by one renderer: after the first every image and
+    // buffer goes to the pool, the later frames take theirs from it (the pool holds as many
+    // afterwards, none created anew), and the stale contents change no bit of the output.
+    let gpu = gpu();
+    let (w, h) = (96u32, 64u32);
+    let color: Vec<f32> =
+        (0..w * h).flat_map(|i| if i % 97 == 0 { [60.0, 50.0, 40.0, 1.0] } else { [0.2, 0.3, 0.1, 1.0] }).collect();
+    let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
+    let frame = realcam::model::frame::Frame::new(w, h, color, depth);
+    let camera = dof_camera(50.0, 1.4, 2.0, 6);
+    let p = plan(&frame, &camera);
+    assert!(p.runs("bokeh_tiled"), "{}", p.explain());
+    let renderer = Renderer::new(&gpu, &p).expect("pipelines");
+    assert_eq!(gpu.pool_idle().0, 0);
+    let first = renderer.render(&frame, &p, false).expect("render").rgba;
+    let after_first = gpu.pool_idle();
+    assert!(after_first.0 > 20, "the pool after a frame: {after_first:?}");
+    for run in 1..4 {
+        let again = renderer.render(&frame, &p, false).expect("render").rgba;
+        assert_eq!(gpu.pool_idle(), after_first, "run {run}: the pool grew or shrank");
+        let differ = first.iter().zip(&again).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+        assert_eq!(differ, 0, "run {run}: values differ from the first frame's");
+    }
+    assert_validation_clean(&gpu);
+    gpu.trim_pool();
+    assert_eq!(gpu.pool_idle(), (0, 0));
 }

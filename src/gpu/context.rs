@@ -1,6 +1,7 @@
 //! Instance, validation, physical-device choice, the one compute queue, the allocator and the
 //! persistent pipeline cache.
 
+use super::pool::{Pooled, ResourcePool};
 use super::{GpuError, GpuResult, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -69,6 +70,8 @@ pub(crate) struct Shared {
     pub queue: vk::Queue,
     pub queue_family: u32,
     pub allocator: Mutex<Option<Allocator>>,
+    /// Idle images and buffers for the next request of the same kind (src/gpu/pool.rs).
+    pub pool: Mutex<ResourcePool>,
     pub pipeline_cache: vk::PipelineCache,
     cache_file: Option<PathBuf>,
     cache_loaded: Vec<u8>,
@@ -291,6 +294,7 @@ impl Gpu {
             queue,
             queue_family,
             allocator: Mutex::new(Some(allocator)),
+            pool: Mutex::new(ResourcePool::default()),
             pipeline_cache,
             cache_file,
             cache_loaded,
@@ -404,6 +408,17 @@ impl Gpu {
     }
 
     /// Name a Vulkan object for debuggers and validation messages.
+    /// Destroy the idle images and buffers the pool keeps for the next frame (a long-lived
+    /// process between jobs; a render lets its pool go with the device).
+    pub fn trim_pool(&self) {
+        self.shared.trim_pool();
+    }
+
+    /// The pool's idle resources: how many, and their bytes.
+    pub fn pool_idle(&self) -> (usize, u64) {
+        self.shared.pool.lock().map(|p| (p.idle_count(), p.idle_bytes())).unwrap_or((0, 0))
+    }
+
     pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         if let Some(d) = &self.shared.debug_device {
             if let Ok(name) = CString::new(name) {
@@ -482,6 +497,36 @@ fn cache_path(options: &GpuOptions, props: &vk::PhysicalDeviceProperties) -> Opt
 }
 
 impl Shared {
+    /// An image or buffer dropped after its work completed: kept idle for the next request of
+    /// the same kind, unless the device is being destroyed; what no longer fits is destroyed.
+    pub(crate) fn release(&self, item: Pooled) {
+        let evicted = match self.pool.lock() {
+            Ok(mut pool) => pool.keep(item),
+            Err(_) => vec![item],
+        };
+        self.destroy_pooled(evicted);
+    }
+
+    /// Destroy every idle image and buffer (their memory back to the allocator).
+    pub(crate) fn trim_pool(&self) {
+        let idle = self.pool.lock().map(|mut p| p.drain()).unwrap_or_default();
+        self.destroy_pooled(idle);
+    }
+
+    fn destroy_pooled(&self, items: Vec<Pooled>) {
+        if items.is_empty() {
+            return;
+        }
+        let allocations: Vec<_> = items.into_iter().map(|i| i.destroy(&self.device)).collect();
+        if let Ok(mut guard) = self.allocator.lock() {
+            if let Some(allocator) = guard.as_mut() {
+                for a in allocations {
+                    let _ = allocator.free(a);
+                }
+            }
+        }
+    }
+
     /// Write the pipeline cache back if it grew, to a temporary file renamed into place, so
     /// parallel processes on a farm never read a half-written cache.
     fn save_pipeline_cache(&self) {
@@ -508,6 +553,7 @@ impl Drop for Shared {
             let _ = self.device.device_wait_idle();
             self.save_pipeline_cache();
             self.device.destroy_pipeline_cache(self.pipeline_cache, None);
+            self.trim_pool();
             if let Ok(mut a) = self.allocator.lock() {
                 a.take();
             }

@@ -5,6 +5,7 @@
 mod context;
 pub mod kernel;
 mod pipeline;
+mod pool;
 mod profiler;
 mod recorder;
 pub mod reflect;
@@ -16,6 +17,7 @@ pub use kernel::{
     buffer, declaration, image, Binding, HostData, HostImage, Kernel, Shader, ShaderBindings, SpecializedKernel, Twin,
 };
 pub use pipeline::ComputePipeline;
+pub use pool::POOL_MAX_BYTES;
 pub use profiler::{PassTiming, Profile};
 pub use recorder::{Bind, Download, Recorder, TwinCheck};
 pub use resources::{color_range, GpuBuffer, GpuImage};

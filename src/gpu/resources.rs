@@ -1,6 +1,7 @@
 //! Images and buffers, all memory through gpu-allocator, every object named for debuggers.
 
 use super::context::Shared;
+use super::pool::{Pooled, PooledBuffer, PooledImage};
 use super::{Gpu, GpuError, GpuResult, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -26,6 +27,8 @@ pub struct GpuBuffer {
     allocation: Option<Allocation>,
     pub size_bytes: u64,
     pub name: String,
+    usage: vk::BufferUsageFlags,
+    location: MemoryLocation,
 }
 
 impl Gpu {
@@ -37,6 +40,21 @@ impl Gpu {
         if width > max_px || height > max_px {
             let device = self.info().name.clone();
             return Err(GpuError::ImageTooLarge { name: name.into(), device, width, height, max_px });
+        }
+        let reused = self.shared.pool.lock().ok().and_then(|mut p| p.take_image(width, height, format));
+        if let Some(p) = reused {
+            self.set_name(p.image, name);
+            self.set_name(p.view, name);
+            return Ok(GpuImage {
+                shared: self.shared.clone(),
+                image: p.image,
+                view: p.view,
+                allocation: Some(p.allocation),
+                format,
+                width,
+                height,
+                name: name.to_string(),
+            });
         }
         let device = self.device();
         let info = vk::ImageCreateInfo::default()
@@ -91,6 +109,19 @@ impl Gpu {
         usage: vk::BufferUsageFlags,
         location: MemoryLocation,
     ) -> GpuResult<GpuBuffer> {
+        let reused = self.shared.pool.lock().ok().and_then(|mut p| p.take_buffer(size_bytes, usage, location));
+        if let Some(p) = reused {
+            self.set_name(p.buffer, name);
+            return Ok(GpuBuffer {
+                shared: self.shared.clone(),
+                buffer: p.buffer,
+                allocation: Some(p.allocation),
+                size_bytes,
+                name: name.to_string(),
+                usage,
+                location,
+            });
+        }
         let device = self.device();
         let info = vk::BufferCreateInfo::default()
             .size(size_bytes.max(4))
@@ -114,6 +145,8 @@ impl Gpu {
                 allocation: Some(allocation),
                 size_bytes,
                 name: name.to_string(),
+                usage,
+                location,
             })
         }
     }
@@ -189,27 +222,33 @@ impl GpuBuffer {
     }
 }
 
+/// Dropped after the work that used it completed: kept idle for the next frame's same image.
 impl Drop for GpuImage {
     fn drop(&mut self) {
-        unsafe {
-            self.shared.device.destroy_image_view(self.view, None);
-            self.shared.device.destroy_image(self.image, None);
+        if let Some(allocation) = self.allocation.take() {
+            self.shared.release(Pooled::Image(PooledImage {
+                image: self.image,
+                view: self.view,
+                allocation,
+                format: self.format,
+                width: self.width,
+                height: self.height,
+            }));
         }
-        free(&self.shared, self.allocation.take());
     }
 }
 
+/// Dropped after the work that used it completed: kept idle for the next frame's same buffer.
 impl Drop for GpuBuffer {
     fn drop(&mut self) {
-        unsafe { self.shared.device.destroy_buffer(self.buffer, None) };
-        free(&self.shared, self.allocation.take());
-    }
-}
-
-fn free(shared: &Shared, allocation: Option<Allocation>) {
-    if let (Some(a), Ok(mut guard)) = (allocation, shared.allocator.lock()) {
-        if let Some(allocator) = guard.as_mut() {
-            let _ = allocator.free(a);
+        if let Some(allocation) = self.allocation.take() {
+            self.shared.release(Pooled::Buffer(PooledBuffer {
+                buffer: self.buffer,
+                allocation,
+                size_bytes: self.size_bytes,
+                usage: self.usage,
+                location: self.location,
+            }));
         }
     }
 }
