@@ -138,6 +138,9 @@ pub fn run(
             path(format!("f{frame}_depth.exr")),
             "-o".into(),
             path(format!("one.{frame}.exr")),
+            // The same outputs as the sequence's frames (its traces give the GPU time).
+            "--trace".into(),
+            path(format!("one.{frame}.json")),
         ]);
         args.extend(camera.iter().cloned());
         args
