@@ -20,7 +20,6 @@ pub mod exr_read;
 pub mod exr_write;
 pub mod film_file;
 pub mod flare_lights;
-pub mod json;
 pub mod lens_analysis;
 pub mod lens_file;
 pub mod lensfun;

@@ -28,8 +28,8 @@
 //! or most of its annulus leaves the frame, when another listed highlight's disc reaches its
 //! disc or annulus, or when the disc is too small for a plateau (in focus).
 
-use crate::io::json::{Json, JsonError};
 use crate::optics::lens::ThinLens;
+use serde_json::Value as Json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -54,8 +54,8 @@ const DISC_SLACK: f64 = 1.15;
 pub enum HighlightsError {
     #[error("highlights: cannot read \"{}\": {source}", .path.display())]
     Read { path: PathBuf, source: std::io::Error },
-    #[error("highlights: \"{}\": {source}", .path.display())]
-    Json { path: PathBuf, source: JsonError },
+    #[error("highlights: \"{}\": invalid JSON: {source}", .path.display())]
+    Json { path: PathBuf, source: serde_json::Error },
     /// A field missing or of the wrong kind, by its path in the document (`objects[3].depth_m`).
     #[error("highlights: \"{}\": field \"{field}\" {problem}", .path.display())]
     Field { path: PathBuf, field: String, problem: String },
@@ -93,6 +93,18 @@ pub struct SceneHighlights {
     pub highlights: Vec<Highlight>,
 }
 
+/// What a JSON value is, for error messages.
+fn kind(v: &Json) -> &'static str {
+    match v {
+        Json::Null => "null",
+        Json::Bool(_) => "a boolean",
+        Json::Number(_) => "a number",
+        Json::String(_) => "a string",
+        Json::Array(_) => "an array",
+        Json::Object(_) => "an object",
+    }
+}
+
 impl SceneHighlights {
     /// Read a Blender `camera.json` (scene A's format): `camera.focal_length_mm`,
     /// `camera.pixel_pitch_mm`, `camera.resolution`, `ground_truth.dof.focus_distance_m`, and the
@@ -106,7 +118,8 @@ impl SceneHighlights {
 
     /// [`read`](Self::read) from text (`path` names it in errors).
     pub fn parse(path: &Path, text: &str) -> Result<Self, HighlightsError> {
-        let doc = Json::parse(text).map_err(|source| HighlightsError::Json { path: path.into(), source })?;
+        let doc: Json =
+            serde_json::from_str(text).map_err(|source| HighlightsError::Json { path: path.into(), source })?;
         let field =
             |field: &str, problem: String| HighlightsError::Field { path: path.into(), field: field.into(), problem };
         // The value at a dotted path of object members.
@@ -117,13 +130,13 @@ impl SceneHighlights {
             match v.as_f64() {
                 Some(x) if !positive || x > 0.0 => Ok(x),
                 Some(x) => Err(field(name, format!("must be above 0, got {x}"))),
-                None => Err(field(name, format!("must be a number, got {}", v.kind()))),
+                None => Err(field(name, format!("must be a number, got {}", kind(v)))),
             }
         };
         let pair = |name: &str, v: &Json| -> Result<[f64; 2], HighlightsError> {
-            match v.as_array() {
+            match v.as_array().map(Vec::as_slice) {
                 Some([a, b]) => Ok([number(name, a, false)?, number(name, b, false)?]),
-                _ => Err(field(name, format!("must be an array of two numbers, got {}", v.kind()))),
+                _ => Err(field(name, format!("must be an array of two numbers, got {}", kind(v)))),
             }
         };
         let focal_length_mm = number("camera.focal_length_mm", at("camera.focal_length_mm")?, true)?;
@@ -134,25 +147,25 @@ impl SceneHighlights {
         if !(w >= 1.0 && h >= 1.0 && w.fract() == 0.0 && h.fract() == 0.0 && w.max(h) <= 65536.0) {
             return Err(field("camera.resolution", format!("must be two whole numbers of pixels, got [{w}, {h}]")));
         }
-        let objects = at("objects")?.as_array().ok_or_else(|| {
-            field("objects", format!("must be an array, got {}", at("objects").map_or("", |v| v.kind())))
-        })?;
+        let objects = at("objects")?
+            .as_array()
+            .ok_or_else(|| field("objects", format!("must be an array, got {}", at("objects").map_or("", kind))))?;
         let mut highlights = Vec::new();
         for (i, object) in objects.iter().enumerate() {
             let member = |key: &str| -> Result<&Json, HighlightsError> {
                 object.get(key).ok_or_else(|| field(&format!("objects[{i}].{key}"), "is missing".into()))
             };
             let role = member("role")?;
-            let role = role.as_str().ok_or_else(|| {
-                field(&format!("objects[{i}].role"), format!("must be a string, got {}", role.kind()))
-            })?;
+            let role = role
+                .as_str()
+                .ok_or_else(|| field(&format!("objects[{i}].role"), format!("must be a string, got {}", kind(role))))?;
             if !role.starts_with("highlight") {
                 continue;
             }
             let name = member("name")?;
-            let name = name.as_str().ok_or_else(|| {
-                field(&format!("objects[{i}].name"), format!("must be a string, got {}", name.kind()))
-            })?;
+            let name = name
+                .as_str()
+                .ok_or_else(|| field(&format!("objects[{i}].name"), format!("must be a string, got {}", kind(name))))?;
             let depth_m = number(&format!("objects[{i}].depth_m"), member("depth_m")?, true)?;
             let xy_name = format!("objects[{i}].pixel_xy_topleft_ydown");
             let [x_px, y_px] = pair(&xy_name, member("pixel_xy_topleft_ydown")?)?;
@@ -817,7 +830,7 @@ mod tests {
                 GOOD.replace(r#""approx_diameter_px": 4.0"#, r#""approx_diameter_px": -1"#),
                 "approx_diameter_px\" must be 0 or more",
             ),
-            (GOOD.replace("\"objects\"", "\"objects\" 1"), "invalid JSON at line 3"),
+            (GOOD.replace("\"objects\"", "\"objects\" 1"), "invalid JSON: expected `:` at line 3 column 19"),
         ];
         for (text, expected) in cases {
             let e = error(&text);
