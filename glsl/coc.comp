@@ -5,12 +5,13 @@
 // Anti-aliased edges: renderers filter the colour pass over about 1.5 px but take the depth of
 // one sample per pixel, so a pixel at an edge may carry one surface's depth and mostly another
 // surface's light (a bright in-focus point's fringe with the sky's depth). Where the 3x3
-// neighbourhood spans two depths whose CoCs differ by more than a pixel, the pixel's colour is
-// read as a mix of the two layers' colours (least squares for the near layer's share alpha),
-// and it takes the depth of the layer that brings more of its light: alpha L_near against
-// (1 - alpha) L_far. A near pixel whose alpha lies within the range of the near layer's pixels
-// (a textured surface at a hard edge) keeps its depth. The far layer gets no such test: at an
-// anti-aliased fringe the far neighbours are fringe pixels too, and would explain each other.
+// neighbourhood spans two depths whose CoCs differ by more than a quarter pixel, the pixel's
+// colour is read as a mix of the two layers' colours (least squares for the near layer's share
+// alpha), and it takes the depth of the layer that brings more of its light: alpha L_near
+// against (1 - alpha) L_far. A near pixel whose alpha lies within the range of the near layer's
+// pixels (a textured surface at a hard edge) keeps its depth. The far layer gets no such test:
+// at an anti-aliased fringe the far neighbours are fringe pixels too, and would explain each
+// other.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
@@ -110,11 +111,13 @@ float resolved_inverse_depth(ivec2 p) {
         w_near = max(w_near, w[i]);
         w_far = min(w_far, w[i]);
     }
-    // Two layers only matter if their CoCs differ by more than a pixel. lavapipe runs the code
+    // Two layers only matter if their CoCs differ by more than a quarter pixel
+    // (EDGE_RESOLVE_MIN_PX in src/passes/coc.rs: a highlight's fringe over a surface half a metre
+    // behind it differs by less than a pixel and still enlarged its disc). lavapipe runs the code
     // after an early return or inside a false `if` anyway, but it leaves a loop that no lane of
     // the SIMD group is still in: the edge resolve is a loop of one trip at an edge and none
     // elsewhere, so groups without an edge skip its colour reads and arithmetic.
-    int trips = pc.coc_scale_px_mm * (w_near - w_far) > 1.0 ? 1 : 0;
+    int trips = pc.coc_scale_px_mm * (w_near - w_far) > 0.25 ? 1 : 0;
     float resolved = w_p;
     for (int once = 0; once < trips; ++once) {
         resolved = edge_inverse_depth(p, w, w_p, w_near, w_far);

@@ -2449,3 +2449,71 @@ fn flare_fit_writes_the_fitted_ghosts_into_a_new_lens_file_and_predict_reads_the
     let e = realcam(&dir, s(&["flare-fit", "--lens", tessar, "--out", &out, "--ghosts", "4-0"])).failure();
     assert_contains(&e, "--ghosts: \"4-0\" is not FIRST/SECOND (e.g. 4/0)");
 }
+
+#[test]
+fn compare_measures_the_highlights_discs_and_names_a_bad_description() {
+    // A 64x48 frame of scene A's camera (50 mm, 0.028125 mm pixels, focus 2 m): a point at 7.5 m
+    // at f/2 has a disc of circumradius 8.15 px. The test image's disc is a hexagon 3% larger
+    // in radius (6% in area) than the reference's, which the table reports.
+    let dir = TestDir::new("compare-highlights");
+    let (w, h, cx, cy) = (64u32, 48u32, 32.3, 24.4);
+    let hexagon = |r: f64| {
+        let mut im = rgba(w, h, [0.5, 0.5, 0.5]);
+        for y in 0..h {
+            for x in 0..w {
+                let inside = (0..256)
+                    .filter(|s| {
+                        let (dx, dy) = (
+                            x as f64 + (s % 16) as f64 / 16.0 + 1.0 / 32.0 - cx,
+                            y as f64 + (s / 16) as f64 / 16.0 + 1.0 / 32.0 - cy,
+                        );
+                        (0..6).all(|k| {
+                            let a = (60.0 * k as f64).to_radians();
+                            dx * a.cos() + dy * a.sin() <= r * 0.75f64.sqrt()
+                        })
+                    })
+                    .count();
+                let v = 0.5 + 40.0 * inside as f32 / 256.0;
+                let i = 4 * (y * w + x) as usize;
+                im.data[i..i + 3].copy_from_slice(&[v, v, v]);
+            }
+        }
+        im
+    };
+    write_exr_rgba(&dir.join("test.exr"), &hexagon(8.15 * 1.03), &float_opts()).unwrap();
+    write_exr_rgba(&dir.join("reference.exr"), &hexagon(8.15), &float_opts()).unwrap();
+    let camera = |depth: &str| {
+        format!(
+            r#"{{"camera": {{"focal_length_mm": 50, "pixel_pitch_mm": 0.028125, "resolution": [64, 48]}},
+               "ground_truth": {{"dof": {{"focus_distance_m": 2.0}}}},
+               "objects": [{{"name": "HL", "role": "highlight_background", "depth_m": {depth},
+                             "pixel_xy_topleft_ydown": [32.3, 24.4]}}]}}"#
+        )
+    };
+    std::fs::write(dir.join("camera.json"), camera("7.5")).unwrap();
+    let args = |json: &str| s(&["compare", "test.exr", "reference.exr", "--highlights", json, "--fstop", "2"]);
+    let run = realcam(&dir, args("camera.json")).success();
+    assert_contains(&run.stdout, "rmse_matched");
+    assert_contains(&run.stdout, "| HL | 7.50 | 8.15 | ");
+    let ratio: f64 = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("| HL |"))
+        .unwrap()
+        .split('|')
+        .nth(6)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!((ratio - 1.03f64.powi(2)).abs() < 0.005, "{}", run.stdout);
+    assert_contains(&run.stdout, "f/2: areas within 2%: 0 of 1 measured");
+    // A bad description: the file and the field, exit code 1.
+    std::fs::write(dir.join("bad.json"), camera("\"far\"")).unwrap();
+    let e = realcam(&dir, args("bad.json")).failure();
+    assert_contains(&e, "bad.json\": field \"objects[0].depth_m\" must be a number, got a string");
+    // --highlights needs the f-number.
+    let run = realcam(&dir, s(&["compare", "test.exr", "reference.exr", "--highlights", "camera.json"]));
+    assert_eq!(run.code, Some(2), "{}", run.describe());
+    assert_contains(&run.stderr, "--fstop");
+}

@@ -12,5 +12,6 @@ pub mod error_budget;
 pub mod flare_fit;
 pub mod flare_predict;
 pub mod fuzz;
+pub mod highlight_discs;
 pub mod metrics;
 pub mod synth;

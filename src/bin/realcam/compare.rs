@@ -2,10 +2,15 @@
 
 use anyhow::{bail, Result};
 use realcam::io::read_exr_rgba;
+use realcam::tools::highlight_discs::{compare_highlights, SceneHighlights};
 use realcam::tools::metrics::compare_rgba;
 use std::path::Path;
 
-pub fn run(test: &Path, reference: &Path) -> Result<()> {
+/// The areas within this relative difference count as matching (issue 15: 2%).
+const AREA_TOLERANCE: f64 = 0.02;
+
+/// `highlights`: a scene description and the f-number, for the highlights' disc areas.
+pub fn run(test: &Path, reference: &Path, highlights: Option<(&Path, f64)>) -> Result<()> {
     let a = read_exr_rgba(test)?;
     let b = read_exr_rgba(reference)?;
     if (a.width, a.height) != (b.width, b.height) {
@@ -29,5 +34,11 @@ pub fn run(test: &Path, reference: &Path) -> Result<()> {
         e.psnr_db,
         e.relative_energy_error * 100.0
     );
+    if let Some((description, f_number)) = highlights {
+        let scene = SceneHighlights::read(description)?;
+        let report = compare_highlights(&scene, f_number, a.width, a.height, &a.data, &b.data)?;
+        println!("\nhighlight discs ({} against {}):\n", test.display(), reference.display());
+        print!("{}", report.table(AREA_TOLERANCE));
+    }
     Ok(())
 }

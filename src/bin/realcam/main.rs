@@ -68,6 +68,16 @@ enum Command {
         test: PathBuf,
         /// The reference (EXR).
         reference: PathBuf,
+        /// Also measure the defocused discs of the isolated highlights a scene description
+        /// lists (a Blender `camera.json`: objects with a role `highlight_*`): each disc's area
+        /// (its energy over its plateau, background from an annulus) in both images, their
+        /// ratio, and how many are within 2%.
+        #[arg(long, value_name = "CAMERA_JSON", requires = "fstop")]
+        highlights: Option<PathBuf>,
+        /// The f-number both images were rendered at (with --highlights: the renderers' thin
+        /// lens at the description's focus distance places each disc's window).
+        #[arg(long, requires = "highlights")]
+        fstop: Option<f64>,
     },
     /// Write the deterministic synthetic test scenes (testdata/ is made with this).
     Synth {
@@ -94,7 +104,9 @@ fn main() {
         Command::FlarePredict(args) => flare_predict::run(&args),
         Command::FlareFit(args) => flare_fit::run(&args),
         Command::Bench(args) => bench::run(&args),
-        Command::Compare { test, reference } => compare::run(&test, &reference),
+        Command::Compare { test, reference, highlights, fstop } => {
+            compare::run(&test, &reference, highlights.as_deref().zip(fstop))
+        }
         Command::Synth { out } => synth::run(&out),
     };
     if let Err(e) = result {
