@@ -54,6 +54,21 @@ float background(ivec2 p) {
     return sum / max(sides, 1.0);
 }
 
+// The brightest luminance of p's 3x3 neighbourhood: the visibility test's, so a highlight's
+// anti-aliased fringe, dimmer than its core, joins the core's sprites (left to the levels, it
+// spread a soft halo around the crisp disc: faint highlights of scene A 2-6% too large).
+float neighbourhood_peak(ivec2 p) {
+    float peak = -3.0e38;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 q = p + ivec2(dx, dy);
+            if (outside(q, pc.size)) continue;
+            peak = max(peak, luminance(finite_or_zero(imageLoad(color_in, q)).rgb));
+        }
+    }
+    return peak;
+}
+
 void main() {
     uint index = gl_GlobalInvocationID.x;
     if (index >= args[ARGS_HIGHLIGHT_COUNT]) return;
@@ -76,7 +91,8 @@ void main() {
             // the levels (its shape would not show), which keeps the number of sprites, and
             // their cost, bounded.
             float area = PI * 0.25 * coc * coc;
-            bool visible = (lum - reference) / max(area, 1.0) > pc.sprite_visibility * max(bg, pc.highlight_min * 0.01);
+            // The disc stands out if its brightest pixel's does: the fringe goes with the core.
+            bool visible = (neighbourhood_peak(p) - reference) / max(area, 1.0) > pc.sprite_visibility * max(bg, pc.highlight_min * 0.01);
             if (lum <= reference || !visible) continue;
             vec3 excess = c.rgb * (1.0 - bg / lum);
             uint slot = atomicAdd(args[ARGS_SPRITE_COUNT], 1u);

@@ -2,8 +2,7 @@
 //! sprites, their excess over the background taken out of the colour the gathers and the
 //! pyramid read. Shader: glsl/dof_highlights.comp.
 
-use super::barriers::args_for_indirect;
-use super::barriers::{buffer_after_compute_write, write_after_write};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, write_after_write};
 use super::dof_downsample::{luminance, texel_pixels};
 use super::twin::finite_or_zero;
 use crate::gpu::shaders::dof_tiles::{
@@ -75,6 +74,23 @@ fn background(color: &HostImage, size: [i32; 2], x: i32, y: i32, weights: [f32; 
     sum / sides.max(1.0)
 }
 
+/// The brightest luminance of (x, y)'s 3x3 neighbourhood in the frame (glsl/dof_highlights.comp's
+/// `neighbourhood_peak`).
+pub fn neighbourhood_peak(color: &HostImage, size: [i32; 2], x: i32, y: i32, weights: [f32; 3]) -> f32 {
+    let mut peak = f32::MIN;
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let (qx, qy) = (x + dx, y + dy);
+            if qx < 0 || qy < 0 || qx >= size[0] || qy >= size[1] {
+                continue;
+            }
+            let q: Vec<f32> = color.clamped(qx, qy).iter().map(|&v| finite_or_zero(v)).collect();
+            peak = peak.max(luminance(&q, weights));
+        }
+    }
+    peak
+}
+
 impl Twin for HighlightsShader {
     fn cpu(pc: &HighlightsPush, _groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
@@ -95,8 +111,9 @@ impl Twin for HighlightsShader {
                 let bg = background(&color, pc.size, x, y, pc.luminance_weights);
                 let reference = pc.highlight_min.max(pc.highlight_ratio * bg);
                 let area = std::f32::consts::PI * 0.25 * coc_p * coc_p;
+                let peak = neighbourhood_peak(&color, pc.size, x, y, pc.luminance_weights);
                 let visible =
-                    (lum - reference) / area.max(1.0) > pc.sprite_visibility * bg.max(pc.highlight_min * 0.01);
+                    (peak - reference) / area.max(1.0) > pc.sprite_visibility * bg.max(pc.highlight_min * 0.01);
                 if lum <= reference || !visible {
                     continue;
                 }
