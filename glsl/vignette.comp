@@ -27,7 +27,11 @@ void main() {
     vec2 r_mm = (vec2(p) + 0.5 - pc.centre_px) * pc.pixel_pitch_mm;
     float t2 = dot(r_mm, r_mm) / (pc.image_distance_mm * pc.image_distance_mm);
     // cos^4(atan(t)) = 1 / (1 + t^2)^2, without trigonometry.
-    float falloff = pc.entries > 0 ? height_table_lookup(1, pc.entries, length(r_mm)) : 1.0 / ((1.0 + t2) * (1.0 + t2));
+    float falloff = 1.0 / ((1.0 + t2) * (1.0 + t2));
+    // The lens's table where it has one, in a loop of one trip or none: lavapipe evaluates both
+    // sides of a conditional whatever the condition (and the lookup, given no table, read the
+    // word before it), but leaves a loop that no lane is in.
+    for (int once = 0; once < min(pc.entries, 1); ++once) falloff = height_table_lookup(1, pc.entries, length(r_mm));
     vec4 c = imageLoad(color_in, p);
     imageStore(color_out, p, vec4(c.rgb * falloff, c.a));
 }

@@ -82,7 +82,8 @@ fn assert_close(gpu: &[f32], cpu: &[f32], what: &str, relative: f32) {
 /// Scenes and cameras that together make every pass of the pass order run, on tiny frames.
 fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     let mut cases = Vec::new();
-    // The reference gather with everything the aperture can do, vignetting and the film curve.
+    // The reference gather with everything the aperture can do, vignetting (cos^4, then a lens's
+    // table) and the film curve.
     for (blades, with_mask) in [(5, false), (0, true)] {
         let mut camera = dof_camera(50.0, 1.4, 2.0, blades);
         camera.aperture_mask = with_mask.then(triangle_mask);
@@ -92,6 +93,9 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
             Some(HeightTable { image_height_mm: vec![0.0, 1.0, 3.0], values: vec![0.0, 0.05, 0.3] });
         camera.bokeh = BokehMode::Reference;
         camera.vignetting = true;
+        // The second case vignettes by a relative-illumination table, the first by cos^4.
+        camera.relative_illumination =
+            with_mask.then(|| HeightTable { image_height_mm: vec![0.0, 1.0, 3.0], values: vec![1.0, 0.9, 0.6] });
         camera.exposure = true;
         camera.film = FilmMode::Curve(FilmCurve::default_filmic());
         cases.push(("reference gather, vignette, film", busy_frame(40, 28), camera));
