@@ -91,6 +91,29 @@ fn the_renderers_coc_model_draws_the_pinhole_thin_lens_disc() {
     }
 }
 
+/// A grey frame with a 2x2 highlight at (cx, cy) and its anti-aliased fringe, the ring of
+/// pixels around it: values [highlight, fringe, background], depths [highlight, the rest] (a
+/// renderer's depth pass keeps one sample per pixel: the fringe has the background's).
+fn fringed_highlight(w: u32, h: u32, (cx, cy): (u32, u32), value: [f32; 3], depth_m: [f32; 2]) -> Frame {
+    let inside = |x: u32, y: u32| (cx..cx + 2).contains(&x) && (cy..cy + 2).contains(&y);
+    let fringe = |x: u32, y: u32| (cx - 1..cx + 3).contains(&x) && (cy - 1..cy + 3).contains(&y) && !inside(x, y);
+    let pixels = || (0..h).flat_map(|y| (0..w).map(move |x| (x, y)));
+    let color = pixels()
+        .flat_map(|(x, y)| {
+            let v = value[if inside(x, y) {
+                0
+            } else if fringe(x, y) {
+                1
+            } else {
+                2
+            }];
+            [v, v, v, 1.0]
+        })
+        .collect();
+    let depth = pixels().map(|(x, y)| depth_m[if inside(x, y) { 0 } else { 1 }]).collect();
+    Frame::new(w, h, color, depth)
+}
+
 #[test]
 fn an_in_focus_highlight_with_anti_aliased_edges_stays_sharp_over_the_sky() {
     // A 2x2 highlight (50) in focus at 2 m in front of the sky (1e10 m, 0.1), with the
@@ -101,24 +124,8 @@ fn an_in_focus_highlight_with_anti_aliased_edges_stays_sharp_over_the_sky() {
     let gpu = gpu();
     let (w, h) = (128u32, 72u32);
     let (cx, cy) = (64u32, 36u32);
-    let inside = |x: u32, y: u32| (cx..cx + 2).contains(&x) && (cy..cy + 2).contains(&y);
-    let fringe = |x: u32, y: u32| (cx - 1..cx + 3).contains(&x) && (cy - 1..cy + 3).contains(&y) && !inside(x, y);
-    let mut color = Vec::new();
-    let mut depth = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let v = if inside(x, y) {
-                50.0
-            } else if fringe(x, y) {
-                0.3 * 50.0 + 0.7 * 0.1
-            } else {
-                0.1
-            };
-            color.extend([v, v, v, 1.0]);
-            depth.push(if inside(x, y) { 2.0 } else { 1.0e10 });
-        }
-    }
-    let frame = Frame::new(w, h, color.clone(), depth);
+    let frame = fringed_highlight(w, h, (cx, cy), [50.0, 0.3 * 50.0 + 0.7 * 0.1, 0.1], [2.0, 1.0e10]);
+    let color = frame.color.clone();
     // The light (over the sky's level) farther than 2 px from the 4x4 footprint.
     let near = |x: u32, y: u32| (cx - 3..cx + 5).contains(&x) && (cy - 3..cy + 5).contains(&y);
     let spread = |rgba: &[f32]| -> f64 {
@@ -160,22 +167,7 @@ fn a_faint_highlights_anti_aliased_fringe_goes_with_its_sprite_and_the_disc_keep
     let gpu = gpu();
     let (w, h) = (320u32, 180u32);
     let (cx, cy) = (160u32, 90u32);
-    let inside = |x: u32, y: u32| (cx..cx + 2).contains(&x) && (cy..cy + 2).contains(&y);
-    let fringe = |x: u32, y: u32| (cx - 1..cx + 3).contains(&x) && (cy - 1..cy + 3).contains(&y) && !inside(x, y);
-    let color: Vec<f32> = (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .flat_map(|(x, y)| {
-            let v = if inside(x, y) {
-                40.0
-            } else if fringe(x, y) {
-                4.0
-            } else {
-                0.5
-            };
-            [v, v, v, 1.0]
-        })
-        .collect();
-    let frame = Frame::new(w, h, color, vec![8.0; (w * h) as usize]);
+    let frame = fringed_highlight(w, h, (cx, cy), [40.0, 4.0, 0.5], [8.0, 8.0]);
     let mut areas = Vec::new();
     for mode in [BokehMode::Tiled, BokehMode::Reference] {
         let mut camera = dof_camera(50.0, 2.0, 2.0, 6);
