@@ -360,6 +360,43 @@ mod tests {
         data.specialization(&constants)
     }
 
+    /// sa_intensity of glsl/include/aperture.glsl in f32: `steps` Newton steps from rho = r.
+    fn shader_sa_intensity(r: f32, s: f32, steps: u32) -> f32 {
+        let mut rho = r;
+        for _ in 0..steps {
+            let f = rho + s * rho * rho * rho - (1.0 + s) * r;
+            rho = (rho - f / (1.0 + 3.0 * s * rho * rho)).clamp(0.0, 1.0);
+        }
+        (1.0 + s) * (1.0 + s) / ((1.0 + s * rho * rho) * (1.0 + 3.0 * s * rho * rho))
+    }
+
+    /// The largest relative error of `steps` shader steps against the f64 root over the whole
+    /// range of the strength (|s| <= 0.3, the shader's SA_MAX_STRENGTH) and of the radius.
+    fn worst_sa_error(steps: u32) -> f64 {
+        let mut worst = 0.0f64;
+        for i in 0..=120 {
+            let s = -0.3 + 0.005 * i as f64;
+            for j in 0..=2000 {
+                let r = j as f64 / 2000.0;
+                let exact = crate::optics::spherical::intensity(s, r);
+                let got = shader_sa_intensity(r as f32, s as f32, steps) as f64;
+                worst = worst.max((got - exact).abs() / exact);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn sa_newton_steps_reach_the_f64_root() {
+        use crate::gpu::shaders::aperture::SA_NEWTON_STEPS;
+        // The shader's count leaves only f32 rounding (the error of twice as many steps), one
+        // step fewer does not.
+        let (chosen, twice) = (worst_sa_error(SA_NEWTON_STEPS), worst_sa_error(2 * SA_NEWTON_STEPS));
+        assert!(chosen < 1.5e-5 && chosen <= twice * 1.01, "{SA_NEWTON_STEPS} steps: {chosen:e}, twice: {twice:e}");
+        let fewer = worst_sa_error(SA_NEWTON_STEPS - 1);
+        assert!(fewer > 1e-4, "{} steps would do: {fewer:e}", SA_NEWTON_STEPS - 1);
+    }
+
     #[test]
     fn only_a_lens_that_needs_a_path_gets_its_pipeline() {
         let hexagon = ApertureShape { blades: 6, curvature: 0.0, ..ApertureShape::CIRCLE };
