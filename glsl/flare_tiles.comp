@@ -16,20 +16,15 @@ layout(push_constant) uniform Push { ivec2 size; } pc;
 
 #define SUMS 7
 #define GROUP (TILE_SIZE * TILE_SIZE)
-shared float s_sum[SUMS][GROUP];
 // The tile's light pixels lie in s_first .. s_end - 1 (none: s_end 0).
 shared uint s_first;
 shared uint s_end;
 
-void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    uint i = gl_LocalInvocationIndex;
-    if (i == 0u) {
-        s_first = GROUP;
-        s_end = 0u;
-    }
+// Pixel p's sums if it belongs to a light (energy per channel, energy-weighted position,
+// energy, count); `lit` false and zeros if not.
+float[SUMS] light_sums(ivec2 p, out bool lit) {
+    lit = false;
     float v[SUMS] = float[SUMS](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    bool lit = false;
     if (!outside(p, pc.size)) {
         vec3 c = imageLoad(color_in, p).rgb;
         bool finite = !any(isnan(c)) && !any(isinf(c));
@@ -39,24 +34,39 @@ void main() {
             lit = true;
         }
     }
-    for (int k = 0; k < SUMS; ++k) s_sum[k][i] = v[k];
+    return v;
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    uint i = gl_LocalInvocationIndex;
+    if (i == 0u) {
+        s_first = GROUP;
+        s_end = 0u;
+    }
     // s_first and s_end set before any invocation narrows them.
     barrier();
+    bool lit;
+    light_sums(p, lit);
     if (lit) {
         atomicMin(s_first, i);
         atomicMax(s_end, i + 1u);
     }
-    // The sums and the range written before invocation 0 reads them.
+    // The range narrowed by every invocation before invocation 0 reads it.
     barrier();
-    // One invocation sums, in pixel order (the same sums every run; few barriers, which CPU
-    // drivers pay for). Lavapipe runs the body of an `if` whatever the condition, but leaves a
-    // loop that no lane is still in: over the range of light pixels only, a tile without any
-    // (nearly all) costs one pass through the loop, not one per pixel.
+    // One invocation sums, in pixel order (the same sums every run; few barriers and no
+    // per-pixel shared stores, which CPU drivers pay for): it reads the range's pixels again.
+    // Lavapipe runs the body of an `if` whatever the condition, but leaves a loop that no lane
+    // is still in: over the range of light pixels only, a tile without any (nearly all) costs
+    // one pass through the loop, not one per pixel.
     if (i == 0u) {
         float total[SUMS] = float[SUMS](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        ivec2 origin = ivec2(gl_WorkGroupID.xy) * TILE_SIZE;
         for (uint j = s_first; j < s_end; ++j) {
-            if (s_sum[SUMS - 1][j] > 0.0) {
-                for (int k = 0; k < SUMS; ++k) total[k] += s_sum[k][j];
+            bool lit_j;
+            float v[SUMS] = light_sums(origin + ivec2(int(j) % TILE_SIZE, int(j) / TILE_SIZE), lit_j);
+            if (lit_j) {
+                for (int k = 0; k < SUMS; ++k) total[k] += v[k];
             }
         }
         uint t = gl_WorkGroupID.y * uint(fc.tiles_x) + gl_WorkGroupID.x;
