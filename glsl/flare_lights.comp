@@ -248,15 +248,13 @@ void main() {
         s_lights = n;
         args[ARGS_LIGHTS] = n;
         args[ARGS_LIT_TILES] = s_lit_total;
-        // Without a light no sprite is made and the frame keeps its colour: the copy writes it,
-        // the binning and the sprites dispatch no group.
+        // Without a light no sprite is made and the frame keeps its colour (the sprites add to
+        // it in place): the binning and the sprites dispatch no group.
         uvec3 tiles = uvec3(fc.tiles_x, fc.tiles_y, 1);
         uvec3 sprites = n > 0u ? tiles : uvec3(0u, 1u, 1u);
-        uvec3 copy = n > 0u ? uvec3(0u, 1u, 1u) : tiles;
         for (uint k = 0; k < 3; ++k) {
             args[ARGS_BIN_GROUPS + k] = k == 0u ? n * uint(fc.slots_per_light) : 1u;
             args[ARGS_SPRITE_GROUPS + k] = sprites[k];
-            args[ARGS_COPY_GROUPS + k] = copy[k];
         }
     }
     barrier();

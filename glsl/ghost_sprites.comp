@@ -7,24 +7,25 @@
 // the crossing sprites by kind (in batches where they may be more than a list holds), every
 // pixel shades the lists (each pixel decoding the bin words itself measured 2.7x slower on
 // lavapipe at 16 lights). The light's own pixels give up the share of their light its
-// starburst and halo took.
+// starburst and halo took. The flare is added to the colour in place: each pixel is read and
+// written by its own invocation only, and a frame without a light dispatches no group and
+// keeps its colour untouched (no copy).
 // A later primitive (Walch's fitted Bezier ghosts) is one more kind here.
 #include "common.glsl"
 #include "flare.glsl"
 // Only aperture_sdf is used: the mask and shape-table bindings are declared, never read.
-#define APERTURE_MASK_BINDING 8
-#define APERTURE_SHAPE_BINDING 9
+#define APERTURE_MASK_BINDING 7
+#define APERTURE_SHAPE_BINDING 8
 #include "aperture.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
-layout(binding = 0, rgba32f) uniform readonly image2D color_in;
-layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
-layout(binding = 2, std430) readonly buffer FlareParams { FlareConstants fc; };
-layout(binding = 3, std430) readonly buffer FlareTiles { float tile_data[]; };
-layout(binding = 4, std430) readonly buffer FlareLights { float light_data[]; };
-layout(binding = 5, std430) readonly buffer FlareSprites { float sprite_data[]; };
-layout(binding = 6, std430) readonly buffer FlareArgs { uint args[]; };
-layout(binding = 7, std430) readonly buffer FlareBins { uint bins[]; };
+layout(binding = 0, rgba32f) uniform image2D color;   // the flare added in place
+layout(binding = 1, std430) readonly buffer FlareParams { FlareConstants fc; };
+layout(binding = 2, std430) readonly buffer FlareTiles { float tile_data[]; };
+layout(binding = 3, std430) readonly buffer FlareLights { float light_data[]; };
+layout(binding = 4, std430) readonly buffer FlareSprites { float sprite_data[]; };
+layout(binding = 5, std430) readonly buffer FlareArgs { uint args[]; };
+layout(binding = 6, std430) readonly buffer FlareBins { uint bins[]; };
 
 // size: the image; words_per_tile: the bin words of one tile.
 layout(push_constant) uniform Push { ivec2 size; int words_per_tile; } pc;
@@ -150,12 +151,12 @@ void main() {
         shade_listed(p, q, sum);
     }
     if (outside(p, pc.size)) return;
-    vec4 c = finite_or_zero(imageLoad(color_in, p));
+    vec4 c = finite_or_zero(imageLoad(color, p));
     // The light's own pixels give up what its starburst and halo took.
     int light = int(tile_data[(uint(tile.y) * uint(fc.tiles_x) + uint(tile.x)) * TILE_WORDS + TILE_LIGHT]);
     if (light >= 0 && max(c.r, max(c.g, c.b)) >= fc.threshold) {
         uint lb = uint(light) * LIGHT_WORDS + LIGHT_MOVED;
         c.rgb *= vec3(1.0) - vec3(light_data[lb], light_data[lb + 1], light_data[lb + 2]);
     }
-    imageStore(color_out, p, vec4(c.rgb + vec3(s_covering[0], s_covering[1], s_covering[2]) + sum, c.a));
+    imageStore(color, p, vec4(c.rgb + vec3(s_covering[0], s_covering[1], s_covering[2]) + sum, c.a));
 }

@@ -69,13 +69,12 @@
 
 // The counts flare_lights writes, and the group counts of the indirect dispatches after it
 // (x, y, z each): flare_bins one group per sprite, ghost_sprites every tile where a light was
-// found and none where not, the colour's copy the other way round (one of the two writes it).
+// found and none where not (it adds to the colour in place).
 #define ARGS_LIGHTS 0
 #define ARGS_LIT_TILES 1
 #define ARGS_BIN_GROUPS 4
 #define ARGS_SPRITE_GROUPS 8
-#define ARGS_COPY_GROUPS 12
-#define ARGS_WORDS 16
+#define ARGS_WORDS 12
 
 // The frame's flare settings (src/passes/flare.rs FlareConstants, 4-byte fields).
 struct FlareConstants {

@@ -15,7 +15,6 @@
 //! The plan skips the pass when no light in the frame could make an element add a thousandth of
 //! the sensor's saturation, and says how bright a light would have to be.
 
-use super::copy::CopyShader;
 use super::flare_bins::{FlareBinsBindings, FlareBinsShader};
 use super::flare_lights::{FlareLightsBindings, FlareLightsShader};
 use super::flare_tiles::{light_weight, FlareTilesShader};
@@ -368,7 +367,6 @@ pub struct Flare {
     lights: Kernel<FlareLightsShader>,
     bins: Kernel<FlareBinsShader>,
     sprites: SpecializedKernel<GhostSpritesShader>,
-    copy: Kernel<CopyShader>,
 }
 
 impl Pass for Flare {
@@ -447,7 +445,6 @@ impl Pass for Flare {
             lights: Kernel::new(gpu)?,
             bins: Kernel::new(gpu)?,
             sprites: SpecializedKernel::new(gpu)?,
-            copy: Kernel::new(gpu)?,
         })
     }
 
@@ -456,8 +453,9 @@ impl Pass for Flare {
         self.sprites.prepare(&ghost_sprites::specialization(&p.constants, flare_bins::words_per_tile(p.sprite_slots())))
     }
 
-    /// The colour in, a new colour with the flare added (and the lights' starburst and halo
-    /// taken from their own pixels).
+    /// The flare added to the colour in place (and the lights' starburst and halo taken from
+    /// their own pixels): what reaches the flare is not read again by anything recorded before
+    /// it, and without a light the colour is left untouched instead of copied.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &FlareParams) -> GpuResult<()> {
         let color = images.color().clone();
         let [tx, ty] = p.tile_grid();
@@ -481,7 +479,6 @@ impl Pass for Flare {
         )?;
         let args =
             rec.create_buffer("flare counts", ARGS_WORDS as u64 * 4, storage | vk::BufferUsageFlags::INDIRECT_BUFFER)?;
-        let output = rec.create_image("color (flare)", color.width, color.height, color.format)?;
 
         flare_tiles::record(&self.tiles, rec, &color, &constants, &tiles, [tx, ty])?;
         let light_bindings = FlareLightsBindings {
@@ -498,8 +495,7 @@ impl Pass for Flare {
         let bin_bindings = FlareBinsBindings { constants: &constants, sprites: &sprites, args: &args, bins: &bins };
         flare_bins::record(&self.bins, rec, &bin_bindings, sprite_slots as u32)?;
         let sprite_bindings = GhostSpritesBindings {
-            color_in: &color,
-            color_out: &output,
+            color: &color,
             constants: &constants,
             tiles: &tiles,
             lights: &lights,
@@ -508,8 +504,7 @@ impl Pass for Flare {
             bins: &bins,
         };
         let kinds = ghost_sprites::specialization(&p.constants, words_per_tile);
-        ghost_sprites::record(&self.sprites, &self.copy, rec, &kinds, &sprite_bindings, words_per_tile)?;
-        images.set_color(None, output);
+        ghost_sprites::record(&self.sprites, rec, &kinds, &sprite_bindings, words_per_tile)?;
         Ok(())
     }
 }

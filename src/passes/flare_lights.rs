@@ -7,7 +7,7 @@ use super::flare::{constants_of, ghost_from_table, FlareConstants};
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_BIN_GROUPS, ARGS_COPY_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY,
+    ARGS_BIN_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY,
     EXPLICIT_WORDS, EXPLICIT_X, EXPLICIT_Y, GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST,
     KIND_GLOW, KIND_NONE, KIND_SPIKE, LIGHT_AREA, LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0,
     LIGHT_SPIKE_REACH, LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND,
@@ -279,9 +279,9 @@ impl Twin for FlareLightsShader {
         args[ARGS_LIT_TILES as usize] = lit.len() as u32;
         let tiles = [fc.tiles_x.max(0) as u32, fc.tiles_y.max(0) as u32, 1];
         let none = [0, 1, 1];
-        let (sprites, copy) = if acc.is_empty() { (none, tiles) } else { (tiles, none) };
+        let sprites = if acc.is_empty() { none } else { tiles };
         let bins = [acc.len() as u32 * fc.slots_per_light.max(0) as u32, 1, 1];
-        for (at, groups) in [(ARGS_BIN_GROUPS, bins), (ARGS_SPRITE_GROUPS, sprites), (ARGS_COPY_GROUPS, copy)] {
+        for (at, groups) in [(ARGS_BIN_GROUPS, bins), (ARGS_SPRITE_GROUPS, sprites)] {
             args[at as usize..][..3].copy_from_slice(&groups);
         }
         // 3. Each light.

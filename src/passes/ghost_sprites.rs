@@ -3,29 +3,25 @@
 //! whatever the number of sprites. Shader: glsl/ghost_sprites.comp. Further ghost primitives
 //! (Walch's fitted Bezier shapes) are further kinds of sprite here.
 
-use super::barriers::{args_for_indirect, buffer_after_compute_write, overwrite, write_after_write};
-use super::copy::{CopyBindings, CopyShader};
+use super::barriers::{args_for_indirect, buffer_after_compute_write, update_in_place};
 use super::flare::{constants_of, FlareConstants};
 use super::flare_bins::ghost_channel;
 use super::twin::floats;
 use super::TILE_SIZE;
 use crate::gpu::shaders::flare::{
-    ARGS_COPY_GROUPS, ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST,
+    ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST,
     KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST,
     SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, SpecializedKernel, Twin};
+use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
 
 pub const NAME: &str = "ghost_sprites";
-/// The profile's name of the copy that stands in for the kernel in a frame without a light.
-pub const COPY_NAME: &str = "flare_copy";
 
 crate::shader_bindings! {
     /// The bindings of glsl/ghost_sprites.comp.
     pub struct GhostSpritesBindings {
-        color_in: image(color_in),
-        color_out: image(color_out),
+        color: image(color),
         constants: buffer(FlareParams),
         tiles: buffer(FlareTiles),
         lights: buffer(FlareLights),
@@ -110,14 +106,14 @@ impl Twin for GhostSpritesShader {
     /// Every sprite at every pixel of its bounds (the bins only skip sprites whose light there is
     /// 0, and add covering ones once per tile: the same light).
     fn cpu(size: &[i32; 3], groups: [u32; 3], b: &mut [HostData]) {
-        let fc = constants_of(&b[2]);
+        let fc = constants_of(&b[1]);
         let aperture = AperturePolygon {
             blades: fc.blades.max(0) as u32,
             rotation_rad: fc.rotation as f64,
             curvature: fc.curvature as f64,
         };
-        let (tiles, lights, sprites) = (floats(b[3].words()), floats(b[4].words()), floats(b[5].words()));
-        let total = b[6].words()[ARGS_LIGHTS as usize] as usize * fc.slots_per_light.max(0) as usize;
+        let (tiles, lights, sprites) = (floats(b[2].words()), floats(b[3].words()), floats(b[4].words()));
+        let total = b[5].words()[ARGS_LIGHTS as usize] as usize * fc.slots_per_light.max(0) as usize;
         let input = b[0].image().clone();
         let (w, h) = ((groups[0] * TILE_SIZE).min(size[0] as u32), (groups[1] * TILE_SIZE).min(size[1] as u32));
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
@@ -136,7 +132,7 @@ impl Twin for GhostSpritesShader {
                 }
             }
         }
-        let out = b[1].image_mut();
+        let out = b[0].image_mut();
         for y in 0..h {
             for x in 0..w {
                 let c = input.clamped(x as i32, y as i32);
@@ -171,32 +167,23 @@ pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 
     [1, 1, (constants.ghost_count > 0) as u32, (constants.spike_count > 0) as u32, batches as u32]
 }
 
-/// Record the kernel: the frame's colour and the sprites in, a new colour out; `constants`
-/// from [`specialization`]. flare_lights chose the group counts: with a light every tile runs
-/// the sprites, without one the frame's colour is only copied (`copy`, every tile), so a frame
-/// with nothing to draw costs one copy.
+/// Record the kernel: the sprites added to the frame's colour in place; `constants` from
+/// [`specialization`]. flare_lights chose the group count: every tile with a light, none
+/// without one (the colour is then left as it is: a frame with nothing to draw costs nothing
+/// here).
 pub fn record(
     kernel: &SpecializedKernel<GhostSpritesShader>,
-    copy: &Kernel<CopyShader>,
     rec: &mut Recorder,
     constants: &[u32; 5],
     b: &GhostSpritesBindings<'_>,
     words_per_tile: u64,
 ) -> GpuResult<()> {
-    let size = [b.color_in.width as i32, b.color_in.height as i32];
-    rec.begin_pass(COPY_NAME);
-    // color_out: written from scratch (by the copy or by the sprites); its old contents are
-    //   discarded. color_in: already waited for by flare_tiles, only read since. The counts:
-    //   made visible to indirect reads by flare_bins's barrier, not written since.
-    rec.image_barriers(&[overwrite(b.color_out)]);
-    let copy_bindings = CopyBindings { color_in: b.color_in, color_out: b.color_out };
-    copy.dispatch_indirect(rec, &copy_bindings, &size, b.args, ARGS_COPY_GROUPS as u64 * 4)?;
-    rec.end_pass();
+    let size = [b.color.width as i32, b.color.height as i32];
     rec.begin_pass(NAME);
     // tiles (their light), lights, sprites and the counts: written by flare_lights
     //   (read-after-write); the bins: written by flare_bins (read-after-write).
-    // color_out: the copy's writes before these (write-after-write as recorded; at run time
-    //   only one of the two dispatches has groups).
+    // color: written by the pass before the flare (or the upload) and read by flare_tiles
+    //   since; each texel is now read and rewritten: those writes visible, those reads done.
     rec.buffer_barriers(&[
         buffer_after_compute_write(b.tiles),
         buffer_after_compute_write(b.lights),
@@ -204,7 +191,7 @@ pub fn record(
         args_for_indirect(b.args),
         buffer_after_compute_write(b.bins),
     ]);
-    rec.image_barriers(&[write_after_write(b.color_out)]);
+    rec.image_barriers(&[update_in_place(b.color)]);
     let push = [size[0], size[1], words_per_tile as i32];
     kernel.dispatch_indirect(rec, constants, b, &push, b.args, ARGS_SPRITE_GROUPS as u64 * 4)?;
     rec.end_pass();

@@ -269,7 +269,11 @@ impl PlannedPass {
 
 /// The frame's images on the GPU while a plan is recorded, by role. A pass that changes the
 /// colour reads [`FrameImages::color`] and replaces it with its own output image: each pass
-/// writes images of its own, so no pass overwrites what an earlier one still has to read.
+/// writes images of its own, so no pass overwrites what an earlier one still has to read. The
+/// one exception adds to the colour pixel by pixel (the flare, which leaves a frame without a
+/// light untouched instead of copying it): it updates [`FrameImages::color`] in place, after
+/// its barrier has waited for every earlier read, and nothing recorded later reads the colour
+/// as it was.
 pub struct FrameImages {
     pub width: u32,
     pub height: u32,
