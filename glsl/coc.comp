@@ -47,10 +47,13 @@ layout(push_constant) uniform Push {
 
 #include "height_table.glsl"
 
-float inverse_depth(ivec2 q) {
+// Depth in mm at q (clamped to the frame), at least 1e-30 so that its inverse is finite.
+float depth_mm(ivec2 q) {
     q = clamp(q, ivec2(0), pc.size - 1);
-    return 1.0 / max(imageLoad(depth_m, q).r * pc.mm_per_depth_unit, 1.0e-30);
+    return max(imageLoad(depth_m, q).r * pc.mm_per_depth_unit, 1.0e-30);
 }
+
+float inverse_depth(ivec2 q) { return 1.0 / depth_mm(q); }
 
 float brightness(vec3 c) { return max(c.r, 0.0) + max(c.g, 0.0) + max(c.b, 0.0); }
 
@@ -102,15 +105,19 @@ float edge_inverse_depth(ivec2 p, float w[9], float w_p, float w_near, float w_f
 
 // The inverse depth (1/mm) whose light pixel p mostly holds (see the top of the file).
 float resolved_inverse_depth(ivec2 p) {
-    float w_p = inverse_depth(p);
+    float d_p = depth_mm(p);
+    float w_p = 1.0 / d_p;
     if (!RESOLVE_EDGES) return w_p;
-    float w[9];
-    float w_near = w_p, w_far = w_p;
+    // The nearest and farthest layers from the depths (a division is monotonic: the largest
+    // inverse is the inverse of the smallest depth), so a pixel away from an edge divides once
+    // for them, not once per neighbour.
+    float d_min = d_p, d_max = d_p;
     for (int i = 0; i < 9; ++i) {
-        w[i] = inverse_depth(p + ivec2(i % 3 - 1, i / 3 - 1));
-        w_near = max(w_near, w[i]);
-        w_far = min(w_far, w[i]);
+        float d = depth_mm(p + ivec2(i % 3 - 1, i / 3 - 1));
+        d_min = min(d_min, d);
+        d_max = max(d_max, d);
     }
+    float w_near = 1.0 / d_min, w_far = 1.0 / d_max;
     // Two layers only matter if their CoCs differ by more than a quarter pixel
     // (EDGE_RESOLVE_MIN_PX in src/passes/coc.rs: a highlight's fringe over a surface half a metre
     // behind it differs by less than a pixel and still enlarged its disc). lavapipe runs the code
@@ -120,6 +127,8 @@ float resolved_inverse_depth(ivec2 p) {
     int trips = pc.coc_scale_px_mm * (w_near - w_far) > 0.25 ? 1 : 0;
     float resolved = w_p;
     for (int once = 0; once < trips; ++once) {
+        float w[9];
+        for (int i = 0; i < 9; ++i) w[i] = inverse_depth(p + ivec2(i % 3 - 1, i / 3 - 1));
         resolved = edge_inverse_depth(p, w, w_p, w_near, w_far);
     }
     return resolved;
