@@ -6,13 +6,16 @@
 // shot-noise-like (standard deviation sigma * sqrt(value)), sigma growing with the square root of
 // the ISO speed, from a hash of the pixel, the channel and a seed: deterministic. A film file may
 // give the curve as a table instead (log10 sensor value against log10 output, linear between
-// entries, constant beyond the ends; src/io/film_file.rs).
+// entries, constant beyond the ends; src/io/film_file.rs). Where the vignette pass runs, its
+// falloff is applied here first (include/vignette.glsl): one read and write of the frame fewer
+// than a dispatch of its own.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
 layout(binding = 1, rgba32f) uniform writeonly image2D color_out;
-// [log10 sensor values (n), log10 outputs (n)] when RESPONSE == 2.
+// [log10 sensor values (n), log10 outputs (n)] when RESPONSE == 2; then, with VIGNETTE, the
+// vignette's table from word vignette_base (its heights and relative illumination).
 layout(binding = 2, std430) readonly buffer Table { float table[]; };
 
 // The run's path, specialised (src/passes/film.rs, FilmPush::specialization) so the pipeline
@@ -20,6 +23,7 @@ layout(binding = 2, std430) readonly buffer Table { float table[]; };
 // more than the rest of the pass.
 layout(constant_id = 0) const int RESPONSE = 1;  // 0: linear (scene-referred), 1: characteristic curve, 2: table
 layout(constant_id = 1) const bool NOISE = true; // noise_sigma > 0
+layout(constant_id = 2) const bool VIGNETTE = false; // vignette != 0
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -35,7 +39,17 @@ layout(push_constant) uniform Push {
     float noise_sigma;              // at sensor value 1; 0: no noise
     uint seed;
     int table_entries;
+    int vignette;                   // 1: the vignette's falloff first (VIGNETTE); its constants:
+    float vignette_centre_x_px;
+    float vignette_centre_y_px;
+    float vignette_pixel_pitch_mm;
+    float vignette_image_distance_mm;
+    int vignette_entries;           // 0: cos^4
+    int vignette_base;              // the vignette's first word in `table`
 } pc;
+
+#include "height_table.glsl"
+#include "vignette.glsl"
 
 uint hash(uint x) {
     x ^= x >> 16; x *= 0x7feb352du;
@@ -92,7 +106,12 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));
-    vec3 h = c.rgb * pc.exposure_gain;
+    vec3 rgb = c.rgb;
+    if (VIGNETTE) {
+        rgb *= vignette_falloff(p, vec2(pc.vignette_centre_x_px, pc.vignette_centre_y_px), pc.vignette_pixel_pitch_mm,
+                                pc.vignette_image_distance_mm, pc.vignette_base, pc.vignette_entries);
+    }
+    vec3 h = rgb * pc.exposure_gain;
     if (NOISE) {
         for (int k = 0; k < 3; ++k) h[k] += pc.noise_sigma * sqrt(max(h[k], 0.0)) * gaussian(p, k);
     }

@@ -759,7 +759,9 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     assert_contains(err, "[run ] coc");
     assert_contains(err, "[run ] bokeh_gather");
     assert_contains(err, "[run ] vignette");
+    assert_contains(err, "applied in the film pass's dispatch (one read and write of the frame fewer)");
     assert_contains(err, "[run ] film");
+    assert_contains(err, "the vignette's falloff first, in the same dispatch");
     assert_contains(err, "[skip] motion_blur");
     // The profile table.
     assert_contains(err, "GPU time per pass");
@@ -786,7 +788,8 @@ fn render_writes_exr_png_trace_with_explain_and_profile() {
     assert!(trace.trim_start().starts_with('{') && trace.trim_end().ends_with('}'));
     assert_contains(&trace, "\"traceEvents\"");
     assert_contains(&trace, "\"ph\":\"X\"");
-    for pass in ["coc", "bokeh_gather", "vignette", "film"] {
+    // The vignette runs in the film's dispatch.
+    for pass in ["coc", "bokeh_gather", "vignette+film"] {
         assert_contains(&trace, &format!("\"name\":\"{pass}\""));
     }
 

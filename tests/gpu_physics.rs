@@ -362,7 +362,12 @@ fn profile_times_every_pass() {
     let (_, plan, profile) = render(&gpu, &frame, &camera);
     for pass in ["coc", realcam::pipeline::planner::BOKEH_TILED, "vignette", "film"] {
         assert!(plan.runs(pass), "{pass} planned");
-        let pass = if pass == realcam::pipeline::planner::BOKEH_TILED { "dof_tiles" } else { pass };
+        // The tiled path's first dispatch; the vignette runs in the film's dispatch.
+        let pass = match pass {
+            realcam::pipeline::planner::BOKEH_TILED => "dof_tiles",
+            "vignette" | "film" => realcam::passes::film::WITH_VIGNETTE_NAME,
+            _ => pass,
+        };
         let ms = profile.pass_ms(pass).unwrap_or_else(|| panic!("{pass} timed"));
         assert!(ms.is_finite() && ms > 0.0, "{pass}: {ms} ms");
     }

@@ -153,6 +153,14 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
         "the glow-only case has ghosts or spikes"
     );
     cases.push(("flare, glow only", flare_frame(72, 40), glow_only));
+    // The vignette in a dispatch of its own: no film pass to apply it (exposure off, linear).
+    let mut camera = dof_camera(50.0, 1.4, 2.0, 5);
+    camera.vignetting = true;
+    camera.relative_illumination =
+        Some(HeightTable { image_height_mm: vec![0.0, 1.0, 3.0], values: vec![1.0, 0.9, 0.6] });
+    camera.exposure = false;
+    camera.film = FilmMode::Linear;
+    cases.push(("vignette without the film", busy_frame(40, 28), camera));
     cases
 }
 
@@ -289,11 +297,19 @@ fn whole_pipeline_matches_the_chained_cpu_twins() {
         assert_close(out.coc_px.as_ref().unwrap(), &coc_cpu, "coc", 1e-5);
         let gather = plan.params::<bokeh_gather::BokehGather>().unwrap();
         let dof = bokeh_gather::gather_cpu(&frame.color, &coc_cpu, &gather.push, &gather.aperture);
+        // The film runs, so the vignette's falloff is applied in its dispatch: the film's twin
+        // applies it, and the same falloff by the vignette's own twin then the film without it
+        // gives the same values.
         let v = plan.params::<vignette::Vignette>().unwrap();
-        let vig = vignette::vignette_cpu(&dof, &v.push, &v.table);
         let f = plan.params::<film::Film>().unwrap();
-        let cpu = film::film_cpu(&vig, &f.push, &f.table);
+        assert!(v.in_film && f.push.vignette == 1, "{}", plan.explain());
+        let cpu = film::film_cpu(&dof, &f.push, &f.table);
         assert_close(&out.rgba, &cpu, "pipeline", 1e-4);
+        let film_alone = film::FilmPush { vignette: 0, ..f.push };
+        let apart = film::film_cpu(&vignette::vignette_cpu(&dof, &v.push, &v.table), &film_alone, &f.table);
+        assert_eq!(cpu, apart, "the vignette in the film's dispatch against the two passes apart");
+        let corner = v.push.corner_falloff(&v.table);
+        assert!(corner < 0.99, "the case vignettes visibly (twice would show): {corner}");
     }
 }
 

@@ -4,15 +4,19 @@
 #ifndef REALCAM_HEIGHT_TABLE_GLSL
 #define REALCAM_HEIGHT_TABLE_GLSL
 
-float height_table_lookup(int column, int n, float h_mm) {
-    if (h_mm <= table[0]) return table[column * n];
+// The table starting at word `base` of the buffer (a shader whose buffer holds another table
+// first: film's curve, then the vignette's relative illumination).
+float height_table_lookup_at(int base, int column, int n, float h_mm) {
+    if (h_mm <= table[base]) return table[base + column * n];
     for (int i = 1; i < n; ++i) {
-        if (h_mm <= table[i]) {
-            float t = (h_mm - table[i - 1]) / (table[i] - table[i - 1]);
-            return mix(table[column * n + i - 1], table[column * n + i], t);
+        if (h_mm <= table[base + i]) {
+            float t = (h_mm - table[base + i - 1]) / (table[base + i] - table[base + i - 1]);
+            return mix(table[base + column * n + i - 1], table[base + column * n + i], t);
         }
     }
-    return table[column * n + n - 1];
+    return table[base + column * n + n - 1];
 }
+
+float height_table_lookup(int column, int n, float h_mm) { return height_table_lookup_at(0, column, n, h_mm); }
 
 #endif

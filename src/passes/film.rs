@@ -5,12 +5,38 @@
 
 use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
+use super::vignette::{Vignette, VignettePush};
 use super::{Decision, FrameImages, Pass};
 use crate::gpu::{Gpu, GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
-use crate::model::camera::FilmMode;
+use crate::model::camera::{Camera, FilmMode};
 use crate::optics::film::FilmCurve;
 
 pub const NAME: &str = "film";
+/// The profile's name of the film's dispatch when it also applies the vignette's falloff.
+pub const WITH_VIGNETTE_NAME: &str = "vignette+film";
+
+/// The film the output gets: the camera's, or linear when the curve goes only into the preview.
+fn output_film(camera: &Camera) -> &FilmMode {
+    if camera.film_on_output {
+        &camera.film
+    } else {
+        &FilmMode::Linear
+    }
+}
+
+/// Whether the pass runs for `camera`: a curve, an exposure gain other than 1 or grain.
+pub fn runs(camera: &Camera) -> bool {
+    curve_and_table(output_film(camera)).0.is_some() || camera.exposure_gain() != 1.0 || camera.noise_sigma() != 0.0
+}
+
+/// A non-finite value as 0 (the shader's finite_or_zero before the vignette's falloff).
+fn finite(v: f32) -> f32 {
+    if v.is_finite() {
+        v
+    } else {
+        0.0
+    }
+}
 
 /// Push constants of glsl/film.comp.
 #[repr(C)]
@@ -31,13 +57,48 @@ pub struct FilmPush {
     pub seed: u32,
     /// Entries of the characteristic-curve table (use_curve 2); 0: none.
     pub table_entries: i32,
+    /// 1: the vignette's falloff applied first (its constants below), 0: none.
+    pub vignette: i32,
+    pub vignette_centre_px: [f32; 2],
+    pub vignette_pixel_pitch_mm: f32,
+    pub vignette_image_distance_mm: f32,
+    /// Entries of the vignette's table (0: cos^4).
+    pub vignette_entries: i32,
+    /// The vignette's table's first word in the film's table buffer.
+    pub vignette_base: i32,
 }
 
 impl FilmPush {
-    /// The shader's specialization constants for these constants: `RESPONSE` (`use_curve`) and
-    /// `NOISE` (whether `noise_sigma` > 0), so each run's pipeline holds only its own path.
-    pub fn specialization(&self) -> [u32; 2] {
-        [self.use_curve as u32, u32::from(self.noise_sigma > 0.0)]
+    /// The shader's specialization constants for these constants: `RESPONSE` (`use_curve`),
+    /// `NOISE` (whether `noise_sigma` > 0) and `VIGNETTE`, so each run's pipeline holds only
+    /// its own path.
+    pub fn specialization(&self) -> [u32; 3] {
+        [self.use_curve as u32, u32::from(self.noise_sigma > 0.0), u32::from(self.vignette != 0)]
+    }
+
+    /// The vignette's constants, as the vignette pass would run them, for its table at word
+    /// `base` of this pass's table.
+    pub fn with_vignette(self, v: &VignettePush, base: usize) -> FilmPush {
+        FilmPush {
+            vignette: 1,
+            vignette_centre_px: v.centre_px,
+            vignette_pixel_pitch_mm: v.pixel_pitch_mm,
+            vignette_image_distance_mm: v.image_distance_mm,
+            vignette_entries: v.entries,
+            vignette_base: base as i32,
+            ..self
+        }
+    }
+
+    /// The vignette's constants back (meaningful when `vignette` is 1).
+    fn vignette_push(&self) -> VignettePush {
+        VignettePush {
+            size: self.size,
+            centre_px: self.vignette_centre_px,
+            pixel_pitch_mm: self.vignette_pixel_pitch_mm,
+            image_distance_mm: self.vignette_image_distance_mm,
+            entries: self.vignette_entries,
+        }
     }
 }
 
@@ -85,6 +146,12 @@ impl FilmPush {
             noise_sigma: 0.0,
             seed: 0,
             table_entries: 0,
+            vignette: 0,
+            vignette_centre_px: [0.0; 2],
+            vignette_pixel_pitch_mm: 0.0,
+            vignette_image_distance_mm: 0.0,
+            vignette_entries: 0,
+            vignette_base: 0,
         }
     }
 
@@ -151,10 +218,16 @@ pub fn film_cpu(rgba: &[f32], params: &FilmPush, table: &[f32]) -> Vec<f32> {
         .flat_map(|(i, px)| {
             let (x, y) = (i as u32 % w, i as u32 / w);
             let a = if px[3].is_finite() { px[3] } else { 0.0 };
+            // The vignette's falloff on the finite value, as the shader applies it.
+            let falloff = match params.vignette {
+                0 => 1.0,
+                _ => params.vignette_push().falloff(x, y, &table[params.vignette_base as usize..]),
+            };
+            let vignetted = |v: f32| if params.vignette == 0 { v } else { finite(v) * falloff };
             [
-                params.apply_at(px[0], x, y, 0, table),
-                params.apply_at(px[1], x, y, 1, table),
-                params.apply_at(px[2], x, y, 2, table),
+                params.apply_at(vignetted(px[0]), x, y, 0, table),
+                params.apply_at(vignetted(px[1]), x, y, 1, table),
+                params.apply_at(vignetted(px[2]), x, y, 2, table),
                 a,
             ]
         })
@@ -225,10 +298,9 @@ impl Pass for Film {
     fn plan(input: &PlanInput<'_>) -> Decision<FilmParams> {
         let camera = input.camera;
         let gain = camera.exposure_gain();
-        let film = if camera.film_on_output { &camera.film } else { &FilmMode::Linear };
-        let (curve, _) = curve_and_table(film);
+        let film = output_film(camera);
         let noise_sigma = camera.noise_sigma();
-        if curve.is_none() && gain == 1.0 && noise_sigma == 0.0 {
+        if !runs(camera) {
             return Decision::skip("linear film with exposure off and no grain: the sensor value is the scene value");
         }
         let exposure = if camera.exposure {
@@ -261,10 +333,17 @@ impl Pass for Film {
             String::new()
         };
         let (w, h) = input.size();
-        let (mut push, table) = response_push(w, h, gain, film);
+        let (mut push, mut table) = response_push(w, h, gain, film);
         push.noise_sigma = noise_sigma as f32;
         push.seed = camera.seed;
-        Decision::run(FilmParams { push, table }, format!("{exposure}, {response}{grain}"))
+        // The vignette's falloff, where that pass runs, in this dispatch (see src/passes/vignette.rs).
+        let mut also = String::new();
+        if let Some(v) = Vignette::plan(input).runs.into_iter().find(|v| v.in_film) {
+            push = push.with_vignette(&v.push, table.len());
+            table.extend(&v.table);
+            also = "; the vignette's falloff first, in the same dispatch".into();
+        }
+        Decision::run(FilmParams { push, table }, format!("{exposure}, {response}{grain}{also}"))
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
@@ -277,6 +356,7 @@ impl Pass for Film {
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &FilmParams) -> GpuResult<()> {
         let constants = p.push.specialization();
-        filter::record(&(&self.kernel, &constants[..]), rec, images, NAME, &p.table, &p.push)
+        let label = if p.push.vignette != 0 { WITH_VIGNETTE_NAME } else { NAME };
+        filter::record(&(&self.kernel, &constants[..]), rec, images, label, &p.table, &p.push)
     }
 }

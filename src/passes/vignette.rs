@@ -1,6 +1,10 @@
 //! Vignetting pass: the lens's relative-illumination table, or cos^4 of the real field angle
 //! (Kyaw 2013 eq 4.14 / 4.9).
-//! Shader: glsl/vignette.comp.
+//! Shader: glsl/vignette.comp (the falloff in glsl/include/vignette.glsl). Where the film pass
+//! runs (it comes next in the pass order and also works pixel by pixel), the falloff is applied
+//! in the film's dispatch instead of a dispatch of its own: one read and write of the frame
+//! fewer (`VignetteParams::in_film`, `--explain` says so, the profile names the film's dispatch
+//! `vignette+film`).
 
 use super::filter::{self, FilterBindings};
 use super::scene::{PlanInput, VISIBLE_FALLOFF};
@@ -83,6 +87,8 @@ impl Twin for VignetteShader {
 pub struct VignetteParams {
     pub push: VignettePush,
     pub table: Vec<f32>,
+    /// Applied in the film pass's dispatch (which then runs), not in one of its own.
+    pub in_film: bool,
 }
 
 pub struct Vignette {
@@ -116,8 +122,17 @@ impl Pass for Vignette {
         } else if 1.0 - corner <= VISIBLE_FALLOFF {
             Decision::skip(format!("{falloff_name} at the corners is {corner:.6}: invisible"))
         } else {
-            let why = format!("{falloff_name}: {:.1}% of the centre's light at the farthest corner", corner * 100.0);
-            Decision::run(VignetteParams { push, table }, why)
+            let in_film = super::film::runs(camera);
+            let why = format!(
+                "{falloff_name}: {:.1}% of the centre's light at the farthest corner{}",
+                corner * 100.0,
+                if in_film {
+                    "; applied in the film pass's dispatch (one read and write of the frame fewer)"
+                } else {
+                    ""
+                }
+            );
+            Decision::run(VignetteParams { push, table, in_film }, why)
         }
     }
 
@@ -125,7 +140,11 @@ impl Pass for Vignette {
         Ok(Vignette { kernel: Kernel::new(gpu)? })
     }
 
+    /// A dispatch of its own, or nothing where the film pass applies the falloff.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &VignetteParams) -> GpuResult<()> {
+        if p.in_film {
+            return Ok(());
+        }
         filter::record(&self.kernel, rec, images, NAME, &p.table, &p.push)
     }
 }

@@ -47,9 +47,10 @@ pub fn film_changes_sensor_values(camera: &Camera) -> bool {
 
 /// The plan that exposes `average`, a long exposure's average of sensor values from
 /// [`sensor_camera`], on `camera`'s film: only the film pass runs, with its grain and curve and
-/// without the exposure gain (the frames had it).
+/// without the exposure gain or the vignette's falloff, which the film applies where the
+/// vignette runs (the frames had both).
 pub fn film_plan(average: &Frame, camera: &Camera) -> Plan {
-    let film_camera = Camera { exposure: false, ..camera.clone() };
+    let film_camera = Camera { exposure: false, vignetting: false, ..camera.clone() };
     let input = PlanInput::new(average, &film_camera);
     let passes = PASS_ORDER
         .iter()

@@ -52,7 +52,7 @@ fn methods() -> Vec<Method> {
 }
 
 fn dof_ms(profile: &Profile) -> f64 {
-    let skip = ["upload", "download", "vignette", "film", "coc"];
+    let skip = ["upload", "download", "vignette", "film", crate::passes::film::WITH_VIGNETTE_NAME, "coc"];
     profile.passes.iter().filter(|p| !skip.contains(&p.name.as_str())).map(|p| p.gpu_ms).sum()
 }
 
