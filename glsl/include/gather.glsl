@@ -11,8 +11,10 @@
 vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transition_px) {
     float coc_p = imageLoad(coc_px, p).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
-    vec4 bg = vec4(0.0), fg = vec4(0.0);
-    float bg_w = 0.0, fg_w = 0.0;
+    vec4 bg = vec4(0.0), fg = vec4(0.0), hidden = vec4(0.0);
+    float bg_w = 0.0, fg_w = 0.0, hidden_n = 0.0, own_n = 0.0;
+    // A sample spread over p's own CoC would carry 1 / (this) at p.
+    float area_p_px2 = ap.area_factor * radius_p * radius_p;
     for (int dy = -r; dy <= r; ++dy) {
         // The taps lie in the disc dx^2 + dy^2 <= r^2: its rows are the loop's bounds, as
         // lavapipe pays for every tap a loop visits, skipped or not.
@@ -23,24 +25,53 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
             ivec2 q = clamp(p + ivec2(dx, dy), ivec2(0), size - 1);
             float coc_q = imageLoad(coc_px, q).r;
             float radius_q = max(0.5 * abs(coc_q), 0.5);
+            float d2_px2 = float(dx * dx + dy * dy);
             // A sample behind p spreads no farther than p's own CoC.
             float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
-            if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
-            // The aperture's image is upright behind the focus plane and inverted in front.
-            int flip = coc_q < 0.0 ? -1 : 1;
-            ivec2 o = ivec2(-dx, -dy) * flip;
-            float w = aperture_weight_at(o, reach, ap, vec2(p + ivec2(dx, dy)) + 0.5, float(flip), 1.0)
-                * sa_weight(vec2(o), radius_q, coc_q, ap);
-            if (w <= 0.0) continue;
+            float w = 0.0;
+            if (d2_px2 <= (reach + 1.0) * (reach + 1.0)) {
+                // The aperture's image is upright behind the focus plane and inverted in front.
+                int flip = coc_q < 0.0 ? -1 : 1;
+                ivec2 o = ivec2(-dx, -dy) * flip;
+                w = aperture_weight_at(o, reach, ap, vec2(p + ivec2(dx, dy)) + 0.5, float(flip), 1.0)
+                    * sa_weight(vec2(o), radius_q, coc_q, ap);
+            }
             vec4 c = finite_or_zero(imageLoad(color_in, q));
             float f = clamp((coc_p - coc_q) / layer_transition_px, 0.0, 1.0);
+            // Within p's own CoC, the positions that are not in front of p (own depth or
+            // behind), and of those the ones behind p whose light does not reach p (a sharp
+            // background spreads less than p's CoC): how much of p's disc is background that
+            // p's own surface hides (see the fill below), and its colour.
+            float in_p = d2_px2 <= radius_p * radius_p ? 1.0 : 0.0;
+            float behind = clamp((coc_q - coc_p) / layer_transition_px, 0.0, 1.0);
+            float unreached = in_p * behind * (1.0 - min(w * area_p_px2, 1.0));
+            hidden += unreached * c;
+            hidden_n += unreached;
+            own_n += in_p * (1.0 - f);
+            if (w <= 0.0) continue;
             fg += (f * w) * c;
             fg_w += f * w;
             bg += ((1.0 - f) * w) * c;
             bg_w += (1.0 - f) * w;
         }
     }
-    vec4 background = bg_w > 0.0 ? bg / bg_w : vec4(0.0);
+    // The light reaching p from its own depth and behind sums to weight 1 where the scene
+    // continues around p (a flat wall at any CoC: the discs' areas are normalised). Less
+    // (bg_w < 1) has two causes. Part of p's surface is hidden behind something nearer (the
+    // front layer's positions): that part is estimated by the visible part, normalising by
+    // bg_w. Or p's surface ends within its CoC over a background that spreads less than p's
+    // CoC (a small bright sphere over a sharp texture, a blurred foreground's edge): then the
+    // light p's pinhole ray misses comes from that background, which p's surface hides in the
+    // pinhole image. Normalising would give p's surface the missing weight: a sphere smaller
+    // than its CoC kept its full brightness at its own pixels (energy not conserved). The
+    // second share (at most the unreached background's part of p's disc) is filled with the
+    // colour of that background around p; the rest normalises as before. On a flat wall or
+    // where nothing behind p fails to reach it, nothing is filled.
+    float hidden_share = own_n > 0.0 ? hidden_n / own_n : 0.0;
+    float missing = min(max(1.0 - bg_w, 0.0), hidden_share);
+    vec4 hidden_colour = hidden_n > 0.0 ? hidden / hidden_n : vec4(0.0);
+    float lit_w = bg_w + missing;
+    vec4 background = lit_w > 0.0 ? (bg + missing * hidden_colour) / lit_w : vec4(0.0);
     vec4 foreground = fg_w > 0.0 ? fg / fg_w : vec4(0.0);
     return mix(background, foreground, clamp(fg_w, 0.0, 1.0));
 }
