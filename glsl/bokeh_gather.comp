@@ -7,6 +7,10 @@
 //  - A sample in front spreads over its full CoC and is composited over the background with the
 //    coverage it reaches (alpha), so a blurred foreground covers what is behind it softly.
 //  - A sharp subject (tiny CoC) reaches only its own pixel, so it does not bleed into the background.
+//  - Where the pixel's own layer is a surface ending within its CoC over a background that does
+//    not reach it (a small bright sphere over a sharp texture), that layer keeps only the weight
+//    it has; the rest is the background around the pixel, which the surface hides in the pinhole
+//    image (gather.glsl), so the surface's light is spread once, not also kept at full strength.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 3
 #define APERTURE_SHAPE_BINDING 4
