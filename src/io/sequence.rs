@@ -212,6 +212,28 @@ fn split_dash(span: &str) -> Option<(&str, &str)> {
     (1..bytes.len()).find(|&i| bytes[i] == b'-' && bytes[i - 1].is_ascii_digit()).map(|i| (&span[..i], &span[i + 1..]))
 }
 
+/// How much lower a sequence's reading and writing threads run than the thread that starts
+/// them, in nice steps ([`yield_to_the_gpu`]; 19 is the lowest priority).
+pub const IO_NICE_STEPS: i32 = 10;
+
+/// Lowers the calling thread's CPU priority by [`IO_NICE_STEPS`] (a process run at nice 0 gets
+/// reading and writing threads at nice 10): a sequence's reading and writing threads
+/// then fill the time the GPU leaves the cores instead of stretching its work. On a CPU Vulkan
+/// driver (lavapipe) the "GPU" is threads on the same cores, and a dispatch split over them waits
+/// for its slowest part, so a reader or writer taking a core mid-dispatch delays the frame more
+/// than the time it takes. A real GPU's frames wait on a fence, leaving the cores to them anyway.
+/// Best effort: a failure only leaves the priority as it was.
+pub fn yield_to_the_gpu() {
+    #[cfg(target_os = "linux")]
+    unsafe {
+        // On Linux the nice value is per thread: `who` is the thread id. getpriority returns
+        // the nice value itself (-1 is also its error value, which would give nice 9: harmless).
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let nice = libc::getpriority(libc::PRIO_PROCESS, tid);
+        libc::setpriority(libc::PRIO_PROCESS, tid, (nice + IO_NICE_STEPS).min(19));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -365,5 +387,24 @@ mod tests {
             "chunk 0 of frame range \"1001-1006,1010\" in chunks of 0: the chunk size must be at least 1"
         );
         assert!(range.chunk(u64::MAX, 2).is_err());
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn yielding_to_the_gpu_lowers_only_the_calling_threads_priority() {
+        let nice_of = |tid: libc::id_t| unsafe { libc::getpriority(libc::PRIO_PROCESS, tid) };
+        let tid = || unsafe { libc::syscall(libc::SYS_gettid) as libc::id_t };
+        let main = tid();
+        let before = nice_of(main);
+        let (io, io_nice) = std::thread::spawn(move || {
+            yield_to_the_gpu();
+            (tid(), nice_of(tid()))
+        })
+        .join()
+        .unwrap();
+        assert_ne!(io, main);
+        // A thread starts at its creator's nice value; the call lowers it by IO_NICE_STEPS.
+        assert_eq!(io_nice, (before + IO_NICE_STEPS).min(19), "the reading or writing thread");
+        assert_eq!(nice_of(main), before, "the calling thread only");
     }
 }

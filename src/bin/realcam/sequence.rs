@@ -201,6 +201,7 @@ fn read_ahead<'scope>(
 ) -> Receiver<ReadFrame> {
     let (send, receive) = sync_channel(1);
     scope.spawn(move || {
+        realcam::io::sequence::yield_to_the_gpu();
         for (frame, args, skip) in jobs {
             if stop.load(Ordering::Relaxed) {
                 break;
@@ -302,7 +303,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let tally = std::thread::scope(|scope| {
         let read = read_ahead(scope, jobs, &camera, &stop);
         let (finish, finished) = sync_channel(1);
-        let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop));
+        let writer = scope.spawn(|| {
+            realcam::io::sequence::yield_to_the_gpu();
+            write_behind(finished, total, fail_fast, &stop)
+        });
         let mut session = Session::opening(args);
         for ReadFrame { frame, args: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
