@@ -2,6 +2,8 @@
 //! The exposure gain (sensor value per scene unit, Kyaw 2013 eq 4.1/4.9 with ISO) is applied
 //! first; then either the characteristic curve (toe, straight part, shoulder on log exposure)
 //! or nothing more, keeping scene-referred linear values for compositing.
+//! Where the vignette pass runs, its falloff is applied here first, in the same dispatch
+//! (src/passes/vignette.rs says why; `FilmPush::with_vignette`).
 
 use super::filter::{self, FilterBindings};
 use super::scene::PlanInput;
