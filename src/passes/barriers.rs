@@ -52,15 +52,10 @@ pub fn write_after_write(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
 /// their writes finished and visible to these reads and writes (read-after-write,
 /// write-after-write), their reads finished before these writes (write-after-read).
 pub fn update_in_place(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
-    vk::ImageMemoryBarrier2::default()
+    // write_after_write's, with the upload's copy among the earlier writes.
+    write_after_write(image)
         .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY)
         .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
-        .old_layout(vk::ImageLayout::GENERAL)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .image(image.image)
-        .subresource_range(crate::gpu::color_range())
 }
 
 /// A buffer an earlier compute pass wrote and this pass reads or updates.
