@@ -43,6 +43,13 @@ pub struct DeviceInfo {
     pub driver: String,
 }
 
+impl DeviceInfo {
+    /// Whether the device runs on the CPU's own cores (a CPU Vulkan driver such as lavapipe).
+    pub fn on_cpu(&self) -> bool {
+        self.kind == device_kind(vk::PhysicalDeviceType::CPU).0
+    }
+}
+
 impl std::fmt::Display for DeviceInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{} ({}, Vulkan {}, {})", self.name, self.kind, self.api_version, self.driver)

@@ -216,13 +216,38 @@ fn split_dash(span: &str) -> Option<(&str, &str)> {
 /// them, in nice steps ([`yield_to_the_gpu`]; 19 is the lowest priority).
 pub const IO_NICE_STEPS: i32 = 10;
 
+/// When a sequence's reading and writing threads yield to the GPU: only where the device runs on
+/// the CPU's own cores (a CPU Vulkan driver such as lavapipe), which is known once the device
+/// has opened (beside the first frame's read). On a real GPU, or a farm node whose cores other
+/// jobs share, they keep the render thread's priority.
+#[derive(Debug, Default)]
+pub struct IoPriority {
+    device_on_cpu: std::sync::OnceLock<bool>,
+}
+
+impl IoPriority {
+    /// The render thread, once the device has opened: whether it runs on the CPU.
+    pub fn device_opened(&self, on_cpu: bool) {
+        let _ = self.device_on_cpu.set(on_cpu);
+    }
+
+    /// A reading or writing thread, before each frame: its priority lowered once the device is
+    /// known to run on the CPU (`lowered`: this thread's own record of having done it).
+    pub fn before_frame(&self, lowered: &mut bool) {
+        if !*lowered && self.device_on_cpu.get() == Some(&true) {
+            yield_to_the_gpu();
+            *lowered = true;
+        }
+    }
+}
+
 /// Lowers the calling thread's CPU priority by [`IO_NICE_STEPS`] (a process run at nice 0 gets
 /// reading and writing threads at nice 10): a sequence's reading and writing threads
 /// then fill the time the GPU leaves the cores instead of stretching its work. On a CPU Vulkan
 /// driver (lavapipe) the "GPU" is threads on the same cores, and a dispatch split over them waits
 /// for its slowest part, so a reader or writer taking a core mid-dispatch delays the frame more
-/// than the time it takes. A real GPU's frames wait on a fence, leaving the cores to them anyway.
-/// Best effort: a failure only leaves the priority as it was.
+/// than the time it takes ([`IoPriority`] calls it only for such a device). Best effort: a
+/// failure only leaves the priority as it was.
 pub fn yield_to_the_gpu() {
     #[cfg(target_os = "linux")]
     unsafe {
@@ -391,20 +416,33 @@ mod tests {
 
     #[cfg(target_os = "linux")]
     #[test]
-    fn yielding_to_the_gpu_lowers_only_the_calling_threads_priority() {
+    fn the_io_threads_yield_only_to_a_device_on_the_cpu_and_only_themselves() {
         let nice_of = |tid: libc::id_t| unsafe { libc::getpriority(libc::PRIO_PROCESS, tid) };
         let tid = || unsafe { libc::syscall(libc::SYS_gettid) as libc::id_t };
         let main = tid();
         let before = nice_of(main);
-        let (io, io_nice) = std::thread::spawn(move || {
-            yield_to_the_gpu();
-            (tid(), nice_of(tid()))
-        })
-        .join()
-        .unwrap();
+        // A thread's nice value after each step: device unknown, then opened (on_cpu).
+        let io_thread = |on_cpu: bool| {
+            std::thread::spawn(move || {
+                let priority = IoPriority::default();
+                let mut lowered = false;
+                priority.before_frame(&mut lowered);
+                let unknown = nice_of(tid());
+                priority.device_opened(on_cpu);
+                priority.before_frame(&mut lowered);
+                priority.before_frame(&mut lowered);
+                (tid(), unknown, nice_of(tid()))
+            })
+            .join()
+            .unwrap()
+        };
+        let (io, unknown, lowered) = io_thread(true);
         assert_ne!(io, main);
-        // A thread starts at its creator's nice value; the call lowers it by IO_NICE_STEPS.
-        assert_eq!(io_nice, (before + IO_NICE_STEPS).min(19), "the reading or writing thread");
+        // A thread starts at its creator's nice value; on a CPU device it drops IO_NICE_STEPS
+        // once (not once per frame), and only that thread does.
+        assert_eq!((unknown, lowered), (before, (before + IO_NICE_STEPS).min(19)), "on the CPU");
         assert_eq!(nice_of(main), before, "the calling thread only");
+        let (_, unknown, kept) = io_thread(false);
+        assert_eq!((unknown, kept), (before, before), "on a GPU");
     }
 }

@@ -9,7 +9,7 @@ use crate::render::{
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use realcam::io::output::Outputs;
-use realcam::io::sequence::{FramePattern, FrameRange};
+use realcam::io::sequence::{FramePattern, FrameRange, IoPriority};
 use realcam::io::ExrWriteOptions;
 use realcam::model::camera::Camera;
 use realcam::model::long_exposure::LongExposure;
@@ -198,11 +198,13 @@ fn read_ahead<'scope>(
     jobs: Vec<(i64, RenderArgs, bool)>,
     camera: &'scope Camera,
     stop: &'scope AtomicBool,
+    priority: &'scope IoPriority,
 ) -> Receiver<ReadFrame> {
     let (send, receive) = sync_channel(1);
     scope.spawn(move || {
-        realcam::io::sequence::yield_to_the_gpu();
+        let mut lowered = false;
         for (frame, args, skip) in jobs {
+            priority.before_frame(&mut lowered);
             if stop.load(Ordering::Relaxed) {
                 break;
             }
@@ -234,10 +236,18 @@ struct Tally {
 /// while the GPU renders the next, and reports every frame in order: its line, then the
 /// progress. With `fail_fast`, the first failure sets `stop` and the frames after it are
 /// dropped unwritten (their temporaries removed).
-fn write_behind(finished: Receiver<Finished>, total: usize, fail_fast: bool, stop: &AtomicBool) -> Tally {
+fn write_behind(
+    finished: Receiver<Finished>,
+    total: usize,
+    fail_fast: bool,
+    stop: &AtomicBool,
+    priority: &IoPriority,
+) -> Tally {
     let mut progress = Progress::new(total);
     let mut tally = Tally::default();
+    let mut lowered = false;
     for item in finished {
+        priority.before_frame(&mut lowered);
         if fail_fast && !tally.failed.is_empty() {
             continue;
         }
@@ -300,13 +310,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .collect();
     let fail_fast = args.sequence.fail_fast;
     let stop = AtomicBool::new(false);
+    // The reading and writing threads yield to a GPU that runs on the CPU (io::sequence).
+    let priority = IoPriority::default();
     let tally = std::thread::scope(|scope| {
-        let read = read_ahead(scope, jobs, &camera, &stop);
+        let read = read_ahead(scope, jobs, &camera, &stop, &priority);
         let (finish, finished) = sync_channel(1);
-        let writer = scope.spawn(|| {
-            realcam::io::sequence::yield_to_the_gpu();
-            write_behind(finished, total, fail_fast, &stop)
-        });
+        let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority));
         let mut session = Session::opening(args);
         for ReadFrame { frame, args: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
@@ -319,6 +328,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                         let outputs = one.outputs()?;
                         Ok((outputs, render_loaded(&one, &camera, loaded, &mut session)?))
                     });
+                    if let Some(gpu) = session.gpu() {
+                        priority.device_opened(gpu.info().on_cpu());
+                    }
                     match rendered {
                         Ok((outputs, rendered)) => {
                             Finished::Rendered { frame, args: Box::new(one), outputs, rendered: Box::new(rendered) }
@@ -381,10 +393,11 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let mut skipped = 0;
     let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
     let stop = AtomicBool::new(false);
+    let priority = IoPriority::default();
     let mut session = Session::opening(args);
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
-        let read = read_ahead(scope, jobs, &sensor, &stop);
+        let read = read_ahead(scope, jobs, &sensor, &stop, &priority);
         for ReadFrame { frame, args: one, loaded } in read {
             let Some(loaded) = loaded else {
                 skipped += 1;
@@ -392,17 +405,20 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
                 progress.frame_finished(frame);
                 continue;
             };
-            let added =
-                loaded.and_then(|loaded| render_loaded(&one, &sensor, loaded, &mut session)).and_then(|rendered| {
-                    exposure.add(frame, &rendered.image)?;
-                    exr_options = Some(rendered.exr_options);
-                    working_space = rendered.working_space;
-                    display_view = rendered.display_view;
-                    if let Some(path) = state {
-                        realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
-                    }
-                    Ok(())
-                });
+            let rendered = loaded.and_then(|loaded| render_loaded(&one, &sensor, loaded, &mut session));
+            if let Some(gpu) = session.gpu() {
+                priority.device_opened(gpu.info().on_cpu());
+            }
+            let added = rendered.and_then(|rendered| {
+                exposure.add(frame, &rendered.image)?;
+                exr_options = Some(rendered.exr_options);
+                working_space = rendered.working_space;
+                display_view = rendered.display_view;
+                if let Some(path) = state {
+                    realcam::io::output::write_file("state", path, &exposure.to_bytes()).context("--state")?;
+                }
+                Ok(())
+            });
             if let Err(e) = added {
                 progress.say(&format!("error: frame {frame}: {}", crate::error_text(&e)));
                 failed = Some(frame);
