@@ -87,8 +87,11 @@ def test_the_plan_and_gpu_times_of_a_render():
     assert plan["motion_blur"] == (False, "no velocity pass")
     assert plan["coc"][0] and "at f/2 focused at 2 m" in plan["coc"][1]
     assert "[run ] coc" in camera.explain
+    # The vignette runs in the film's dispatch (one read and write of the frame fewer).
+    assert plan["vignette"][0] and "applied in the film pass's dispatch" in plan["vignette"][1]
     times = dict(camera.profile)
-    assert set(times) >= {"upload", "coc", "film", "download"}
+    assert set(times) >= {"upload", "coc", "vignette+film", "download"}
+    assert "vignette" not in times and "film" not in times
     assert all(ms >= 0.0 for ms in times.values()) and times["coc"] > 0.0
 
 
