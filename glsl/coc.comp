@@ -8,10 +8,10 @@
 // neighbourhood spans two depths whose CoCs differ by more than a quarter pixel, the pixel's
 // colour is read as a mix of the two layers' colours (the near neighbours' mean, the far
 // neighbour of median brightness; least squares for the near layer's share alpha), and it takes
-// the depth of the layer that brings more of its light: alpha L_near against (1 - alpha) L_far. A near pixel whose alpha lies within the range of the near layer's
-// pixels (a textured surface at a hard edge) keeps its depth. The far layer gets no such test:
-// at an anti-aliased fringe the far neighbours are fringe pixels too, and would explain each
-// other.
+// the depth of the layer that brings more of its light: alpha L_near against (1 - alpha) L_far.
+// A near pixel whose alpha lies within the range of the near layer's pixels (a textured surface
+// at a hard edge) keeps its depth. The far layer gets no such test: at an anti-aliased fringe
+// the far neighbours are fringe pixels too, and would explain each other.
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
