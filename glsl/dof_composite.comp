@@ -98,7 +98,11 @@ void main() {
     float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
     vec4 base = bg;
     Aperture ap = pc.ap;
-    if (blurred < 1.0) {
+    // A loop of one trip or none rather than an `if`: lavapipe runs an `if`'s body whatever the
+    // condition (here the large-CoC foreground's four reads and the gather's set-up), but it
+    // leaves a loop that no lane of the SIMD group is in, so fully blurred pixels skip it.
+    int exact_trips = blurred < 1.0 ? 1 : 0;
+    for (int once = 0; once < exact_trips; ++once) {
         // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
         float fg_radius = tile_radius_px[tile_count + int(t)];
         int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;
