@@ -370,12 +370,12 @@ mod tests {
         (1.0 + s) * (1.0 + s) / ((1.0 + s * rho * rho) * (1.0 + 3.0 * s * rho * rho))
     }
 
-    /// The largest relative error of `steps` shader steps against the f64 root over the whole
-    /// range of the strength (|s| <= 0.3, the shader's SA_MAX_STRENGTH) and of the radius.
-    fn worst_sa_error(steps: u32) -> f64 {
+    /// The largest relative error of `steps` shader steps against the f64 root for strengths
+    /// |s| <= `s_max` (0.3 is the shader's SA_MAX_STRENGTH) over the whole radius.
+    fn worst_sa_error(steps: u32, s_max: f64) -> f64 {
         let mut worst = 0.0f64;
         for i in 0..=120 {
-            let s = -0.3 + 0.005 * i as f64;
+            let s = s_max * (i as f64 / 60.0 - 1.0);
             for j in 0..=2000 {
                 let r = j as f64 / 2000.0;
                 let exact = crate::optics::spherical::intensity(s, r);
@@ -388,13 +388,15 @@ mod tests {
 
     #[test]
     fn sa_newton_steps_reach_the_f64_root() {
-        use crate::gpu::shaders::aperture::SA_NEWTON_STEPS;
-        // The shader's count leaves only f32 rounding (the error of twice as many steps), one
-        // step fewer does not.
-        let (chosen, twice) = (worst_sa_error(SA_NEWTON_STEPS), worst_sa_error(2 * SA_NEWTON_STEPS));
-        assert!(chosen < 1.5e-5 && chosen <= twice * 1.01, "{SA_NEWTON_STEPS} steps: {chosen:e}, twice: {twice:e}");
-        let fewer = worst_sa_error(SA_NEWTON_STEPS - 1);
-        assert!(fewer > 1e-4, "{} steps would do: {fewer:e}", SA_NEWTON_STEPS - 1);
+        use crate::gpu::shaders::aperture::{SA_NEWTON_STEPS, SA_NEWTON_STEPS_WEAK};
+        // Each count leaves only f32 rounding over its range of strengths (the error of twice
+        // as many steps); one step fewer does not. The shader takes the weak count for |s| <= 0.1.
+        for (steps, s_max) in [(SA_NEWTON_STEPS, 0.3), (SA_NEWTON_STEPS_WEAK, 0.1)] {
+            let (chosen, twice) = (worst_sa_error(steps, s_max), worst_sa_error(2 * steps, s_max));
+            assert!(chosen < 1.5e-5 && chosen <= twice * 1.01, "{steps} steps to |s| {s_max}: {chosen:e} ({twice:e})");
+            let fewer = worst_sa_error(steps - 1, s_max);
+            assert!(fewer > 1e-4, "{} steps would do to |s| {s_max}: {fewer:e}", steps - 1);
+        }
     }
 
     #[test]
