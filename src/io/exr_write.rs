@@ -7,6 +7,7 @@ use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, Chromaticities, IntegerBounds, Text};
 use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::prelude::WritableImage;
+use std::borrow::Cow;
 use std::path::Path;
 
 /// Largest finite half-float value.
@@ -126,10 +127,13 @@ pub fn encode_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Re
             got: image.data.len(),
         });
     }
-    let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
-    let channels: Vec<(&str, &[f32])> =
-        ["R", "G", "B", "A"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
-    encode_exr_channels(path, image.width, image.height, &channels, opts)
+    encode_exr_planes(path, image.width, image.height, rgba_planes(image), opts)
+}
+
+/// The channels R, G, B and A of a 4-channel image, each its own vector.
+pub fn rgba_planes(image: &Image) -> Vec<(&'static str, Cow<'static, [f32]>)> {
+    let planes = (0..4).map(|c| Cow::Owned(image.data.iter().skip(c).step_by(4).copied().collect()));
+    ["R", "G", "B", "A"].into_iter().zip(planes).collect()
 }
 
 /// An EXR text; names (`allow_empty` false) must not be empty.
@@ -190,6 +194,19 @@ pub fn encode_exr_channels(
     channels: &[(&str, &[f32])],
     opts: &ExrWriteOptions,
 ) -> Result<Vec<u8>, IoError> {
+    let planes = channels.iter().map(|&(name, data)| (name, Cow::Borrowed(data))).collect();
+    encode_exr_planes(path, width, height, planes, opts)
+}
+
+/// [`encode_exr_channels`] of channels it may keep: a float32 channel given owned is written
+/// from its own vector, not a copy (a 1280x720 frame's four channels are 15 MB).
+pub fn encode_exr_planes(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: Vec<(&str, Cow<'_, [f32]>)>,
+    opts: &ExrWriteOptions,
+) -> Result<Vec<u8>, IoError> {
     let invalid = |reason: String| IoError::InvalidImage { path: path.into(), reason };
     if width == 0 || height == 0 || channels.is_empty() {
         return Err(invalid(format!("nothing to write ({width}x{height} px, {} channel(s))", channels.len())));
@@ -197,7 +214,8 @@ pub fn encode_exr_channels(
     let n = width as usize * height as usize;
     let mut list = exr::prelude::SmallVec::new();
     let mut clamped = 0usize;
-    for (i, (name, data)) in channels.iter().enumerate() {
+    let names: Vec<&str> = channels.iter().map(|(name, _)| *name).collect();
+    for (i, (name, data)) in channels.into_iter().enumerate() {
         if data.len() != n {
             return Err(IoError::DataLength {
                 path: path.into(),
@@ -206,11 +224,11 @@ pub fn encode_exr_channels(
                 got: data.len(),
             });
         }
-        if channels[..i].iter().any(|(other, _)| other == name) {
+        if names[..i].contains(&name) {
             return Err(invalid(format!("channel {name} is given twice")));
         }
         let samples = if opts.float32 || opts.float32_channels.iter().any(|c| c == name) {
-            FlatSamples::F32(data.to_vec())
+            FlatSamples::F32(data.into_owned())
         } else {
             let to_half = |&v: &f32| {
                 if v.is_finite() && v.abs() > HALF_MAX {
@@ -283,7 +301,15 @@ pub fn encode_exr_channels(
     let mut image_attributes = ImageAttributes::new(display);
     image_attributes.chromaticities = chromaticities;
     let image = exr::image::Image::new(image_attributes, layer);
-    let mut bytes = std::io::Cursor::new(Vec::new());
+    // Room for the samples uncompressed, the offset table and the header from the start:
+    // grown by doubling instead, the buffer of a 1280x720 float frame passed through five
+    // sizes up to 28 MB.
+    let sample_bytes: usize = names
+        .iter()
+        .map(|name| if opts.float32 || opts.float32_channels.iter().any(|c| c == name) { 4 } else { 2 })
+        .sum();
+    let capacity = n * sample_bytes + height as usize * 16 + (64 << 10);
+    let mut bytes = std::io::Cursor::new(Vec::with_capacity(capacity));
     image.write().to_buffered(&mut bytes).map_err(|source| IoError::ExrEncode { path: path.into(), source })?;
     let mut bytes = bytes.into_inner();
     sort_header_attributes(&mut bytes);
