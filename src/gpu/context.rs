@@ -89,6 +89,8 @@ pub(crate) struct Shared {
     pub max_image_dimension_px: u32,
     /// The size of the largest device-local memory heap.
     pub device_local_bytes: u64,
+    /// Compute pipelines created so far (see [`Gpu::pipelines_created`]).
+    pub pipelines_created: AtomicU64,
 }
 
 /// The opened GPU. Cheap to clone.
@@ -310,6 +312,7 @@ impl Gpu {
             timestamps,
             max_image_dimension_px: props.limits.max_image_dimension2_d,
             device_local_bytes,
+            pipelines_created: AtomicU64::new(0),
         };
         let gpu = Gpu { shared: Arc::new(shared) };
         gpu.set_name(gpu.shared.queue, "realcam compute queue");
@@ -419,6 +422,12 @@ impl Gpu {
     /// process between jobs; a render lets its pool go with the device).
     pub fn trim_pool(&self) {
         self.shared.trim_pool();
+    }
+
+    /// How many compute pipelines this device has created (each compiles a shader: on lavapipe
+    /// 1-25 ms of CPU).
+    pub fn pipelines_created(&self) -> u64 {
+        self.shared.pipelines_created.load(Ordering::Relaxed)
     }
 
     /// The pool's idle resources: how many, and their bytes.

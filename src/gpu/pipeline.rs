@@ -88,6 +88,7 @@ impl ComputePipeline {
                 }
             };
             log::debug!("pipeline {name} created in {:.1} ms", started.elapsed().as_secs_f64() * 1e3);
+            gpu.shared.pipelines_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             gpu.set_name(pipeline, name);
             gpu.set_name(layout, name);
             gpu.set_name(set_layout, name);

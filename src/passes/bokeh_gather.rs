@@ -8,7 +8,7 @@ use super::twin::finite_or_zero;
 use super::{groups_for, Decision, FrameImages, Pass};
 use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::model::aperture::ApertureShape;
-use crate::model::camera::BokehMode;
+use crate::model::camera::{BokehMode, Camera};
 use ash::vk;
 
 pub const NAME: &str = "bokeh_gather";
@@ -212,6 +212,11 @@ impl Pass for BokehGather {
             .map(|(channel, _)| GatherParams { push, aperture: data.clone(), channel })
             .collect();
         Decision::run_each(runs, why)
+    }
+
+    /// The method the camera chose.
+    fn likely(camera: &Camera) -> bool {
+        camera.bokeh == BokehMode::Reference
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {

@@ -113,6 +113,12 @@ impl CocPush {
         [u32::from(self.resolve_edges != 0), u32::from(self.entries > 0)]
     }
 
+    /// [`CocPush::specialization`] of every run through `camera` (it depends on the camera
+    /// alone: its edge resolve and its field curvature).
+    pub fn specialization_for(camera: &Camera) -> [u32; 2] {
+        [u32::from(camera.resolve_depth_edges), u32::from(camera.field_curvature.is_some())]
+    }
+
     /// The inverse depth (1/mm) of a depth value as the shader reads it.
     pub fn inverse_depth(&self, depth_m: f32) -> f32 {
         1.0 / (depth_m * self.mm_per_depth_unit).max(1.0e-30)
@@ -341,6 +347,16 @@ impl Pass for Coc {
             })
             .collect();
         Decision::run_each(runs, why)
+    }
+
+    /// A camera with a lens (not the focus processor, which maps depth itself) will likely
+    /// find some pixel defocused.
+    fn likely(camera: &Camera) -> bool {
+        camera.bokeh != BokehMode::Diffraction
+    }
+
+    fn prepare_likely(&self, camera: &Camera) -> GpuResult<()> {
+        self.kernel.prepare(&CocPush::specialization_for(camera))
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {

@@ -55,6 +55,7 @@ pub mod vignette;
 pub use scene::{Channel, PlanInput, SceneFacts};
 
 use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Recorder};
+use crate::model::camera::Camera;
 use std::any::Any;
 use std::sync::Arc;
 
@@ -113,6 +114,20 @@ pub trait Pass: Sized + Send + Sync + 'static {
     /// Its pipelines; created only when a plan runs the pass.
     fn new(gpu: &Gpu) -> GpuResult<Self>;
 
+    /// Whether a frame through `camera` will likely run this pass, judged before the frame is
+    /// read: a session then creates its pipelines ([`Pass::new`]) while the first frame's
+    /// files are still being read. Optional: a guess that is wrong costs CPU time beside the
+    /// read, or leaves the pipelines to be created once the plan is known.
+    fn likely(_camera: &Camera) -> bool {
+        false
+    }
+
+    /// With [`Pass::likely`]: create now the specialised pipelines of the likely run that
+    /// `camera` alone decides (see [`Pass::prepare`]).
+    fn prepare_likely(&self, _camera: &Camera) -> GpuResult<()> {
+        Ok(())
+    }
+
     /// Record one run: barriers (with the reason for each) and dispatches. Reads the frame's
     /// images it needs from `images` and replaces those it writes.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, params: &Self::Params) -> GpuResult<()>;
@@ -162,11 +177,18 @@ pub struct PassEntry {
     pub inputs: &'static [Input],
     plan: fn(&PlanInput<'_>) -> PlannedPass,
     create: fn(&Gpu) -> GpuResult<Box<dyn RecordPass>>,
+    likely: fn(&Camera) -> bool,
 }
 
 /// The entry of pass `P`.
 pub const fn entry<P: Pass>() -> PassEntry {
-    PassEntry { name: P::NAME, inputs: P::INPUTS, plan: plan_erased::<P>, create: create_erased::<P> }
+    PassEntry {
+        name: P::NAME,
+        inputs: P::INPUTS,
+        plan: plan_erased::<P>,
+        create: create_erased::<P>,
+        likely: P::likely,
+    }
 }
 
 fn plan_erased<P: Pass>(input: &PlanInput<'_>) -> PlannedPass {
@@ -188,6 +210,9 @@ pub trait RecordPass: Send + Sync {
     /// [`Pass::prepare`] for one run.
     fn prepare_run(&self, params: &(dyn Any + Send + Sync)) -> GpuResult<()>;
 
+    /// [`Pass::prepare_likely`].
+    fn prepare_likely(&self, camera: &Camera) -> GpuResult<()>;
+
     fn record_run(
         &self,
         rec: &mut Recorder,
@@ -202,6 +227,10 @@ impl<P: Pass> RecordPass for P {
             Some(p) => self.prepare(p),
             None => Err(GpuError::Internal(format!("pass {}: a run's parameters are of another pass", P::NAME))),
         }
+    }
+
+    fn prepare_likely(&self, camera: &Camera) -> GpuResult<()> {
+        Pass::prepare_likely(self, camera)
     }
 
     fn record_run(
@@ -224,6 +253,11 @@ impl PassEntry {
 
     pub fn create(&self, gpu: &Gpu) -> GpuResult<Box<dyn RecordPass>> {
         (self.create)(gpu)
+    }
+
+    /// [`Pass::likely`].
+    pub fn likely(&self, camera: &Camera) -> bool {
+        (self.likely)(camera)
     }
 }
 

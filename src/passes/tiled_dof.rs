@@ -32,7 +32,7 @@ use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
 use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
-use crate::model::camera::BokehMode;
+use crate::model::camera::{BokehMode, Camera};
 use ash::vk;
 use std::sync::Arc;
 
@@ -163,6 +163,12 @@ impl Pass for TiledDof {
         let runs =
             input.dof_runs().into_iter().map(|(channel, _)| TiledDofParams { channel, ..base.clone() }).collect();
         Decision::run_each(runs, why)
+    }
+
+    /// The method the camera chose; its pipelines specialised per lens wait for the plan (they
+    /// depend on the frame's largest CoC).
+    fn likely(camera: &Camera) -> bool {
+        camera.bokeh == BokehMode::Tiled
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {

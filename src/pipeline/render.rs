@@ -3,6 +3,7 @@
 //! given to [`Renderer::new`] up front, others when a later plan first runs them).
 
 use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Profile, Recorder, TwinCheck};
+use crate::model::camera::Camera;
 use crate::model::frame::Frame;
 use crate::passes::{FrameImages, Input, RecordPass, PASS_ORDER};
 use crate::pipeline::planner::Plan;
@@ -38,21 +39,46 @@ impl Renderer {
     /// A renderer with the pipelines of the passes `plan` runs, created side by side (each
     /// compiles on the CPU: on lavapipe 1-25 ms a shader).
     pub fn new(gpu: &Gpu, plan: &Plan) -> GpuResult<Renderer> {
-        let renderer = Renderer { gpu: gpu.clone(), passes: PASS_ORDER.iter().map(|_| OnceLock::new()).collect() };
+        let renderer = Renderer::empty(gpu);
+        renderer.prepare(plan)?;
+        Ok(renderer)
+    }
+
+    /// A renderer with no pipeline yet.
+    pub fn empty(gpu: &Gpu) -> Renderer {
+        Renderer { gpu: gpu.clone(), passes: PASS_ORDER.iter().map(|_| OnceLock::new()).collect() }
+    }
+
+    /// Creates the pipelines of the passes `plan` runs, and those its runs specialise, side by
+    /// side; what was created before (by an earlier plan, or [`Renderer::create_likely`]) is kept.
+    pub fn prepare(&self, plan: &Plan) -> GpuResult<()> {
+        if plan.passes.len() != PASS_ORDER.len() {
+            return Err(GpuError::Internal("the plan was made for another pass order".into()));
+        }
         let planned: Vec<usize> = (0..plan.passes.len()).filter(|&i| plan.passes[i].runs()).collect();
-        let shared = &renderer;
-        // Each planned pass's pipelines, and those its runs specialise, on a thread of its own.
-        let create = |i: usize| -> GpuResult<()> {
-            let pass = shared.pass(i)?;
+        self.side_by_side(&planned, |i| {
+            let pass = self.pass(i)?;
             plan.passes[i].run_params().try_for_each(|params| pass.prepare_run(params))
-        };
+        })
+    }
+
+    /// Creates, side by side, the pipelines of the passes likely to run through `camera`
+    /// ([`crate::passes::Pass::likely`]) before a frame is known: a session does this while
+    /// its first frame is still being read.
+    pub fn create_likely(&self, camera: &Camera) -> GpuResult<()> {
+        let likely: Vec<usize> = (0..PASS_ORDER.len()).filter(|&i| PASS_ORDER[i].likely(camera)).collect();
+        self.side_by_side(&likely, |i| self.pass(i)?.prepare_likely(camera))
+    }
+
+    /// `create` for each of the passes `indices`, each on a thread of its own.
+    fn side_by_side(&self, indices: &[usize], create: impl Fn(usize) -> GpuResult<()> + Sync) -> GpuResult<()> {
+        let create = &create;
         std::thread::scope(|scope| {
-            let created: Vec<_> = planned.iter().map(|&i| scope.spawn(move || create(i))).collect();
+            let created: Vec<_> = indices.iter().map(|&i| scope.spawn(move || create(i))).collect();
             created.into_iter().try_for_each(|thread| {
                 thread.join().unwrap_or_else(|_| Err(GpuError::Internal("creating a pipeline panicked".into())))
             })
-        })?;
-        Ok(renderer)
+        })
     }
 
     /// The created pass `i` of the pass order.

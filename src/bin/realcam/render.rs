@@ -15,6 +15,7 @@ use realcam::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter
 use realcam::optics::colour::{named_space, space_name, Chromaticities, NAMED_SPACES};
 use realcam::pipeline::planner::{self, Plan};
 use realcam::pipeline::render::{Rendered, Renderer};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
@@ -395,7 +396,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let outputs = args.outputs()?;
     let camera = args.camera()?;
-    for path in render_frame(args, &camera, outputs, &mut Session::opening(args))? {
+    for path in render_frame(args, &camera, outputs, &mut Session::opening(args, &camera))? {
         eprintln!("wrote {}", path.display());
     }
     Ok(())
@@ -406,8 +407,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 #[derive(Default)]
 pub struct Session {
     gpu: Option<(Gpu, Renderer)>,
-    /// The GPU opening on another thread (`Session::opening`), joined by the first frame.
-    opening: Option<std::thread::JoinHandle<Result<Gpu>>>,
+    /// The GPU opening on another thread (`Session::opening`), with the pipelines the camera
+    /// will likely need; joined by the first frame.
+    opening: Option<std::thread::JoinHandle<Result<(Gpu, Renderer)>>>,
     /// How the first frame reached the GPU, for `--profile`'s start-up line; taken when printed.
     startup: Option<String>,
 }
@@ -424,25 +426,44 @@ impl Drop for Session {
 
 impl Session {
     /// A session whose GPU starts opening now, on another thread: loading the Vulkan driver
-    /// and creating the device (about 50-100 ms on lavapipe) overlap the first frame's EXR read.
-    pub fn opening(args: &RenderArgs) -> Session {
+    /// and creating the device (about 30-100 ms on lavapipe) overlap the first frame's EXR read,
+    /// and so does creating the pipelines of the passes `camera` will likely run
+    /// ([`Renderer::create_likely`]; on lavapipe about 30 ms of CPU for the tiled depth of field).
+    pub fn opening(args: &RenderArgs, camera: &Camera) -> Session {
         let gpu_args = args.gpu.clone();
-        let opening = std::thread::Builder::new().name("gpu-open".into()).spawn(move || gpu_args.open_quietly());
+        let camera = camera.clone();
+        let opening = std::thread::Builder::new().name("gpu-open".into()).spawn(move || {
+            let gpu = gpu_args.open_quietly()?;
+            let renderer = Renderer::empty(&gpu);
+            // Only a head start: a pipeline that fails here is created again, and its error
+            // reported, once the frame's plan asks for it.
+            if let Err(e) = renderer.create_likely(&camera) {
+                log::debug!("creating the likely pipelines ahead of the plan: {e}");
+            }
+            Ok((gpu, renderer))
+        });
         // Without a thread, the first frame opens the GPU itself.
         Session { gpu: None, opening: opening.ok(), startup: None }
     }
 
-    /// The GPU: the one opening on another thread, else opened now; prints it. With it, what
-    /// the wait for it was, for the start-up line.
-    fn open_gpu(&mut self, args: &RenderArgs) -> Result<(Gpu, String)> {
+    /// The GPU: the one opening on another thread (with the pipelines created there), else
+    /// opened now; prints it. With it, what the wait for it was, for the start-up line.
+    fn open_gpu(&mut self, args: &RenderArgs) -> Result<(Gpu, Renderer, String)> {
         let waited = Instant::now();
-        let (gpu, how) = match self.opening.take().map(std::thread::JoinHandle::join) {
-            Some(Ok(opened)) => (opened?, "waited for the GPU opened beside the read"),
+        let (gpu, renderer, how) = match self.opening.take().map(std::thread::JoinHandle::join) {
+            Some(Ok(opened)) => {
+                let (gpu, renderer) = opened?;
+                (gpu, renderer, "waited for the GPU opened beside the read")
+            }
             Some(Err(_)) => bail!("opening the GPU failed (its thread panicked)"),
-            None => (args.gpu.open_quietly()?, "opened the GPU"),
+            None => {
+                let gpu = args.gpu.open_quietly()?;
+                let renderer = Renderer::empty(&gpu);
+                (gpu, renderer, "opened the GPU")
+            }
         };
         eprintln!("device: {}", gpu.info());
-        Ok((gpu, format!("{how} {:.1} ms", ms_since(waited))))
+        Ok((gpu, renderer, format!("{how} {:.1} ms", ms_since(waited))))
     }
 
     /// The start-up line of `--profile` after the first frame: when its GPU work was submitted,
@@ -465,13 +486,13 @@ impl Session {
         let opened = match self.gpu.take() {
             Some(opened) => opened,
             None => {
-                let (gpu, waited) = self.open_gpu(args)?;
+                let (gpu, renderer, waited) = self.open_gpu(args)?;
                 first = Some((waited, Instant::now()));
-                let renderer = Renderer::new(&gpu, plan)?;
                 (gpu, renderer)
             }
         };
         let (gpu, renderer) = self.gpu.insert(opened);
+        renderer.prepare(plan)?;
         let messages_before = gpu.validation_message_count();
         let rendered = renderer.render(frame, plan, false)?;
         // The first frame: from the process's start to its submit, and what came between.
@@ -677,16 +698,14 @@ pub fn output_attributes(
 pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &RenderedFrame) -> Result<Vec<PathBuf>> {
     let image = &rendered.image;
     // Every output to its temporary first; renamed together only when all were written.
-    let planes: Vec<Vec<f32>> = (0..4).map(|c| image.data.iter().skip(c).step_by(4).copied().collect()).collect();
-    let mut channels: Vec<(&str, &[f32])> =
-        ["R", "G", "B", "A"].into_iter().zip(planes.iter().map(Vec::as_slice)).collect();
-    channels.extend(rendered.kept_channels.iter().map(|(name, data)| (name.as_str(), data.as_slice())));
+    let mut channels = io::rgba_planes(image);
+    channels.extend(rendered.kept_channels.iter().map(|(name, data)| (name.as_str(), Cow::Borrowed(data.as_slice()))));
     // Kept channels as float32: a depth of 1e10 stays 1e10 (half ends at 65504).
     let exr_options = ExrWriteOptions {
         float32_channels: rendered.kept_channels.iter().map(|(name, _)| name.clone()).collect(),
         ..rendered.exr_options.clone()
     };
-    let exr = io::encode_exr_channels(&args.output, image.width, image.height, &channels, &exr_options)?;
+    let exr = io::encode_exr_planes(&args.output, image.width, image.height, channels, &exr_options)?;
     outputs.write("output", &exr)?;
     if let Some(png) = &args.png {
         outputs.write("png", &io::encode_png(png, rendered.preview.as_ref().unwrap_or(image))?)?;

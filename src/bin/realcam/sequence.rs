@@ -316,7 +316,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let read = read_ahead(scope, jobs, &camera, &stop, &priority);
         let (finish, finished) = sync_channel(1);
         let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority));
-        let mut session = Session::opening(args);
+        let mut session = Session::opening(args, &camera);
         for ReadFrame { frame, args: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
                 break;
@@ -394,7 +394,7 @@ fn long_exposure(args: &RenderArgs, range: &FrameRange, patterns: &Patterns, cam
     let jobs = range.frames.iter().map(|&f| (f, patterns.frame_args(args, f), exposure.has(f))).collect();
     let stop = AtomicBool::new(false);
     let priority = IoPriority::default();
-    let mut session = Session::opening(args);
+    let mut session = Session::opening(args, &sensor);
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
         let read = read_ahead(scope, jobs, &sensor, &stop, &priority);
