@@ -194,6 +194,11 @@ pub fn color_range() -> vk::ImageSubresourceRange {
 }
 
 impl GpuBuffer {
+    /// What the buffer was created for.
+    pub fn usage(&self) -> vk::BufferUsageFlags {
+        self.usage
+    }
+
     /// Copy bytes into a host-visible buffer.
     pub fn write_bytes(&mut self, bytes: &[u8]) {
         if let Some(slice) = self.allocation.as_mut().and_then(|a| a.mapped_slice_mut()) {
