@@ -437,9 +437,7 @@ impl Session {
             let renderer = Renderer::empty(&gpu);
             // Only a head start: a pipeline that fails here is created again, and its error
             // reported, once the frame's plan asks for it.
-            if let Err(e) = renderer.create_likely(&camera) {
-                log::debug!("creating the likely pipelines ahead of the plan: {e}");
-            }
+            let _ = renderer.create_likely(&camera);
             Ok((gpu, renderer))
         });
         // Without a thread, the first frame opens the GPU itself.
