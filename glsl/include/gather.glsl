@@ -77,8 +77,8 @@ vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transitio
     // pinhole image. Normalising would give p's surface the missing weight: a sphere smaller
     // than its CoC kept its full brightness at its own pixels (energy not conserved). The
     // second share (at most the unreached background's part of p's disc) is filled with the
-    // colour of that background nearest p (on its own CoC's scale); the rest normalises as before. On a flat wall or
-    // where nothing behind p fails to reach it, nothing is filled.
+    // colour of that background nearest p (on its own CoC's scale); the rest normalises as
+    // before. On a flat wall or where nothing behind p fails to reach it, nothing is filled.
     float hidden_share = own_n > 0.0 ? hidden_n / own_n : 0.0;
     float missing = min(max(1.0 - bg_w, 0.0), hidden_share);
     vec4 hidden_colour = hidden_near_w > 0.0 ? hidden / hidden_near_w : vec4(0.0);
