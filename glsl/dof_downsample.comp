@@ -4,8 +4,7 @@
 // w = clamp(radius - 0.5, 0, 1), so sharp pixels (whose light stays where it is; the
 // full-resolution exact gather draws them) do not leak into the blurred levels. The colour is
 // premultiplied by the weight: color_half = sum w c / 4, coc_half = (sum w coc / sum w, sum w / 4).
-// Also copies the colour to color_base (what the exact gathers read), and lists the texels
-// holding a highlight candidate (a bright pixel of large CoC) for dof_highlights.comp, which
+// Also lists the texels holding a highlight candidate (a bright pixel of large CoC) for dof_highlights.comp, which
 // tests them against their background. The test has its own dispatch over that short list:
 // lavapipe runs both sides of every branch, so a test written here would cost its ring of
 // 24 reads for every pixel.
@@ -20,7 +19,6 @@ layout(binding = 3, rg32f) uniform writeonly image2D coc_half;
 layout(binding = 4, std430) buffer Args { uint args[]; };
 // Candidate texels, x | y << 16, in any order.
 layout(binding = 5, std430) writeonly buffer Candidates { uint candidates[]; };
-layout(binding = 6, rgba32f) uniform writeonly image2D color_base;
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -50,7 +48,6 @@ void main() {
             float coc = imageLoad(coc_px, p).r;
             float radius = 0.5 * abs(coc);
             candidate = candidate || (radius > pc.small_radius_px && luminance(c.rgb) > pc.highlight_min);
-            imageStore(color_base, p, c);
             float w = clamp(radius - 0.5, 0.0, 1.0);
             sum += w * c;
             coc_sum += w * coc;

@@ -3,9 +3,10 @@
 // listed. A pixel of large CoC much brighter than the dimmest side of the ring 3 px around it
 // gives its excess over that background to a sprite (drawn with the exact aperture shape by
 // the composite) instead of to the pyramid, which could not draw a crisp bokeh shape from it:
-// the excess leaves the pixel's color_base and its level-1 texel. One invocation per texel,
-// so its four pixels and its level-1 texel have one writer. Counts the sprite binning's
-// dispatch.
+// the excess leaves its level-1 texel here, and the pixel of the input colour in
+// dof_sprite_excess.comp (not here: the rings this dispatch reads would race with writes). One
+// invocation per texel, so its level-1 texel has one writer. Counts the sprite binning's (and
+// dof_sprite_excess's) dispatch.
 #include "common.glsl"
 #include "dof_tiles.glsl"
 
@@ -13,10 +14,9 @@ layout(local_size_x = GROUP_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;
 layout(binding = 1, r32f) uniform readonly image2D coc_px;
 layout(binding = 2, rgba32f) uniform image2D color_half;
-layout(binding = 3, rgba32f) uniform writeonly image2D color_base;
-layout(binding = 4, std430) buffer Args { uint args[]; };
-layout(binding = 5, std430) readonly buffer Candidates { uint candidates[]; };
-layout(binding = 6, std430) writeonly buffer Sprites { Sprite sprites[]; };
+layout(binding = 3, std430) buffer Args { uint args[]; };
+layout(binding = 4, std430) readonly buffer Candidates { uint candidates[]; };
+layout(binding = 5, std430) writeonly buffer Sprites { Sprite sprites[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -98,7 +98,6 @@ void main() {
             uint slot = atomicAdd(args[ARGS_SPRITE_COUNT], 1u);
             if (slot < uint(pc.sprite_capacity)) {
                 sprites[slot] = Sprite(vec2(p) + 0.5, coc, 0.0, vec4(excess, 0.0));
-                imageStore(color_base, p, vec4(c.rgb - excess, c.a));
                 removed += clamp(radius - 0.5, 0.0, 1.0) * excess;
                 if (slot % uint(GROUP_SIZE) == 0u) atomicAdd(args[ARGS_BIN_DISPATCH], 1u);
             } else {

@@ -68,7 +68,7 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
     // A session creates the pipelines of the passes the camera will likely run while the first
     // frame is still being read (Renderer::create_likely). For the tiled depth of field that is
     // the CoC pass's pipeline (its specialisation is the camera's alone) and the tiled path's
-    // eight unspecialised ones; the plan then adds only the three the frame's largest CoC
+    // nine unspecialised ones; the plan then adds only the three the frame's largest CoC
     // specialises (the two gathers and the composite). A likely pipeline the plan did not use,
     // or a CoC specialisation other than the plan's, shows as a count off by one.
     let (w, h) = (64u32, 48u32);
@@ -86,14 +86,14 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         let likely = warm.pipelines_created();
         renderer.prepare(&p).expect("the plan's pipelines");
         let added = warm.pipelines_created() - likely;
-        assert_eq!((likely, added), (9, 3), "resolve_depth_edges {resolve_depth_edges}");
+        assert_eq!((likely, added), (10, 3), "resolve_depth_edges {resolve_depth_edges}");
         renderer.render(&frame, &p, false).expect("render");
         assert_eq!(warm.pipelines_created(), likely + added, "the render created a pipeline the plan had not");
         assert_validation_clean(&warm);
 
-        // Without the head start, the plan creates all twelve.
+        // Without the head start, the plan creates all thirteen.
         let cold = gpu();
         Renderer::new(&cold, &p).expect("pipelines");
-        assert_eq!(cold.pipelines_created(), 12);
+        assert_eq!(cold.pipelines_created(), 13);
     }
 }

@@ -430,3 +430,37 @@ fn film_table_matches_its_cpu_twin_and_the_curve_it_samples() {
         );
     }
 }
+
+#[test]
+fn each_channel_run_of_the_tiled_depth_of_field_reads_the_colour_as_it_was() {
+    // With longitudinal colour the tiled path runs once per channel, each on the input colour.
+    // Each run takes its sprites' excess out of that colour in place (dof_sprite_excess) and
+    // puts those pixels back at its end: run in the reverse channel order, the output is the
+    // same bits (a run that left its change behind would change the next runs' highlights and
+    // gathers, and which runs see it depends on the order).
+    use realcam::passes::tiled_dof::{TiledDof, TiledDofParams};
+    let gpu = gpu();
+    let frame = banded_frame(160, 48);
+    let mut camera = dof_camera(50.0, 1.4, 2.0, 6);
+    camera.max_coc = realcam::model::camera::CocLimit::Px(64.0);
+    camera.longitudinal_color_mm = Some([0.3, -0.3]);
+    let plan = planner::plan(&frame, &camera);
+    let mut reversed = planner::plan(&frame, &camera);
+    let tiled = reversed.passes.iter_mut().find(|p| p.name == "bokeh_tiled").expect("the tiled pass");
+    let mut runs: Vec<TiledDofParams> = tiled.params::<TiledDof>().cloned().collect();
+    runs.reverse();
+    assert_eq!(runs.len(), 3, "one run per channel:\n{}", plan.explain());
+    tiled.set_runs::<TiledDof>(runs, "the channels in reverse order");
+    // Every run has sprites, so each changes the colour it reads.
+    let renderer = Renderer::new(&gpu, &plan).expect("pipelines");
+    let (_, checks) = renderer.render_with_twin_checks(&frame, &plan).expect("render");
+    let excess: Vec<_> = checks.iter().filter(|c| c.shader == "dof_sprite_excess").collect();
+    assert_eq!(excess.len(), 6, "a take-out and a restore per run");
+    assert!(excess.iter().all(|c| c.groups[0] > 0 && c.result.is_ok()), "{excess:?}");
+    let bits = |rgba: Vec<f32>| rgba.into_iter().map(f32::to_bits).collect::<Vec<_>>();
+    let forward = bits(render_plan(&gpu, &frame, &plan).0);
+    let backward = bits(render_plan(&gpu, &frame, &reversed).0);
+    assert_validation_clean(&gpu);
+    let differing = forward.iter().zip(&backward).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} values differ between the channel orders");
+}

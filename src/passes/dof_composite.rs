@@ -176,7 +176,8 @@ pub fn record(
 ) -> GpuResult<()> {
     rec.begin_pass(&format!("{NAME}_{}", push.level));
     // bg/fg/fg_big_level: written by the level gather (read-after-write).
-    // color (the colour less the sprites' energy) and coc_level: written by the pyramid passes.
+    // color (the input colour less the sprites' energy): written in place by dof_sprite_excess.
+    // coc_level: written by the pyramid passes.
     // output: the full-resolution tile passes (and the other levels' composites) wrote other
     //   tiles of it; the write-after-write dependency keeps sync validation (which tracks whole
     //   images) and any driver honest.

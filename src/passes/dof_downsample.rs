@@ -32,7 +32,6 @@ crate::shader_bindings! {
         coc_half: image(coc_half),
         args: buffer(Args),
         candidates: buffer(Candidates),
-        color_base: image(color_base),
     }
 }
 
@@ -78,16 +77,14 @@ pub fn pack_texel(x: i32, y: i32) -> u32 {
 impl Twin for DownsampleShader {
     fn cpu(pc: &DownsamplePush, _groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
-        let (mut color_half, mut coc_half, mut base) =
-            (b[2].image().clone(), b[3].image().clone(), b[6].image().clone());
+        let (mut color_half, mut coc_half) = (b[2].image().clone(), b[3].image().clone());
         let mut listed = Vec::new();
         for hy in 0..pc.half_size[1] {
             for hx in 0..pc.half_size[0] {
                 let (mut sum, mut coc_sum, mut weight, mut candidate) = ([0.0f32; 4], 0.0f32, 0.0f32, false);
-                for (x, y, c, coc_p) in texel_pixels(&color, &coc, pc.size, hx, hy) {
+                for (_, _, c, coc_p) in texel_pixels(&color, &coc, pc.size, hx, hy) {
                     let radius = 0.5 * coc_p.abs();
                     candidate |= radius > pc.small_radius_px && luminance(&c, pc.luminance_weights) > pc.highlight_min;
-                    base.texel_mut(x as u32, y as u32).copy_from_slice(&c);
                     let w = (radius - 0.5).clamp(0.0, 1.0);
                     for k in 0..4 {
                         sum[k] += w * c[k];
@@ -105,7 +102,6 @@ impl Twin for DownsampleShader {
         }
         b[2] = HostData::Image(color_half);
         b[3] = HostData::Image(coc_half);
-        b[6] = HostData::Image(base);
         let args = b[4].words_mut();
         let first = args[ARGS_HIGHLIGHT_COUNT as usize];
         let groups = (first..first + listed.len() as u32).filter(|slot| slot % GROUP_SIZE == 0).count() as u32;
@@ -141,10 +137,10 @@ pub fn record(
     push: &DownsamplePush,
 ) -> GpuResult<()> {
     rec.begin_pass(NAME);
-    // color_half, coc_half, color_base: written from scratch. The inputs (colour, CoC) and the
-    // args buffer were made visible to compute by the barriers around dof_classify. The
-    // candidate list is this frame's own buffer, written here first.
-    rec.image_barriers(&[overwrite(b.color_half), overwrite(b.coc_half), overwrite(b.color_base)]);
+    // color_half, coc_half: written from scratch. The inputs (colour, CoC) and the args buffer
+    // were made visible to compute by the barriers around dof_classify. The candidate list is
+    // this frame's own buffer, written here first.
+    rec.image_barriers(&[overwrite(b.color_half), overwrite(b.coc_half)]);
     kernel.dispatch(rec, b, push, groups_for(b.color_half.width, b.color_half.height))?;
     rec.end_pass();
     Ok(())

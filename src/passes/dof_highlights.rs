@@ -1,6 +1,7 @@
 //! Tiled depth of field: the highlights among the candidate texels dof_downsample listed become
-//! sprites, their excess over the background taken out of the colour the gathers and the
-//! pyramid read. Shader: glsl/dof_highlights.comp.
+//! sprites, their excess over the background taken out of the pyramid's level 1 (and, by
+//! dof_sprite_excess, out of the colour the composite's exact gathers read). Shader:
+//! glsl/dof_highlights.comp.
 
 use super::barriers::{args_for_indirect, buffer_after_compute_write, write_after_write};
 use super::dof_downsample::{luminance, texel_pixels};
@@ -36,7 +37,6 @@ crate::shader_bindings! {
         color: image(color_in),
         coc: image(coc_px),
         color_half: image(color_half),
-        color_base: image(color_base),
         args: buffer(Args),
         candidates: buffer(Candidates),
         sprites: buffer(Sprites),
@@ -94,11 +94,11 @@ pub fn neighbourhood_peak(color: &HostImage, size: [i32; 2], x: i32, y: i32, wei
 impl Twin for HighlightsShader {
     fn cpu(pc: &HighlightsPush, _groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
-        let (mut color_half, mut base) = (b[2].image().clone(), b[3].image().clone());
-        let candidates = b[5].words().to_vec();
-        let listed = (b[4].words()[ARGS_HIGHLIGHT_COUNT as usize] as usize).min(candidates.len());
+        let mut color_half = b[2].image().clone();
+        let candidates = b[4].words().to_vec();
+        let listed = (b[3].words()[ARGS_HIGHLIGHT_COUNT as usize] as usize).min(candidates.len());
         let mut sprites = Vec::new();
-        let (mut count, mut dropped, mut bin_groups) = (b[4].words()[ARGS_SPRITE_COUNT as usize], 0u32, 0u32);
+        let (mut count, mut dropped, mut bin_groups) = (b[3].words()[ARGS_SPRITE_COUNT as usize], 0u32, 0u32);
         for &packed in &candidates[..listed] {
             let (hx, hy) = ((packed & 0xffff) as i32, (packed >> 16) as i32);
             let mut removed = [0.0f32; 3];
@@ -123,8 +123,6 @@ impl Twin for HighlightsShader {
                 if (slot as i32) < pc.sprite_capacity {
                     let centre = [x as f32 + 0.5, y as f32 + 0.5];
                     sprites.push((slot, [centre[0], centre[1], coc_p, 0.0, excess[0], excess[1], excess[2], 0.0]));
-                    let less = [c[0] - excess[0], c[1] - excess[1], c[2] - excess[2], c[3]];
-                    base.texel_mut(x as u32, y as u32).copy_from_slice(&less);
                     let w = (radius - 0.5).clamp(0.0, 1.0);
                     for k in 0..3 {
                         removed[k] += w * excess[k];
@@ -142,12 +140,11 @@ impl Twin for HighlightsShader {
             }
         }
         b[2] = HostData::Image(color_half);
-        b[3] = HostData::Image(base);
-        let args = b[4].words_mut();
+        let args = b[3].words_mut();
         args[ARGS_SPRITE_COUNT as usize] = count;
         args[ARGS_SPRITES_DROPPED as usize] += dropped;
         args[ARGS_BIN_DISPATCH as usize] += bin_groups;
-        let words = b[6].words_mut();
+        let words = b[5].words_mut();
         for (slot, sprite) in sprites {
             let at = slot as usize * SPRITE_WORDS as usize;
             for (k, v) in sprite.iter().enumerate() {
@@ -158,8 +155,8 @@ impl Twin for HighlightsShader {
 
     /// Sprites take slots with atomics, in any order: sort them by their centre.
     fn canonical(pc: &HighlightsPush, b: &mut [HostData]) {
-        let count = (b[4].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
-        super::dof_downsample::sort_sprites(b[6].words_mut(), count);
+        let count = (b[3].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
+        super::dof_downsample::sort_sprites(b[5].words_mut(), count);
     }
 }
 
@@ -172,10 +169,11 @@ pub fn record(
     rec.begin_pass(NAME);
     // args (this dispatch's size, the candidate count) and the candidate list: written by
     //   dof_downsample with atomics; read here as indirect arguments and by the shader.
-    // color_half, color_base: written by dof_downsample; this pass takes the sprites' excess out
-    //   of some of their texels (read-modify-write).
+    // color_half: written by dof_downsample; this pass takes the sprites' excess out of some of
+    //   its texels (read-modify-write). The colour it reads has had no writer since
+    //   dof_downsample read it (dof_sprite_excess comes after this pass).
     rec.buffer_barriers(&[args_for_indirect(b.args), buffer_after_compute_write(b.candidates)]);
-    rec.image_barriers(&[write_after_write(b.color_half), write_after_write(b.color_base)]);
+    rec.image_barriers(&[write_after_write(b.color_half)]);
     kernel.dispatch_indirect(rec, b, push, b.args, ARGS_HIGHLIGHT_DISPATCH as u64 * 4)?;
     rec.end_pass();
     Ok(())

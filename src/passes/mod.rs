@@ -30,6 +30,7 @@ pub mod dof_highlights;
 pub mod dof_level_gather;
 pub mod dof_level_lists;
 pub mod dof_pyramid;
+pub mod dof_sprite_excess;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;
@@ -303,11 +304,13 @@ impl PlannedPass {
 
 /// The frame's images on the GPU while a plan is recorded, by role. A pass that changes the
 /// colour reads [`FrameImages::color`] and replaces it with its own output image: each pass
-/// writes images of its own, so no pass overwrites what an earlier one still has to read. The
-/// one exception adds to the colour pixel by pixel (the flare, which leaves a frame without a
-/// light untouched instead of copying it): it updates [`FrameImages::color`] in place, after
-/// its barrier has waited for every earlier read, and nothing recorded later reads the colour
-/// as it was.
+/// writes images of its own, so no pass overwrites what an earlier one still has to read. Two
+/// exceptions change the colour pixel by pixel in place, each after its barrier has waited for
+/// every earlier read. The flare adds to it (it leaves a frame without a light untouched
+/// instead of copying it), and nothing recorded later reads the colour as it was. The tiled
+/// depth of field takes its highlight sprites' excess out of their pixels (sparing a copy of
+/// the frame), after its own steps that read the colour as it was; its output then replaces
+/// the colour, or, for a per-channel run (longitudinal colour), it puts those pixels back.
 pub struct FrameImages {
     pub width: u32,
     pub height: u32,

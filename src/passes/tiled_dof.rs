@@ -9,7 +9,7 @@
 //! share and the barriers between the classification and its indirect dispatches.
 
 use super::aperture::{shape_radius_for, ApertureConstants, ApertureData};
-use super::barriers::{args_for_indirect, buffer_after_compute_write, overwrite};
+use super::barriers::{after_compute_write, args_for_indirect, buffer_after_compute_write, overwrite};
 use super::dof_bin::{BinBindings, BinPush, BinShader};
 use super::dof_bin_order::{BinOrderBindings, BinOrderShader};
 use super::dof_classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
@@ -21,13 +21,14 @@ use super::dof_highlights::{HighlightsBindings, HighlightsPush, HighlightsShader
 use super::dof_level_gather::{LevelGatherBindings, LevelGatherPush, LevelGatherShader};
 use super::dof_level_lists::{LevelListsBindings, LevelListsShader};
 use super::dof_pyramid::{PyramidBindings, PyramidShader};
+use super::dof_sprite_excess::{saved_buffer_bytes, SpriteExcessBindings, SpriteExcessPush, SpriteExcessShader};
 use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShader};
 use super::dof_tiles::{TilesPush, TilesShader};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{
     dof_bin, dof_bin_order, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid,
 };
-use super::{dof_highlights, dof_tile_gather, dof_tiles};
+use super::{dof_highlights, dof_sprite_excess, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
 use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
@@ -111,6 +112,7 @@ pub struct TiledDof {
     tile_gather: SpecializedKernel<TileGatherShader>,
     downsample: Kernel<DownsampleShader>,
     highlights: Kernel<HighlightsShader>,
+    sprite_excess: Kernel<SpriteExcessShader>,
     pyramid: Kernel<PyramidShader>,
     bin: Kernel<BinShader>,
     bin_order: Kernel<BinOrderShader>,
@@ -178,6 +180,7 @@ impl Pass for TiledDof {
             tile_gather: SpecializedKernel::new(gpu)?,
             downsample: Kernel::new(gpu)?,
             highlights: Kernel::new(gpu)?,
+            sprite_excess: Kernel::new(gpu)?,
             pyramid: Kernel::new(gpu)?,
             bin: Kernel::new(gpu)?,
             bin_order: Kernel::new(gpu)?,
@@ -200,6 +203,9 @@ impl Pass for TiledDof {
     }
 
     /// The whole path: the colour and the run's CoC in, a new colour written for every pixel.
+    /// The sprites' excess is taken out of the input colour itself (a pixel each) once every step
+    /// that reads it as it was has; a per-channel run (longitudinal colour) puts those pixels
+    /// back at its end, for the next channel's run and the passes after.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &TiledDofParams) -> GpuResult<()> {
         let (color, coc) = (images.color().clone(), images.coc(p.channel)?.clone());
         let tiles = p.tiles();
@@ -225,8 +231,9 @@ impl Pass for TiledDof {
         let bin_counts =
             rec.create_buffer("dof sprite bin counts", tile_count * 4, storage | vk::BufferUsageFlags::TRANSFER_DST)?;
         let bins = rec.create_buffer("dof sprite bins", tile_count * 4 * BIN_CAPACITY as u64, storage)?;
+        let saved =
+            rec.create_buffer("dof sprite pixels as they were", saved_buffer_bytes(p.sprite_capacity), storage)?;
         let rgba = vk::Format::R32G32B32A32_SFLOAT;
-        let color_base = rec.create_image("dof colour less sprites", p.width, p.height, rgba)?;
         let output = rec.create_image("color (depth of field)", p.width, p.height, rgba)?;
         let mut levels = Vec::new();
         for level in 1..=LEVELS {
@@ -295,7 +302,6 @@ impl Pass for TiledDof {
             coc_half: &level1.coc,
             args: &args,
             candidates: &candidates,
-            color_base: &color_base,
         };
         dof_downsample::record(&self.downsample, rec, &downsample_bindings, &downsample)?;
         let highlights = HighlightsPush {
@@ -311,12 +317,17 @@ impl Pass for TiledDof {
             color: &color,
             coc: &coc,
             color_half: &level1.color,
-            color_base: &color_base,
             args: &args,
             candidates: &candidates,
             sprites: &sprites,
         };
         dof_highlights::record(&self.highlights, rec, &highlights_bindings, &highlights)?;
+        // Every step that reads the colour as it was has recorded its reads (the copy and small
+        // tiles, dof_downsample, dof_highlights; the pyramid and the level gathers read the
+        // levels): the sprites' excess now leaves their pixels, for the composite's exact gathers.
+        let excess_bindings = SpriteExcessBindings { color: &color, args: &args, sprites: &sprites, saved: &saved };
+        let excess = SpriteExcessPush { sprite_capacity: p.sprite_capacity as i32, restore: 0 };
+        dof_sprite_excess::record(&self.sprite_excess, rec, &excess_bindings, &excess)?;
         for (level, pair) in (2..).zip(levels.windows(2)) {
             let b = PyramidBindings {
                 color_fine: &pair[0].color,
@@ -375,7 +386,7 @@ impl Pass for TiledDof {
             };
             let b = CompositeBindings {
                 // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
-                color: &color_base,
+                color: &color,
                 coc: &coc,
                 bg_level: &l.bg,
                 fg_level: &l.fg,
@@ -392,6 +403,16 @@ impl Pass for TiledDof {
                 args: &args,
             };
             dof_composite::record(&self.composite, &specialization, rec, &b, &push)?;
+        }
+        if p.channel.is_some() {
+            // Longitudinal colour: each channel's run reads the input colour, which stays the
+            // frame's colour after this run (the next channel's run and the passes before
+            // longitudinal_color read it): the sprites' pixels as they were.
+            let restore = SpriteExcessPush { restore: 1, ..excess };
+            dof_sprite_excess::record(&self.sprite_excess, rec, &excess_bindings, &restore)?;
+            // Those readers take the colour as the upload left it, visible to compute reads with
+            // no barrier of their own: this write made visible to them here.
+            rec.image_barriers(&[after_compute_write(&color)]);
         }
         images.set_color(p.channel, output);
         Ok(())
