@@ -67,16 +67,18 @@ fn the_next_frame_of_the_same_size_reuses_the_last_frames_images_and_buffers_and
 fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
     // A session creates the pipelines of the passes the camera will likely run while the first
     // frame is still being read (Renderer::create_likely). For the tiled depth of field that is
-    // the CoC pass's pipeline (its specialisation is the camera's alone) and the tiled path's
-    // nine unspecialised ones; the plan then adds only the three the frame's largest CoC
-    // specialises (the two gathers and the composite). A likely pipeline the plan did not use,
-    // or a CoC specialisation other than the plan's, shows as a count off by one.
+    // every pipeline the plan uses: the CoC pass's (its specialisation is the camera's alone),
+    // the tiled path's nine unspecialised ones, and the three the lens specialises (the two
+    // gathers and the composite, with or without the aberration's path); the plan adds none. A
+    // likely pipeline the plan did not use, or a specialisation other than the plan's, shows as
+    // a count off by one or three.
     let (w, h) = (64u32, 48u32);
     let color: Vec<f32> = (0..w * h).flat_map(|i| [0.2 + (i % 7) as f32 * 0.1, 0.3, 0.1, 1.0]).collect();
     let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
     let frame = realcam::model::frame::Frame::new(w, h, color, depth);
-    for resolve_depth_edges in [true, false] {
-        let camera = realcam::model::camera::Camera { resolve_depth_edges, ..dof_camera(50.0, 1.4, 2.0, 6) };
+    for (resolve_depth_edges, spherical_aberration) in [(true, 0.0), (false, 0.0), (true, 0.3)] {
+        let mut camera = realcam::model::camera::Camera { resolve_depth_edges, ..dof_camera(50.0, 1.4, 2.0, 6) };
+        camera.aperture.spherical_aberration = spherical_aberration;
         let p = plan(&frame, &camera);
         assert!(p.runs("coc") && p.runs("bokeh_tiled"), "{}", p.explain());
 
@@ -86,9 +88,10 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         let likely = warm.pipelines_created();
         renderer.prepare(&p).expect("the plan's pipelines");
         let added = warm.pipelines_created() - likely;
-        assert_eq!((likely, added), (10, 3), "resolve_depth_edges {resolve_depth_edges}");
+        let case = format!("resolve_depth_edges {resolve_depth_edges}, spherical aberration {spherical_aberration}");
+        assert_eq!((likely, added), (13, 0), "{case}");
         renderer.render(&frame, &p, false).expect("render");
-        assert_eq!(warm.pipelines_created(), likely + added, "the render created a pipeline the plan had not");
+        assert_eq!(warm.pipelines_created(), likely + added, "{case}: the render created a pipeline the plan had not");
         assert_validation_clean(&warm);
 
         // Without the head start, the plan creates all thirteen.

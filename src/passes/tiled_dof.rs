@@ -167,10 +167,26 @@ impl Pass for TiledDof {
         Decision::run_each(runs, why)
     }
 
-    /// The method the camera chose; its pipelines specialised per lens wait for the plan (they
-    /// depend on the frame's largest CoC).
+    /// The method the camera chose.
     fn likely(camera: &Camera) -> bool {
         camera.bokeh == BokehMode::Tiled
+    }
+
+    /// The gathers' and the composite's specialisation switches paths on for the lens alone (an
+    /// aperture image, a cat's eye, spherical aberration), whatever the frame's size and CoCs:
+    /// the parameters of a stand-in frame give the plan's.
+    fn prepare_likely(&self, camera: &Camera) -> GpuResult<()> {
+        const STAND_IN_PX: u32 = 64;
+        const STAND_IN_COC_PX: f64 = 8.0;
+        let pitch_mm = camera.pixel_pitch_mm(STAND_IN_PX, STAND_IN_PX);
+        let centre_px = [0.5 * STAND_IN_PX as f64; 2];
+        let p = TiledDofParams::new(STAND_IN_PX, STAND_IN_PX, STAND_IN_COC_PX, &camera.aperture, 1.0, centre_px);
+        let (aperture, aperture_data) = ApertureData::new(
+            p.aperture.with_pitch(camera, pitch_mm),
+            camera.aperture_mask.as_ref(),
+            shape_radius_for(STAND_IN_COC_PX),
+        );
+        self.prepare(&TiledDofParams { aperture, aperture_data, ..p })
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
