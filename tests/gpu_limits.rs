@@ -67,10 +67,12 @@ fn the_next_frame_of_the_same_size_reuses_the_last_frames_images_and_buffers_and
 fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
     // A session creates the pipelines of the passes the camera will likely run while the first
     // frame is still being read (Renderer::create_likely). For the tiled depth of field that is
-    // the CoC pass's pipeline (its specialisation is the camera's alone) and the tiled path's
-    // nine unspecialised ones; the plan then adds only the three the frame's largest CoC
-    // specialises (the two gathers and the composite). A likely pipeline the plan did not use,
-    // or a CoC specialisation other than the plan's, shows as a count off by one.
+    // the CoC pass's pipeline (its specialisation is the camera's alone), its edge resolve's
+    // where the camera resolves depth edges (coc_edges, specialised by the camera's field
+    // curvature alone), and the tiled path's nine unspecialised ones; the plan then adds only the
+    // three the frame's largest CoC specialises (the two gathers and the composite). A likely
+    // pipeline the plan did not use, or a CoC specialisation other than the plan's, shows as a
+    // count off by one.
     let (w, h) = (64u32, 48u32);
     let color: Vec<f32> = (0..w * h).flat_map(|i| [0.2 + (i % 7) as f32 * 0.1, 0.3, 0.1, 1.0]).collect();
     let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
@@ -86,14 +88,17 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         let likely = warm.pipelines_created();
         renderer.prepare(&p).expect("the plan's pipelines");
         let added = warm.pipelines_created() - likely;
-        assert_eq!((likely, added), (10, 3), "resolve_depth_edges {resolve_depth_edges}");
+        // coc, coc_edges with the resolve, and the tiled path's unspecialised ones.
+        let coc_pipelines = if resolve_depth_edges { 2 } else { 1 };
+        assert_eq!((likely, added), (coc_pipelines + 9, 3), "resolve_depth_edges {resolve_depth_edges}");
         renderer.render(&frame, &p, false).expect("render");
         assert_eq!(warm.pipelines_created(), likely + added, "the render created a pipeline the plan had not");
         assert_validation_clean(&warm);
 
-        // Without the head start, the plan creates all thirteen.
+        // Without the head start, the plan creates them all (fourteen, thirteen without the
+        // resolve).
         let cold = gpu();
         Renderer::new(&cold, &p).expect("pipelines");
-        assert_eq!(cold.pipelines_created(), 13);
+        assert_eq!(cold.pipelines_created(), coc_pipelines + 12);
     }
 }
