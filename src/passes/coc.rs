@@ -439,6 +439,12 @@ impl Pass for Coc {
             // The focus processor maps depth to its tables itself.
             return Decision::skip(format!("{why}; not needed by the focus processor"));
         }
+        // The edge resolve is a second dispatch (coc_edges) over the pixels coc lists.
+        let why = if camera.resolve_depth_edges {
+            format!("{why}; anti-aliased depth edges resolved over the listed edge pixels ({EDGES_NAME})")
+        } else {
+            format!("{why}; depth kept as stored at edges (--keep-edge-depth)")
+        };
         let base =
             CocParams::new(CocPush::for_frame(camera, f.pixel_pitch_mm, input.frame), camera.field_curvature.as_ref());
         let runs = input
