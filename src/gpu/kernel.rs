@@ -417,41 +417,55 @@ pub fn check_interface(
 mod tests {
     use super::*;
 
-    fn coc_interface() -> ShaderInterface {
-        interface(shaders::spirv("coc").unwrap()).unwrap()
+    /// glsl/coc_edges.comp: images and buffers.
+    fn coc_edges_interface() -> ShaderInterface {
+        interface(shaders::spirv("coc_edges").unwrap()).unwrap()
+    }
+
+    /// The bindings of glsl/coc_edges.comp as its pass declares them.
+    fn coc_edges_declared() -> [Binding; 6] {
+        [
+            image("depth_m"),
+            image("coc_px"),
+            buffer("FieldCurvature"),
+            image("color_in"),
+            buffer("Args"),
+            buffer("EdgePixels"),
+        ]
     }
 
     #[test]
     fn a_declaration_that_matches_the_shader_passes() {
-        let declared = [image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("color_in")];
-        check_interface("coc", &declared, 60, &coc_interface()).unwrap();
+        check_interface("coc_edges", &coc_edges_declared(), 60, &coc_edges_interface()).unwrap();
     }
 
     #[test]
     fn a_mismatch_is_an_error_naming_the_shader_and_the_binding() {
         let error = |declared: &[Binding], push: u32| {
-            check_interface("coc", declared, push, &coc_interface()).unwrap_err().to_string()
+            check_interface("coc_edges", declared, push, &coc_edges_interface()).unwrap_err().to_string()
         };
+        let all = coc_edges_declared();
         // Swapped bindings.
-        let swapped = error(&[image("coc_px"), image("depth_m"), buffer("FieldCurvature"), image("color_in")], 60);
+        let mut swapped = all;
+        swapped.swap(0, 1);
         assert_eq!(
-            swapped,
-            "shader coc: binding 0 is a storage image named \"depth_m\" in the shader but a storage image named \"coc_px\" in the pass"
+            error(&swapped, 60),
+            "shader coc_edges: binding 0 is a storage image named \"depth_m\" in the shader but a storage image named \"coc_px\" in the pass"
         );
         // An image declared where the shader has a buffer.
-        let kind = error(&[image("depth_m"), image("coc_px"), image("FieldCurvature"), image("color_in")], 60);
+        let mut wrong_kind = all;
+        wrong_kind[2] = image("FieldCurvature");
+        let kind = error(&wrong_kind, 60);
         assert!(
             kind.contains("binding 2 is a storage buffer named \"FieldCurvature\" in the shader but a storage image"),
             "{kind}"
         );
         // A binding the pass forgot, one it invented, a push-constant struct of the wrong size.
-        assert!(error(&[image("depth_m"), image("coc_px"), buffer("FieldCurvature")], 60)
-            .contains("the shader has binding 3 (color_in"));
-        let all = [image("depth_m"), image("coc_px"), buffer("FieldCurvature"), image("color_in")];
+        assert!(error(&all[..5], 60).contains("the shader has binding 5 (EdgePixels"));
         let extra = error(&[&all[..], &[image("x")]].concat(), 60);
-        assert!(extra.contains("declares binding 4 (x"), "{extra}");
+        assert!(extra.contains("declares binding 6 (x"), "{extra}");
         let push = error(&all, 56);
-        assert_eq!(push, "shader coc: the push constants are 56 bytes in the pass but 60 bytes in the shader");
+        assert_eq!(push, "shader coc_edges: the push constants are 56 bytes in the pass but 60 bytes in the shader");
     }
 
     #[test]

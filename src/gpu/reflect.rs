@@ -310,9 +310,10 @@ mod tests {
 
     #[test]
     fn reads_the_bindings_and_push_constants_of_the_compiled_shaders() {
-        // glsl/coc.comp: depth (image), coc_px (image), the field-curvature buffer, the colour
-        // (for the edge resolve); push block of 15 four-byte fields.
-        let coc = shader("coc");
+        // glsl/coc_edges.comp: depth (image), coc_px (image), the field-curvature buffer, the
+        // colour, the edge list's args and pixels; push block (glsl/include/coc.glsl) of 15
+        // four-byte fields.
+        let coc = shader("coc_edges");
         let names: Vec<(u32, BindingKind, &str)> =
             coc.bindings.iter().map(|b| (b.binding, b.kind, b.name.as_str())).collect();
         assert_eq!(
@@ -321,7 +322,9 @@ mod tests {
                 (0, BindingKind::StorageImage, "depth_m"),
                 (1, BindingKind::StorageImage, "coc_px"),
                 (2, BindingKind::StorageBuffer, "FieldCurvature"),
-                (3, BindingKind::StorageImage, "color_in")
+                (3, BindingKind::StorageImage, "color_in"),
+                (4, BindingKind::StorageBuffer, "Args"),
+                (5, BindingKind::StorageBuffer, "EdgePixels")
             ]
         );
         assert_eq!(coc.push_constant_bytes, 15 * 4);

@@ -1,10 +1,13 @@
 //! Circle-of-confusion pass: signed CoC diameter in pixels per pixel, from planar depth
-//! (Kyaw 2013 eq 5.3). Shader: glsl/coc.comp.
+//! (Kyaw 2013 eq 5.3), and the anti-aliased-edge resolve over the pixels that need it. Shaders:
+//! glsl/coc.comp (every pixel's CoC from its own depth, and the list of edge pixels) and
+//! glsl/coc_edges.comp (an indirect dispatch over that list).
 
-use super::barriers::overwrite;
+use super::barriers::{args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::{finite_or_zero, floats};
 use super::{groups_for, Decision, FrameImages, Input, Pass};
+use crate::gpu::shaders::coc::{COC_ARGS_COUNT, COC_ARGS_DISPATCH, COC_ARGS_WORDS, EDGE_GROUP_SIZE};
 use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 use crate::model::camera::{BokehMode, Camera, CocModel};
 use crate::model::frame::Frame;
@@ -12,8 +15,10 @@ use crate::optics::ThinLens;
 use ash::vk;
 
 pub const NAME: &str = "coc";
+/// The edge resolve's dispatch (glsl/coc_edges.comp), also its span in `--profile`.
+pub const EDGES_NAME: &str = "coc_edges";
 
-/// Push constants of glsl/coc.comp.
+/// Push constants of glsl/coc.comp and glsl/coc_edges.comp (glsl/include/coc.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct CocPush {
@@ -35,7 +40,7 @@ pub struct CocPush {
     /// green); 0 for green.
     pub coc_offset_px: f32,
     /// 1: each pixel at an anti-aliased depth edge takes the depth of the layer that brings most
-    /// of its light (glsl/coc.comp); 0: the depth as stored.
+    /// of its light (glsl/coc_edges.comp); 0: the depth as stored.
     pub resolve_edges: i32,
 }
 
@@ -113,15 +118,25 @@ impl CocPush {
         [u32::from(self.resolve_edges != 0), u32::from(self.entries > 0)]
     }
 
+    /// glsl/coc_edges.comp's specialization constant: `FIELD_CURVATURE`.
+    pub fn edge_specialization(&self) -> [u32; 1] {
+        [u32::from(self.entries > 0)]
+    }
+
     /// [`CocPush::specialization`] of every run through `camera` (it depends on the camera
     /// alone: its edge resolve and its field curvature).
     pub fn specialization_for(camera: &Camera) -> [u32; 2] {
         [u32::from(camera.resolve_depth_edges), u32::from(camera.field_curvature.is_some())]
     }
 
+    /// The depth in mm of a depth value as the shader reads it (at least 1e-30).
+    pub fn depth_mm(&self, depth_m: f32) -> f32 {
+        (depth_m * self.mm_per_depth_unit).max(1.0e-30)
+    }
+
     /// The inverse depth (1/mm) of a depth value as the shader reads it.
     pub fn inverse_depth(&self, depth_m: f32) -> f32 {
-        1.0 / (depth_m * self.mm_per_depth_unit).max(1.0e-30)
+        1.0 / self.depth_mm(depth_m)
     }
 
     /// CPU twin at pixel (x, y) with the field-curvature table (`table_data` layout).
@@ -180,19 +195,34 @@ pub fn coc_resolved_cpu(depth_m: &[f32], rgba: &[f32], push: &CocPush, table: &[
 /// scene A did not change (11.3 ms on lavapipe).
 pub const EDGE_RESOLVE_MIN_PX: f32 = 0.25;
 
-/// The inverse depth (1/mm) whose light pixel (x, y) mostly holds: glsl/coc.comp's
-/// resolved_inverse_depth, in the same f32 arithmetic.
+/// Whether the edge resolve looks at pixel (x, y): the CoCs of the nearest and the farthest
+/// depth of its 3x3 neighbourhood differ by more than [`EDGE_RESOLVE_MIN_PX`]. glsl/coc.comp's
+/// `at_edge`, which lists such pixels for glsl/coc_edges.comp, in the same f32 arithmetic.
+pub fn at_edge(depth: &HostImage, push: &CocPush, x: i32, y: i32) -> bool {
+    let d_p = push.depth_mm(depth.clamped(x, y)[0]);
+    let (d_min, d_max) = (0..9)
+        .map(|i| push.depth_mm(depth.clamped(x + i % 3 - 1, y + i / 3 - 1)[0]))
+        .fold((d_p, d_p), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    push.coc_scale_px_mm * (1.0 / d_min - 1.0 / d_max) > EDGE_RESOLVE_MIN_PX
+}
+
+/// The inverse depth (1/mm) whose light pixel (x, y) mostly holds: its own, or where the edge
+/// resolve is on and the pixel is [`at_edge`], [`edge_inverse_depth`].
 pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
-    let w_p = push.inverse_depth(depth.clamped(x, y)[0]);
-    if push.resolve_edges == 0 {
-        return w_p;
+    if push.resolve_edges != 0 && at_edge(depth, push, x, y) {
+        edge_inverse_depth(depth, color, push, x, y)
+    } else {
+        push.inverse_depth(depth.clamped(x, y)[0])
     }
+}
+
+/// The inverse depth (1/mm) whose light a pixel (x, y) at an edge mostly holds:
+/// glsl/coc_edges.comp's, in the same f32 arithmetic.
+pub fn edge_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
+    let w_p = push.inverse_depth(depth.clamped(x, y)[0]);
     let offset = |i: i32| (x + i % 3 - 1, y + i / 3 - 1);
     let w: Vec<f32> = (0..9).map(offset).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
     let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
-    if push.coc_scale_px_mm * (w_near - w_far) <= EDGE_RESOLVE_MIN_PX {
-        return w_p;
-    }
     let w_mid = 0.5 * (w_near + w_far);
     let brightness = |c: [f32; 3]| c.iter().map(|v| v.max(0.0)).sum::<f32>();
     let c9: Vec<[f32; 3]> =
@@ -218,7 +248,7 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
     let c_near = near.0.map(|v| v / near.1);
     // The far layer's colour: its neighbour of median brightness (the darker middle one of an
     // even count, ties by position), not its mean, which a small highlight's other fringe
-    // pixels inflate (glsl/coc.comp).
+    // pixels inflate (glsl/coc_edges.comp).
     let rank = (far.0 - 1.0) as usize / 2;
     let far_of = || (0..9).filter(|&i| i != 4 && !is_near(i));
     let c_far = far_of()
@@ -259,11 +289,12 @@ crate::shader_bindings! {
         depth_m: image(depth_m),
         coc_px: image(coc_px),
         field_curvature: buffer(FieldCurvature),
-        color_in: image(color_in),
+        args: buffer(Args),
+        edge_pixels: buffer(EdgePixels),
     }
 }
 
-/// glsl/coc.comp.
+/// glsl/coc.comp: one invocation per pixel.
 pub struct CocShader;
 
 impl Shader for CocShader {
@@ -272,16 +303,88 @@ impl Shader for CocShader {
     type Push = CocPush;
 }
 
+/// A pixel in the edge list: x | y << 16.
+pub fn pack_pixel(x: i32, y: i32) -> u32 {
+    x as u32 | ((y as u32) << 16)
+}
+
+/// The pixel of an edge-list entry.
+pub fn unpack_pixel(v: u32) -> (i32, i32) {
+    ((v & 0xffff) as i32, (v >> 16) as i32)
+}
+
 impl Twin for CocShader {
     fn cpu(push: &CocPush, _groups: [u32; 3], b: &mut [HostData]) {
         let table = floats(b[2].words());
-        let (depth, color) = (b[0].image().clone(), b[3].image().clone());
+        let depth = b[0].image().clone();
+        let resolve = push.resolve_edges != 0;
+        let mut listed = Vec::new();
         let out = b[1].image_mut();
         for y in 0..push.size[1] {
             for x in 0..push.size[0] {
-                let inv_u = resolved_inverse_depth(&depth, &color, push, x, y);
-                out.texel_mut(x as u32, y as u32)[0] = push.coc_px_of_inverse_depth(inv_u, x as u32, y as u32, &table);
+                out.texel_mut(x as u32, y as u32)[0] =
+                    push.coc_px_at(depth.clamped(x, y)[0], x as u32, y as u32, &table);
+                if resolve && at_edge(&depth, push, x, y) {
+                    listed.push(pack_pixel(x, y));
+                }
             }
+        }
+        if !resolve {
+            return;
+        }
+        let args = b[3].words_mut();
+        args[COC_ARGS_DISPATCH as usize + 1] = 1;
+        args[COC_ARGS_DISPATCH as usize + 2] = 1;
+        let first = args[COC_ARGS_COUNT as usize];
+        let groups = (first..first + listed.len() as u32).filter(|slot| slot % EDGE_GROUP_SIZE == 0).count() as u32;
+        args[COC_ARGS_COUNT as usize] += listed.len() as u32;
+        args[COC_ARGS_DISPATCH as usize] += groups;
+        b[4].words_mut()[first as usize..first as usize + listed.len()].copy_from_slice(&listed);
+    }
+
+    /// Pixels take slots of the edge list with atomics, in any order: sort the list.
+    fn canonical(push: &CocPush, b: &mut [HostData]) {
+        if push.resolve_edges == 0 {
+            return;
+        }
+        let count = b[3].words()[COC_ARGS_COUNT as usize] as usize;
+        let words = b[4].words_mut();
+        let count = count.min(words.len());
+        words[..count].sort_unstable();
+    }
+}
+
+crate::shader_bindings! {
+    /// The bindings of glsl/coc_edges.comp.
+    pub struct CocEdgesBindings {
+        depth_m: image(depth_m),
+        coc_px: image(coc_px),
+        field_curvature: buffer(FieldCurvature),
+        color_in: image(color_in),
+        args: buffer(Args),
+        edge_pixels: buffer(EdgePixels),
+    }
+}
+
+/// glsl/coc_edges.comp: one invocation per pixel of the edge list (indirect).
+pub struct CocEdgesShader;
+
+impl Shader for CocEdgesShader {
+    const NAME: &'static str = EDGES_NAME;
+    type Bindings<'a> = CocEdgesBindings<'a>;
+    type Push = CocPush;
+}
+
+impl Twin for CocEdgesShader {
+    fn cpu(push: &CocPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let table = floats(b[2].words());
+        let (depth, color) = (b[0].image().clone(), b[3].image().clone());
+        let count = b[4].words()[COC_ARGS_COUNT as usize] as usize;
+        let listed = b[5].words()[..count].to_vec();
+        let out = b[1].image_mut();
+        for (x, y) in listed.into_iter().map(unpack_pixel) {
+            let inv_u = edge_inverse_depth(&depth, &color, push, x, y);
+            out.texel_mut(x as u32, y as u32)[0] = push.coc_px_of_inverse_depth(inv_u, x as u32, y as u32, &table);
         }
     }
 }
@@ -304,6 +407,7 @@ impl CocParams {
 
 pub struct Coc {
     kernel: SpecializedKernel<CocShader>,
+    edges: SpecializedKernel<CocEdgesShader>,
 }
 
 impl Pass for Coc {
@@ -335,6 +439,12 @@ impl Pass for Coc {
             // The focus processor maps depth to its tables itself.
             return Decision::skip(format!("{why}; not needed by the focus processor"));
         }
+        // The edge resolve is a second dispatch (coc_edges) over the pixels coc lists.
+        let why = if camera.resolve_depth_edges {
+            format!("{why}; anti-aliased depth edges resolved over the listed edge pixels ({EDGES_NAME})")
+        } else {
+            format!("{why}; depth kept as stored at edges (--keep-edge-depth)")
+        };
         let base =
             CocParams::new(CocPush::for_frame(camera, f.pixel_pitch_mm, input.frame), camera.field_curvature.as_ref());
         let runs = input
@@ -356,18 +466,30 @@ impl Pass for Coc {
     }
 
     fn prepare_likely(&self, camera: &Camera) -> GpuResult<()> {
-        self.kernel.prepare(&CocPush::specialization_for(camera))
+        let [resolve, field_curvature] = CocPush::specialization_for(camera);
+        self.kernel.prepare(&[resolve, field_curvature])?;
+        if resolve != 0 {
+            self.edges.prepare(&[field_curvature])?;
+        }
+        Ok(())
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(Coc { kernel: SpecializedKernel::new(gpu)? })
+        Ok(Coc { kernel: SpecializedKernel::new(gpu)?, edges: SpecializedKernel::new(gpu)? })
     }
 
+    /// The CoC pipeline, and the edge resolve's where the run resolves edges.
     fn prepare(&self, p: &CocParams) -> GpuResult<()> {
-        self.kernel.prepare(&p.push.specialization())
+        self.kernel.prepare(&p.push.specialization())?;
+        if p.push.resolve_edges != 0 {
+            self.edges.prepare(&p.push.edge_specialization())?;
+        }
+        Ok(())
     }
 
-    /// Depth (R32F metres) -> a new CoC image (R32F signed px) for the run's channel.
+    /// Depth (R32F metres) -> a new CoC image (R32F signed px) for the run's channel: every
+    /// pixel's from its own depth (`coc`), then, with the edge resolve, the listed edge pixels'
+    /// resolved (`coc_edges`).
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &CocParams) -> GpuResult<()> {
         rec.begin_pass(NAME);
         let depth = images.depth()?.clone();
@@ -378,16 +500,57 @@ impl Pass for Coc {
         let coc = rec.create_image(&name, images.width, images.height, vk::Format::R32_SFLOAT)?;
         // field_curvature: uploaded with its own barrier (copy -> compute read).
         let table = rec.upload_buffer("field curvature", &p.table)?;
+        let resolve = p.push.resolve_edges != 0;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let args = rec.create_buffer(
+            "coc edge resolve args (indirect dispatch, count)",
+            COC_ARGS_WORDS as u64 * 4,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        // Without the resolve the shader's list is specialised out: a word to bind.
+        let capacity = if resolve { images.width as u64 * images.height as u64 } else { 1 };
+        let edge_pixels = rec.create_buffer("coc edge pixels", capacity.max(1) * 4, storage)?;
         // depth: written by the upload copy, whose own barrier already made it visible to
         //   compute reads in layout GENERAL; nothing to wait for here.
         // coc: written from scratch; discard old contents.
         rec.image_barriers(&[overwrite(&coc)]);
-        let color = images.color().clone();
-        // color: the upload's own barrier made it visible to compute reads (the CoC pass runs
-        //   before any pass that writes the colour).
-        let bindings = CocBindings { depth_m: &depth, coc_px: &coc, field_curvature: &table, color_in: &color };
+        if resolve {
+            // args: the count and the dispatch's x start at zero every run (coc.comp counts up
+            //   with atomics): transfer write -> compute read/write. The edge list is this run's
+            //   own buffer, written here first.
+            rec.fill_buffer(&args, 0);
+            rec.buffer_barriers(&[buffer_after_fill(&args)]);
+        }
+        let bindings = CocBindings {
+            depth_m: &depth,
+            coc_px: &coc,
+            field_curvature: &table,
+            args: &args,
+            edge_pixels: &edge_pixels,
+        };
         let constants = p.push.specialization();
         self.kernel.dispatch(rec, &constants, &bindings, &p.push, groups_for(images.width, images.height))?;
+        if resolve {
+            rec.begin_pass(EDGES_NAME);
+            // args (this dispatch's size, the count) and the edge list: written by coc.comp with
+            //   atomics; read here as indirect arguments and by the shader.
+            // coc: written by coc.comp; overwritten here at the listed pixels (write-after-write).
+            // depth, color: the upload's own barriers made them visible to compute reads (the
+            //   CoC pass runs before any pass that writes the colour).
+            rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&edge_pixels)]);
+            rec.image_barriers(&[write_after_write(&coc)]);
+            let color = images.color().clone();
+            let edges = CocEdgesBindings {
+                depth_m: &depth,
+                coc_px: &coc,
+                field_curvature: &table,
+                color_in: &color,
+                args: &args,
+                edge_pixels: &edge_pixels,
+            };
+            let constants = p.push.edge_specialization();
+            self.edges.dispatch_indirect(rec, &constants, &edges, &p.push, &args, COC_ARGS_DISPATCH as u64 * 4)?;
+        }
         rec.end_pass();
         images.set_coc(p.channel, coc);
         Ok(())
@@ -505,6 +668,73 @@ mod tests {
         let stored = coc_resolved_cpu(&depth, &rgba, &resolve_push(0), &[0.0]);
         assert_eq!(resolved, stored);
         assert!((0..5).all(|y| resolved[y * 7 + 2] == 0.0));
+    }
+
+    /// The CoC pass's two twins chained as the pass records them: coc.comp's (every pixel's own
+    /// CoC, the edge list), then coc_edges.comp's over that list. Returns the CoC and the list.
+    fn two_dispatches(depth: &[f32], rgba: &[f32], push: &CocPush) -> (Vec<f32>, Vec<u32>) {
+        let (w, h) = (push.size[0] as u32, push.size[1] as u32);
+        let image = |channels, texels| HostData::Image(HostImage::new(w, h, channels, texels));
+        let mut b = vec![
+            image(1, depth.to_vec()),
+            image(1, vec![f32::NAN; (w * h) as usize]),
+            HostData::Buffer(vec![0.0f32.to_bits()]),
+            HostData::Buffer(vec![0; COC_ARGS_WORDS as usize]),
+            HostData::Buffer(vec![u32::MAX; (w * h) as usize]),
+        ];
+        CocShader::cpu(push, [1, 1, 1], &mut b);
+        let args = b[3].words().to_vec();
+        let mut edges =
+            vec![b[0].clone(), b[1].clone(), b[2].clone(), image(4, rgba.to_vec()), b[3].clone(), b[4].clone()];
+        CocEdgesShader::cpu(push, [args[COC_ARGS_DISPATCH as usize], 1, 1], &mut edges);
+        let count = args[COC_ARGS_COUNT as usize] as usize;
+        assert_eq!(args[COC_ARGS_DISPATCH as usize], (count as u32).div_ceil(EDGE_GROUP_SIZE));
+        // The dispatch's y and z: 1 with the resolve; without it the buffer is left alone.
+        let yz = u32::from(push.resolve_edges != 0);
+        assert_eq!(args[1..3], [yz, yz]);
+        (edges[1].image().texels.clone(), b[4].words()[..count].to_vec())
+    }
+
+    #[test]
+    fn the_edge_resolve_runs_on_the_listed_edge_pixels_alone_and_gives_the_whole_pass() {
+        // coc.comp lists exactly the pixels whose 3x3 depths span CoCs more than a quarter pixel
+        // apart (here the two columns either side of the object's edge: 10 of 35), and the
+        // resolve over that list gives the one-dispatch pass's CoC to the bit; without the
+        // resolve nothing is listed and every CoC is the depth's own.
+        let (depth, mut rgba) = edge_frame(|_, _| [10.0; 3]);
+        for y in 0..5 {
+            let i = (y * 7 + 3) * 4;
+            rgba[i..i + 3].copy_from_slice(&[0.3 * 10.0 + 0.7 * 0.1; 3]);
+        }
+        let push = resolve_push(1);
+        let (coc, listed) = two_dispatches(&depth, &rgba, &push);
+        let expected: Vec<u32> = (0..5).flat_map(|y| [pack_pixel(2, y), pack_pixel(3, y)]).collect();
+        assert_eq!(listed, expected);
+        assert_eq!(coc, coc_resolved_cpu(&depth, &rgba, &push, &[0.0]));
+        assert_ne!(coc, coc_cpu(&depth, &push, &[0.0]), "the fringe column resolves");
+        let plain = resolve_push(0);
+        let (coc, listed) = two_dispatches(&depth, &rgba, &plain);
+        assert!(listed.is_empty());
+        assert_eq!(coc, coc_cpu(&depth, &plain, &[0.0]));
+        // The fringed sphere: a ring of edge pixels, and more than a workgroup's worth with the
+        // checker's depth jittered in its right quarter; a per-channel offset.
+        let (w, h) = (16u32, 16u32);
+        let lens = ThinLens::new(50.0, 2.0, 2000.0).unwrap();
+        let base = CocPush::new(&lens, 0.05, 1000.0, w, h, [8.0, 8.0], None);
+        let push = CocPush { resolve_edges: 1, coc_offset_px: 0.7, ..base };
+        let (depth, rgba, _) = fringed_sphere_over_checker(w, h, (8.3, 8.1));
+        let jitter = |i: usize| if i % w as usize >= 12 { 1.0 + 0.05 * (i % 3) as f32 } else { 1.0 };
+        let depth: Vec<f32> = depth.iter().enumerate().map(|(i, &d)| d * jitter(i)).collect();
+        let (coc, listed) = two_dispatches(&depth, &rgba, &push);
+        let depth_image = HostImage::new(w, h, 1, depth.clone());
+        let at: Vec<u32> = (0..h as i32)
+            .flat_map(|y| (0..w as i32).map(move |x| (x, y)))
+            .filter(|&(x, y)| at_edge(&depth_image, &push, x, y))
+            .map(|(x, y)| pack_pixel(x, y))
+            .collect();
+        assert!(listed.len() > EDGE_GROUP_SIZE as usize && listed.len() < (w * h) as usize, "{}", listed.len());
+        assert_eq!(listed, at);
+        assert_eq!(coc, coc_resolved_cpu(&depth, &rgba, &push, &[0.0]));
     }
 
     /// Scene A's HL15 in small: a sphere of radius 1.5 px (150, at 1.2 m) centred off the pixel
