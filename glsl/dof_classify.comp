@@ -3,14 +3,17 @@
 // radius of any tile near enough to cover part of it: dilation), and the tile's class: a copy,
 // the exact full-resolution gather, or the gather at the pyramid level where that radius is
 // at most LEVEL_RADIUS texels. Each tile is appended to its class's list, whose indirect
-// dispatch counts its tiles.
+// dispatch counts its tiles; a level tile none of whose pixels is nearly sharp (its own smallest
+// |CoC| radius at least small_radius_px, so every pixel's `blurred` in dof_composite.comp is 1,
+// with half a pixel to spare) to its level's blurred list instead, which the composite takes
+// without the exact gather.
 #include "common.glsl"
 #include "dof_tiles.glsl"
 
 layout(local_size_x = 64) in;
 layout(binding = 0, std430) readonly buffer TileCoc { vec2 tile_coc[]; };
 layout(binding = 1, std430) buffer Args { uint args[]; };
-layout(binding = 2, std430) writeonly buffer TileLists { uint tile_list[]; }; // CLASS_COUNT lists of tile_count
+layout(binding = 2, std430) writeonly buffer TileLists { uint tile_list[]; }; // LIST_COUNT lists of tile_count
 // [0, n): the gather radius (px); [n, 2n): the largest radius of a foreground sample (in front
 // of the focus plane) that reaches the tile; [2n, 3n): the class, as a float.
 layout(binding = 3, std430) writeonly buffer TileRadius { float tile_radius_px[]; };
@@ -32,6 +35,8 @@ void main() {
         for (int level = 1; level <= LEVELS; ++level) {
             args[ARGS_LEVEL_GATHER(level) + 1] = 1u;
             args[ARGS_LEVEL_GATHER(level) + 2] = 1u;
+            args[ARGS_BLURRED_TILES(level) + 1] = 1u;
+            args[ARGS_BLURRED_TILES(level) + 2] = 1u;
         }
         args[ARGS_BIN_DISPATCH + 1] = 1u;
         args[ARGS_BIN_DISPATCH + 2] = 1u;
@@ -64,6 +69,11 @@ void main() {
     tile_radius_px[t] = radius;
     tile_radius_px[tile_count + t] = fg_radius;
     tile_radius_px[2 * tile_count + t] = float(cls);
-    uint slot = atomicAdd(args[ARGS_TILES(cls)], 1u);
-    tile_list[cls * tile_count + int(slot)] = uint(t);
+    // The tile's own pixels: the smallest |CoC| of its signed range (0 if the range holds 0).
+    vec2 own = tile_coc[t];
+    float own_min_radius = 0.5 * (own.x > 0.0 ? own.x : (own.y < 0.0 ? -own.y : 0.0));
+    bool blurred = cls >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px;
+    int list = blurred ? LIST_BLURRED_LEVEL1 + cls - CLASS_LEVEL1 : cls;
+    uint slot = atomicAdd(args[blurred ? ARGS_BLURRED_TILES(cls - CLASS_LEVEL1 + 1) : ARGS_TILES(cls)], 1u);
+    tile_list[list * tile_count + int(slot)] = uint(t);
 }

@@ -4,12 +4,20 @@
 // sharp subject stays sharp at full resolution), the level's foreground composited over, then
 // the highlight sprites binned to the tile (dof_bin.comp), each with the exact aperture shape,
 // under the gather's occlusion rule: a sprite behind a pixel spreads no farther than the
-// pixel's own CoC. One workgroup per tile, dispatched over the lists of the four levels.
+// pixel's own CoC. One workgroup per tile, dispatched over the lists of the four levels: each
+// level's class list with the exact gather, its blurred list (tiles with no nearly sharp pixel,
+// dof_classify.comp) with a pipeline that has no exact gather in its code at all.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
 #define APERTURE_SHAPE_BINDING 13
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
+
+// Constants 0 and 1 are the aperture's (aperture.glsl). Off for the blurred lists: every pixel's
+// `blurred` is 1 there, so the exact gather's loop would take no trip; but on lavapipe a loop
+// that no lane enters still costs (its skeleton, ~6-9 ms of 34 at 1 thread in scene A's
+// dof_composite_3), and an `if` on a constant removes it from the code.
+layout(constant_id = 2) const bool EXACT_GATHER = true;
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;   // less the sprites' energy
@@ -35,6 +43,7 @@ layout(push_constant) uniform Push {
     Aperture ap;
     float layer_transition_px;
     int sprite_capacity;
+    int list;   // the tile list this dispatch takes (the level's class list, or its blurred list)
 } pc;
 
 #include "gather.glsl"
@@ -62,9 +71,8 @@ vec3 sprite_light(Sprite s, ivec2 p, float coc_p, Aperture ap) {
 }
 
 void main() {
-    int cls = CLASS_LEVEL1 + pc.level - 1;
     int tile_count = pc.tiles.x * pc.tiles.y;
-    uint t = tile_list[cls * tile_count + int(gl_WorkGroupID.x)];
+    uint t = tile_list[pc.list * tile_count + int(gl_WorkGroupID.x)];
     ivec2 p = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * TILE_SIZE + ivec2(gl_LocalInvocationID.xy);
     if (outside(p, pc.size)) return;
     float scale = float(1 << pc.level);
@@ -98,19 +106,21 @@ void main() {
     float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
     vec4 base = bg;
     Aperture ap = pc.ap;
-    // A loop of one trip or none rather than an `if`: lavapipe runs an `if`'s body whatever the
-    // condition (here the large-CoC foreground's four reads and the gather's set-up), but it
-    // leaves a loop that no lane of the SIMD group is in, so fully blurred pixels skip it.
-    int exact_trips = blurred < 1.0 ? 1 : 0;
-    for (int once = 0; once < exact_trips; ++once) {
-        // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
-        float fg_radius = tile_radius_px[tile_count + int(t)];
-        int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;
-        vec4 exact = gather_exact(p, pc.size, r, ap, pc.layer_transition_px);
-        vec4 fg_big = bilinear_level(2, h0, f);
-        exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);
-        base = mix(exact, bg, blurred);
-        fg = vec4(fg.rgb, fg.a * blurred);
+    if (EXACT_GATHER) {
+        // A loop of one trip or none rather than an `if`: lavapipe runs an `if`'s body whatever
+        // the condition (here the large-CoC foreground's four reads and the gather's set-up), but
+        // it leaves a loop that no lane of the SIMD group is in, so fully blurred pixels skip it.
+        int exact_trips = blurred < 1.0 ? 1 : 0;
+        for (int once = 0; once < exact_trips; ++once) {
+            // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
+            float fg_radius = tile_radius_px[tile_count + int(t)];
+            int r = int(ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)))) + 1;
+            vec4 exact = gather_exact(p, pc.size, r, ap, pc.layer_transition_px);
+            vec4 fg_big = bilinear_level(2, h0, f);
+            exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);
+            base = mix(exact, bg, blurred);
+            fg = vec4(fg.rgb, fg.a * blurred);
+        }
     }
     vec3 color = mix(base.rgb, fg.rgb, fg.a);
     // The sprites of the tile's bin; all of them if the bin overflowed.

@@ -235,6 +235,9 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     // order that no case runs, or a compiled shader that no dispatch checked, fails the test.
     let gpu = gpu();
     let (mut ran, mut checked, mut failures) = (BTreeSet::new(), BTreeSet::new(), Vec::new());
+    // The composite's two pipelines (with the exact gather over a level's class list, without
+    // it over the level's blurred list) each checked on tiles.
+    let mut composite_lists = BTreeSet::new();
     // The bare pass of the benchmark is no pass of a render: check it on its own.
     let copy = realcam::gpu::Kernel::new(&gpu).expect("copy pipeline");
     let (_, checks) = realcam::tools::bench::run_bare_pass(&gpu, &copy, &busy_frame(20, 12), true).expect("bare pass");
@@ -264,6 +267,9 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
         assert_validation_clean(&gpu);
         for c in checks {
             checked.insert(c.shader);
+            if c.shader == "dof_composite" && c.groups[0] > 0 {
+                composite_lists.insert(c.pass.ends_with("_blurred"));
+            }
             if let Err(e) = c.result {
                 failures.push(format!("{name}: pass {}: {e}", c.pass));
             }
@@ -277,6 +283,7 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     for (shader, _) in realcam::gpu::shaders::ALL {
         assert!(checked.contains(shader), "shader {shader} was never checked against a twin");
     }
+    assert_eq!(composite_lists.len(), 2, "the composite ran on tiles of only one kind of list: {composite_lists:?}");
 }
 
 #[test]

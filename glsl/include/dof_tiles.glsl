@@ -12,11 +12,16 @@
 #define LEVELS 4
 #define CLASS_COUNT 6
 #define LEVEL_RADIUS 2
+// The tile lists: one per class, then per level the level's tiles with no nearly sharp pixel
+// (every pixel's CoC radius at least the small-CoC radius), which the composite takes without
+// its exact gather; the level classes' own lists keep the others.
+#define LIST_BLURRED_LEVEL1 6  // CLASS_COUNT
+#define LIST_COUNT 10
 
 // The args buffer of indirect dispatches (x, y, z): per class one workgroup per tile (its x is
 // the class's tile count), per level the level gather's workgroups, the sprite binning's (one
 // invocation per sprite); the sprite counters; the level gathers' tile counts; the highlight
-// test's workgroups and candidates.
+// test's workgroups and candidates; the composite's dispatches over the blurred lists.
 #define ARGS_DISPATCH_WORDS 3
 #define ARGS_TILES(c) ((c) * ARGS_DISPATCH_WORDS)
 #define ARGS_LEVEL_GATHER_BASE 18
@@ -32,7 +37,10 @@
 // candidate half-resolution texels (dof_downsample.comp lists them, dof_highlights.comp tests).
 #define ARGS_HIGHLIGHT_DISPATCH 40
 #define ARGS_HIGHLIGHT_COUNT 43
-#define ARGS_WORDS 44
+// The composite's dispatches over the blurred lists, one workgroup per tile (x, y, z per level).
+#define ARGS_BLURRED_TILES_BASE 44
+#define ARGS_BLURRED_TILES(level) (ARGS_BLURRED_TILES_BASE + ((level) - 1) * ARGS_DISPATCH_WORDS)
+#define ARGS_WORDS 56
 
 // Invocations per workgroup of the level gathers and of the sprite binning.
 #define GROUP_SIZE 64

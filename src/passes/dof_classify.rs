@@ -1,12 +1,14 @@
 //! Tiled depth of field, step 2: dilate each tile's CoC to the neighbours it can reach, classify
-//! tiles (copy / exact small gather / a pyramid level), build the tile lists and the indirect
-//! dispatch counts. Shader: glsl/dof_classify.comp.
+//! tiles (copy / exact small gather / a pyramid level), build the tile lists (a level's tiles with
+//! no nearly sharp pixel in a list of their own, for the composite without its exact gather) and
+//! the indirect dispatch counts. Shader: glsl/dof_classify.comp.
 
 use super::barriers::{buffer_after_compute_write, buffer_after_fill};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{
-    ARGS_BIN_DISPATCH, ARGS_DISPATCH_WORDS, ARGS_HIGHLIGHT_DISPATCH, ARGS_LEVEL_GATHER_BASE, CLASS_COPY, CLASS_COUNT,
-    CLASS_LEVEL1, CLASS_SMALL, GROUP_SIZE, LEVELS, LEVEL_RADIUS,
+    ARGS_BIN_DISPATCH, ARGS_BLURRED_TILES_BASE, ARGS_DISPATCH_WORDS, ARGS_HIGHLIGHT_DISPATCH, ARGS_LEVEL_GATHER_BASE,
+    CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL, GROUP_SIZE, LEVELS, LEVEL_RADIUS, LIST_BLURRED_LEVEL1,
+    LIST_COUNT,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
@@ -45,7 +47,7 @@ impl Twin for ClassifyShader {
     fn cpu(pc: &ClassifyPush, _groups: [u32; 3], b: &mut [HostData]) {
         let tile_coc = super::twin::floats(b[0].words());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
-        let (mut radii, mut lists) = (vec![0.0f32; 3 * tile_count], vec![Vec::new(); CLASS_COUNT as usize]);
+        let (mut radii, mut lists) = (vec![0.0f32; 3 * tile_count], vec![Vec::new(); LIST_COUNT as usize]);
         for t in 0..tile_count {
             let (tx, ty) = ((t as i32) % pc.tiles[0], (t as i32) / pc.tiles[0]);
             let (mut radius, mut fg_radius) = (0.0f32, 0.0f32);
@@ -83,12 +85,19 @@ impl Twin for ClassifyShader {
             radii[t] = radius;
             radii[tile_count + t] = fg_radius;
             radii[2 * tile_count + t] = class as f32;
-            lists[class as usize].push(t as u32);
+            let own = [tile_coc[2 * t], tile_coc[2 * t + 1]];
+            let own_min_radius = 0.5 * if own[0] > 0.0 { own[0] } else { (-own[1]).max(0.0) };
+            let list = if class >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px {
+                LIST_BLURRED_LEVEL1 + class - CLASS_LEVEL1
+            } else {
+                class
+            };
+            lists[list as usize].push(t as u32);
         }
         let args = b[1].words_mut();
-        for (class, list) in lists.iter().enumerate() {
-            let at = class * ARGS_DISPATCH_WORDS as usize;
-            args[at] += list.len() as u32;
+        for (list, tiles) in lists.iter().enumerate() {
+            let at = list_tiles_args_word(list as u32);
+            args[at] += tiles.len() as u32;
             args[at + 1] = 1;
             args[at + 2] = 1;
         }
@@ -102,20 +111,19 @@ impl Twin for ClassifyShader {
             args[at + 2] = 1;
         }
         let tile_lists = b[2].words_mut();
-        for (class, list) in lists.iter().enumerate() {
-            tile_lists[class * tile_count..class * tile_count + list.len()].copy_from_slice(list);
+        for (list, tiles) in lists.iter().enumerate() {
+            tile_lists[list * tile_count..list * tile_count + tiles.len()].copy_from_slice(tiles);
         }
         b[3].words_mut().copy_from_slice(&radii.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
     }
 
-    /// Tiles are appended to their class's list with atomics, in any order: sort each list.
+    /// Tiles are appended to their list with atomics, in any order: sort each list.
     fn canonical(pc: &ClassifyPush, b: &mut [HostData]) {
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
-        let counts: Vec<usize> =
-            (0..CLASS_COUNT as usize).map(|c| b[1].words()[c * ARGS_DISPATCH_WORDS as usize] as usize).collect();
+        let counts: Vec<usize> = (0..LIST_COUNT).map(|l| b[1].words()[list_tiles_args_word(l)] as usize).collect();
         let lists = b[2].words_mut();
-        for (class, &count) in counts.iter().enumerate() {
-            let start = class * tile_count;
+        for (list, &count) in counts.iter().enumerate() {
+            let start = list * tile_count;
             let end = (start + count).min(lists.len());
             lists[start..end].sort_unstable();
         }
@@ -128,10 +136,15 @@ pub fn tiles_per_group(level: u32) -> u32 {
     GROUP_SIZE / (side * side)
 }
 
-/// The word of the args buffer holding the number of tiles of class `class` (the x of its
-/// one-workgroup-per-tile dispatch).
-pub fn class_tiles_args_word(class: u32) -> usize {
-    (class * ARGS_DISPATCH_WORDS) as usize
+/// The word of the args buffer holding the number of tiles in tile list `list` (a class's, or
+/// from `LIST_BLURRED_LEVEL1` a level's blurred tiles): the x of its one-workgroup-per-tile
+/// dispatch.
+pub fn list_tiles_args_word(list: u32) -> usize {
+    if list < CLASS_COUNT {
+        (list * ARGS_DISPATCH_WORDS) as usize
+    } else {
+        (ARGS_BLURRED_TILES_BASE + (list - LIST_BLURRED_LEVEL1) * ARGS_DISPATCH_WORDS) as usize
+    }
 }
 
 /// The first word of the level gather's indirect dispatch in the args buffer.

@@ -7,7 +7,7 @@ use super::barriers::{after_compute_write, buffer_after_compute_write, write_aft
 use super::bokeh_gather::gather_exact;
 use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
-use crate::gpu::shaders::dof_tiles::{ARGS_SPRITE_COUNT, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
+use crate::gpu::shaders::dof_tiles::{ARGS_SPRITE_COUNT, BIN_CAPACITY, LIST_BLURRED_LEVEL1, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_composite";
@@ -23,6 +23,10 @@ pub struct CompositePush {
     pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
     pub sprite_capacity: i32,
+    /// The tile list the dispatch takes: the level's class list (`CLASS_LEVEL1 + level - 1`),
+    /// or its blurred list (`LIST_BLURRED_LEVEL1 + level - 1`, the pipeline without the exact
+    /// gather).
+    pub list: i32,
 }
 
 crate::shader_bindings! {
@@ -97,9 +101,10 @@ impl Twin for CompositeShader {
         let (counts, bins) = (b[11].words().to_vec(), b[12].words().to_vec());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let scale = (1 << pc.level) as f32;
-        let class = CLASS_LEVEL1 + pc.level as u32 - 1;
         let out = b[4].image_mut();
-        for tile in listed_tiles(&lists, class, pc.tiles, groups[0], TILE_SIZE, pc.size) {
+        // The pipeline of the blurred lists has no exact gather; their tiles' pixels all have
+        // `blurred` 1, so the rule below is both pipelines'.
+        for tile in listed_tiles(&lists, pc.list as u32, pc.tiles, groups[0], TILE_SIZE, pc.size) {
             let t = tile.index;
             for (x, y) in tile.pixels() {
                 let p = [x as i32, y as i32];
@@ -167,6 +172,13 @@ impl Twin for CompositeShader {
     const TOLERANCE: f32 = 2e-4;
 }
 
+/// The composite's specialisation: the aperture's two constants, then whether the exact gather is
+/// in the code (off for the blurred lists).
+pub fn specialization(aperture: [u32; 2], exact_gather: bool) -> [u32; 3] {
+    [aperture[0], aperture[1], exact_gather as u32]
+}
+
+/// Record the composite over the tile list `push.list`, with the pipeline of `specialization`.
 pub fn record(
     kernel: &SpecializedKernel<CompositeShader>,
     specialization: &[u32],
@@ -174,13 +186,14 @@ pub fn record(
     b: &CompositeBindings<'_>,
     push: &CompositePush,
 ) -> GpuResult<()> {
-    rec.begin_pass(&format!("{NAME}_{}", push.level));
+    let blurred = push.list as u32 >= LIST_BLURRED_LEVEL1;
+    rec.begin_pass(&format!("{NAME}_{}{}", push.level, if blurred { "_blurred" } else { "" }));
     // bg/fg/fg_big_level: written by the level gather (read-after-write).
     // color (the input colour less the sprites' energy): written in place by dof_sprite_excess.
     // coc_level: written by the pyramid passes.
-    // output: the full-resolution tile passes (and the other levels' composites) wrote other
-    //   tiles of it; the write-after-write dependency keeps sync validation (which tracks whole
-    //   images) and any driver honest.
+    // output: the full-resolution tile passes and the other composites (the other levels', and
+    //   the level's other list) wrote other tiles of it; the write-after-write dependency keeps
+    //   sync validation (which tracks whole images) and any driver honest.
     // bins, bin counts: written by dof_bin and put in order by dof_bin_order (read-after-write).
     rec.image_barriers(&[
         after_compute_write(b.color),
@@ -191,8 +204,7 @@ pub fn record(
         write_after_write(b.output),
     ]);
     rec.buffer_barriers(&[buffer_after_compute_write(b.bins), buffer_after_compute_write(b.bin_counts)]);
-    let class = CLASS_LEVEL1 + push.level as u32 - 1;
-    let offset = super::dof_classify::class_tiles_args_word(class) as u64 * 4;
+    let offset = super::dof_classify::list_tiles_args_word(push.list as u32) as u64 * 4;
     kernel.dispatch_indirect(rec, specialization, b, push, b.args, offset)?;
     rec.end_pass();
     Ok(())

@@ -85,7 +85,7 @@ pub fn record(
     for (class, label) in [(CLASS_COPY, "dof_copy_tiles"), (CLASS_SMALL, "dof_small_tiles")] {
         rec.begin_pass(label);
         let p = TileGatherPush { tile_class: class as i32, ..*push };
-        let offset = super::dof_classify::class_tiles_args_word(class) as u64 * 4;
+        let offset = super::dof_classify::list_tiles_args_word(class) as u64 * 4;
         kernel.dispatch_indirect(rec, specialization, b, &p, args, offset)?;
         rec.end_pass();
     }

@@ -30,7 +30,9 @@ use super::{
 };
 use super::{dof_highlights, dof_sprite_excess, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
-use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_COUNT, LEVELS};
+use crate::gpu::shaders::dof_tiles::{
+    ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_LEVEL1, LEVELS, LIST_BLURRED_LEVEL1, LIST_COUNT,
+};
 use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::{BokehMode, Camera};
@@ -206,15 +208,17 @@ impl Pass for TiledDof {
         })
     }
 
-    /// The gathers' and the composite's pipelines for this lens, compiled side by side.
+    /// The gathers' and the composite's pipelines for this lens (the composite with and without
+    /// its exact gather), compiled side by side.
     fn prepare(&self, p: &TiledDofParams) -> GpuResult<()> {
         let specialization = p.aperture_data.specialization(&p.aperture);
         let constants = &specialization[..];
+        let [exact, blurred] = [true, false].map(|on| dof_composite::specialization(specialization, on));
         std::thread::scope(|scope| {
             let gathers = scope.spawn(|| self.tile_gather.prepare(constants).and(self.level_gather.prepare(constants)));
-            let composite = self.composite.prepare(constants);
+            let composites = self.composite.prepare(&exact).and(self.composite.prepare(&blurred));
             gathers.join().unwrap_or_else(|_| Err(GpuError::Internal("creating a pipeline panicked".into())))?;
-            composite
+            composites
         })
     }
 
@@ -233,7 +237,7 @@ impl Pass for TiledDof {
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
         let tile_coc = rec.create_buffer("dof tile CoC range", tile_count * 8, storage)?;
-        let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * CLASS_COUNT as u64, storage)?;
+        let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * LIST_COUNT as u64, storage)?;
         let level_lists = rec.create_buffer("dof level gather lists", tile_count * 4 * LEVELS as u64, storage)?;
         // Per tile: the gather radius, the largest foreground radius reaching it, the class.
         let tile_radius = rec.create_buffer("dof tile radius and class", tile_count * 4 * 3, storage)?;
@@ -389,36 +393,45 @@ impl Pass for TiledDof {
             };
             dof_level_gather::record(&self.level_gather, &specialization, rec, &b, &push)?;
         }
+        // Per level two composites: the class list with the exact gather for nearly sharp pixels,
+        // the blurred list (no such pixel) with a pipeline that has no exact gather in its code.
+        let composite_exact = dof_composite::specialization(specialization, true);
+        let composite_blurred = dof_composite::specialization(specialization, false);
         for (level, l) in (1..).zip(&levels) {
-            let push = CompositePush {
-                size,
-                level_size: [l.color.width as i32, l.color.height as i32],
-                tiles,
-                level,
-                small_radius_px: p.small_radius_px,
-                aperture,
-                layer_transition_px,
-                sprite_capacity: p.sprite_capacity as i32,
-            };
-            let b = CompositeBindings {
-                // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
-                color: &color,
-                coc: &coc,
-                bg_level: &l.bg,
-                fg_level: &l.fg,
-                output: &output,
-                tile_lists: &tile_lists,
-                aperture_mask: &aperture_mask,
-                coc_level: &l.coc,
-                fg_big_level: &l.fg_big,
-                tile_radius: &tile_radius,
-                sprites: &sprites,
-                bin_counts: &bin_counts,
-                bins: &bins,
-                aperture_shape: &aperture_shape,
-                args: &args,
-            };
-            dof_composite::record(&self.composite, &specialization, rec, &b, &push)?;
+            let lists = [(CLASS_LEVEL1, &composite_exact), (LIST_BLURRED_LEVEL1, &composite_blurred)];
+            for (first, constants) in lists {
+                let list = first + level as u32 - 1;
+                let push = CompositePush {
+                    size,
+                    level_size: [l.color.width as i32, l.color.height as i32],
+                    tiles,
+                    level,
+                    small_radius_px: p.small_radius_px,
+                    aperture,
+                    layer_transition_px,
+                    sprite_capacity: p.sprite_capacity as i32,
+                    list: list as i32,
+                };
+                let b = CompositeBindings {
+                    // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
+                    color: &color,
+                    coc: &coc,
+                    bg_level: &l.bg,
+                    fg_level: &l.fg,
+                    output: &output,
+                    tile_lists: &tile_lists,
+                    aperture_mask: &aperture_mask,
+                    coc_level: &l.coc,
+                    fg_big_level: &l.fg_big,
+                    tile_radius: &tile_radius,
+                    sprites: &sprites,
+                    bin_counts: &bin_counts,
+                    bins: &bins,
+                    aperture_shape: &aperture_shape,
+                    args: &args,
+                };
+                dof_composite::record(&self.composite, &constants[..], rec, &b, &push)?;
+            }
         }
         if p.channel.is_some() {
             // Longitudinal colour: each channel's run reads the input colour, which stays the
