@@ -219,6 +219,15 @@ impl Recorder {
         Ok(image)
     }
 
+    /// A buffer of `words` u32 counters and indirect dispatch arguments: read by indirect
+    /// dispatches, cleared by fills, written by shaders (atomics).
+    pub fn create_args_buffer(&mut self, name: &str, words: u32) -> GpuResult<Arc<GpuBuffer>> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        self.create_buffer(name, words as u64 * 4, usage)
+    }
+
     /// A device-local buffer that lives until the recording is dropped.
     pub fn create_buffer(
         &mut self,

@@ -502,11 +502,7 @@ impl Pass for Coc {
         let table = rec.upload_buffer("field curvature", &p.table)?;
         let resolve = p.push.resolve_edges != 0;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let args = rec.create_buffer(
-            "coc edge resolve args (indirect dispatch, count)",
-            COC_ARGS_WORDS as u64 * 4,
-            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-        )?;
+        let args = rec.create_args_buffer("coc edge resolve args (indirect dispatch, count)", COC_ARGS_WORDS)?;
         // Without the resolve the shader's list is specialised out: a word to bind.
         let capacity = if resolve { images.width as u64 * images.height as u64 } else { 1 };
         let edge_pixels = rec.create_buffer("coc edge pixels", capacity.max(1) * 4, storage)?;

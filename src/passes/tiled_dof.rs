@@ -241,11 +241,7 @@ impl Pass for TiledDof {
         let tiles = p.tiles();
         let tile_count = (tiles[0] * tiles[1]) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let args = rec.create_buffer(
-            "dof args (indirect dispatches, counters)",
-            ARGS_WORDS as u64 * 4,
-            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-        )?;
+        let args = rec.create_args_buffer("dof args (indirect dispatches, counters)", ARGS_WORDS)?;
         let tile_coc = rec.create_buffer("dof tile CoC range", tile_count * 8, storage)?;
         let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * LIST_COUNT as u64, storage)?;
         let level_lists = rec.create_buffer("dof level gather lists", tile_count * 4 * LEVELS as u64, storage)?;
