@@ -117,6 +117,24 @@ fn main() {
 
 pub(crate) use flags::error_text;
 
+/// Ends a successful run at once: no destructor or exit handler runs after this. A render's
+/// last step would otherwise be to close its GPU (on lavapipe: the device, its memory block by
+/// block, then LLVM's and Mesa's exit handlers), which the OS does faster when the process
+/// ends: scene A's whole render, 11 interleaved runs on lavapipe, 202 -> 190 ms median. Only
+/// for work whose every output is already written and renamed.
+pub(crate) fn exit_now() -> ! {
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+    let _ = std::io::stderr().flush();
+    #[cfg(unix)]
+    // SAFETY: _exit ends the process; nothing after it runs, so nothing it skips is used.
+    unsafe {
+        libc::_exit(0)
+    }
+    #[cfg(not(unix))]
+    std::process::exit(0)
+}
+
 /// Frames are large (a 1280x720 RGBA float image is 15 MB) and a run allocates and frees many of
 /// them: the passes' bytes, the GPU's images and staging buffers (lavapipe keeps them in host
 /// memory), the EXR encoder's. By default glibc maps each such block afresh and unmaps it when

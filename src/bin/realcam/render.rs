@@ -396,10 +396,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let outputs = args.outputs()?;
     let camera = args.camera()?;
-    for path in render_frame(args, &camera, outputs, &mut Session::opening(args, &camera))? {
+    let mut session = Session::opening(args, &camera);
+    for path in render_frame(args, &camera, outputs, &mut session)? {
         eprintln!("wrote {}", path.display());
     }
-    Ok(())
+    // Every output is written and renamed: the session's GPU is not closed, the OS takes it.
+    crate::exit_now()
 }
 
 /// The GPU and the pipelines of a run, opened at the first frame that reaches the GPU and kept
