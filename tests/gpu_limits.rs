@@ -105,3 +105,33 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         assert_eq!(cold.pipelines_created(), coc_pipelines + 13);
     }
 }
+
+#[test]
+fn on_a_device_that_runs_on_the_cpu_images_are_written_and_read_in_host_memory_frame_after_frame() {
+    // The bare pass (upload, copy shader, read-back) on an odd-sized frame, three frames of
+    // different values through one device: on lavapipe the upload is the host's write into
+    // the image and the read-back the host's read out of the copy's image. The later frames
+    // take images from the pool in whatever layout the last frame left them (GENERAL, not
+    // PREINITIALIZED as new ones), so a wrong layout is a validation error, a wrong row pitch
+    // or stale texels a changed value.
+    use realcam::gpu::{Kernel, Recorder};
+    use realcam::passes::copy::{self, CopyShader};
+    use realcam::passes::FrameImages;
+    let gpu = gpu();
+    let kernel = Kernel::<CopyShader>::new(&gpu).unwrap();
+    let (w, h) = (37u32, 5u32);
+    for frame in 0..3 {
+        let texels: Vec<f32> = (0..w * h * 4).map(|i| (i as f32) * 0.25 + frame as f32 * 1000.0).collect();
+        let mut rec = Recorder::new(&gpu, "host memory test").unwrap();
+        let color = rec.create_image("color (input)", w, h, vk::Format::R32G32B32A32_SFLOAT).unwrap();
+        assert_eq!(color.in_host_memory(), gpu.info().on_cpu(), "frame {frame}");
+        rec.upload_images(&[(&color, &texels)]).unwrap();
+        let mut images = FrameImages::new(color, None);
+        copy::record(&kernel, &mut rec, &mut images).unwrap();
+        assert_eq!(images.color().in_host_memory(), gpu.info().on_cpu());
+        let out = rec.download_image(images.color(), 4).unwrap();
+        let (_, mut data) = rec.submit().unwrap();
+        assert_eq!(std::mem::take(&mut data[out.index()]), texels, "frame {frame}");
+    }
+    assert_validation_clean(&gpu);
+}

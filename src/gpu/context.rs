@@ -91,7 +91,14 @@ pub(crate) struct Shared {
     pub device_local_bytes: u64,
     /// Compute pipelines created so far (see [`Gpu::pipelines_created`]).
     pub pipelines_created: AtomicU64,
+    /// The formats whose images live in mapped host memory, linear (see [`Gpu::create_image`]):
+    /// on a device that runs on the CPU, those it can store to and copy with linear tiling.
+    pub host_image_formats: Vec<vk::Format>,
 }
+
+/// The formats realcam's images use.
+const HOST_IMAGE_FORMATS: [vk::Format; 3] =
+    [vk::Format::R32_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
 
 /// The opened GPU. Cheap to clone.
 #[derive(Clone)]
@@ -290,6 +297,21 @@ impl Gpu {
             .map(|h| h.size)
             .max()
             .unwrap_or(0);
+        let host_image_formats = match info.on_cpu() {
+            true => HOST_IMAGE_FORMATS
+                .into_iter()
+                .filter(|&f| {
+                    let linear =
+                        instance.get_physical_device_format_properties(physical_device, f).linear_tiling_features;
+                    linear.contains(
+                        vk::FormatFeatureFlags::STORAGE_IMAGE
+                            | vk::FormatFeatureFlags::TRANSFER_SRC
+                            | vk::FormatFeatureFlags::TRANSFER_DST,
+                    )
+                })
+                .collect(),
+            false => Vec::new(),
+        };
         log::info!("GPU: {info}");
         let shared = Shared {
             _entry: entry,
@@ -313,6 +335,7 @@ impl Gpu {
             max_image_dimension_px: props.limits.max_image_dimension2_d,
             device_local_bytes,
             pipelines_created: AtomicU64::new(0),
+            host_image_formats,
         };
         let gpu = Gpu { shared: Arc::new(shared) };
         gpu.set_name(gpu.shared.queue, "realcam compute queue");

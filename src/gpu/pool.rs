@@ -27,6 +27,10 @@ pub(crate) struct PooledImage {
     pub format: vk::Format,
     pub width: u32,
     pub height: u32,
+    /// Its rows in mapped host memory, for an image there.
+    pub host_rows: Option<super::resources::HostRows>,
+    /// The layout its last recording left it in.
+    pub layout: vk::ImageLayout,
 }
 
 /// An idle buffer's parts.

@@ -50,7 +50,10 @@ pub struct Recorder {
     spans: Vec<String>,
     open_span: Option<usize>,
     staging: Vec<GpuBuffer>,
-    downloads: Vec<(GpuBuffer, usize)>,
+    downloads: Vec<Readback>,
+    /// The layouts this recording's barriers move images to, in order: given to the images
+    /// once the submission completed (an upload into an image in host memory needs its layout).
+    layouts: Vec<(vk::Image, vk::ImageLayout)>,
     /// Images and buffers the passes created: alive until the recording is dropped, after the
     /// submission completed.
     images: Vec<Arc<GpuImage>>,
@@ -62,6 +65,14 @@ pub struct Recorder {
 /// Handle to an image read back by [`Recorder::download_image`].
 #[derive(Clone, Copy, Debug)]
 pub struct Download(usize);
+
+/// Where a read-back's texels are after the submission.
+enum Readback {
+    /// Copied into a host-visible buffer.
+    Buffer(GpuBuffer),
+    /// In the image's own mapped memory (an image in host memory), `channels` f32 per texel.
+    Image(Arc<GpuImage>, u32),
+}
 
 impl Recorder {
     pub fn new(gpu: &Gpu, label: &str) -> GpuResult<Recorder> {
@@ -137,6 +148,7 @@ impl Recorder {
                 open_span: None,
                 staging: Vec::new(),
                 downloads: Vec::new(),
+                layouts: Vec::new(),
                 images: Vec::new(),
                 buffers: Vec::new(),
                 twin_checks: twin_checks.then(Vec::new),
@@ -182,6 +194,7 @@ impl Recorder {
 
     /// Record a pipeline barrier made of image barriers (each pass writes its own).
     pub fn image_barriers(&mut self, barriers: &[vk::ImageMemoryBarrier2<'_>]) {
+        self.layouts.extend(barriers.iter().map(|b| (b.image, b.new_layout)));
         let info = vk::DependencyInfo::default().image_memory_barriers(barriers);
         unsafe { self.gpu.cmd_barrier(self.cb, &info) };
     }
@@ -465,18 +478,56 @@ impl Recorder {
     }
 
     /// Upload f32 pixels into images. Afterwards each image is in layout GENERAL and its
-    /// contents are visible to compute-shader reads: the barrier below is the hand-off from the
-    /// copy to whichever pass reads the image first.
+    /// contents are visible to compute-shader reads: the barriers below are the hand-off from
+    /// the host's writes or the copy to whichever pass reads the image first.
     pub fn upload_images(&mut self, uploads: &[(&GpuImage, &[f32])]) -> GpuResult<()> {
+        // An image in host memory that this recording has not used yet (so no work before the
+        // upload touches it) is written by the host now; the others go through a staging
+        // buffer and a copy.
+        let mut direct = Vec::new();
+        let mut staged_uploads = Vec::new();
+        for &(image, data) in uploads {
+            let unused = !self.layouts.iter().any(|(i, _)| *i == image.image);
+            // SAFETY: an image this recording has not used is new or from the idle pool (the
+            // rule of src/gpu/pool.rs): no work that uses it is pending.
+            match unused && image.host_writable() && unsafe { image.write_host(data) } {
+                true => direct.push(image),
+                false => staged_uploads.push((image, data)),
+            }
+        }
+        let uploads = staged_uploads;
+        // Host writes -> compute reads (and writes), with the move to GENERAL: the submission
+        // makes the host's writes before it visible to the device; this orders the layout move
+        // after them and the passes after the move. PREINITIALIZED and GENERAL keep the texels.
+        let host_written: Vec<_> = direct
+            .iter()
+            .map(|image| {
+                vk::ImageMemoryBarrier2::default()
+                    .src_stage_mask(vk::PipelineStageFlags2::HOST)
+                    .src_access_mask(vk::AccessFlags2::HOST_WRITE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                    .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                    .old_layout(image.layout())
+                    .new_layout(vk::ImageLayout::GENERAL)
+                    .image(image.image)
+                    .subresource_range(color_range())
+            })
+            .collect();
+        if !host_written.is_empty() {
+            self.image_barriers(&host_written);
+        }
+        if uploads.is_empty() {
+            return Ok(());
+        }
         let mut staged = Vec::new();
-        for (image, data) in uploads {
+        for (image, data) in &uploads {
             // Straight from the frame's floats into the mapped staging memory: no copy of a
             // whole frame on the way (a 1280x720 colour is 15 MB, each fresh page a fault).
             let bytes: &[u8] = bytemuck::cast_slice(data);
             let mut buffer = self.gpu.create_buffer(
                 &format!("{} upload", image.name),
                 bytes.len() as u64,
-                self.upload_staging_usage(),
+                vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
             buffer.write_bytes(bytes);
@@ -576,48 +627,33 @@ impl Recorder {
         Ok(buffer)
     }
 
-    /// The usage of an image's upload staging buffer. On a device that runs on the CPU, whose
-    /// memory is all the host's, it can also take a read-back (see [`Recorder::download_image`]).
-    fn upload_staging_usage(&self) -> vk::BufferUsageFlags {
-        match self.gpu.info().on_cpu() {
-            true => vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
-            false => vk::BufferUsageFlags::TRANSFER_SRC,
-        }
-    }
-
     /// Read an image back after the submission. The image must have been last written by a
     /// compute shader (every pass's output is).
     pub fn download_image(&mut self, image: &GpuImage, channels: u32) -> GpuResult<Download> {
+        // An image in host memory is read where it is, after the fence: no copy on the device.
+        let own = self.images.iter().find(|i| i.image == image.image && i.in_host_memory()).cloned();
+        if let Some(own) = own {
+            // Compute writes -> host reads after the fence; it stays in GENERAL, where the host
+            // may read it.
+            self.image_barriers(&[vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)
+                .old_layout(vk::ImageLayout::GENERAL)
+                .new_layout(vk::ImageLayout::GENERAL)
+                .image(image.image)
+                .subresource_range(color_range())]);
+            self.downloads.push(Readback::Image(own, channels));
+            return Ok(Download(self.downloads.len() - 1));
+        }
         let size = image.width as u64 * image.height as u64 * channels as u64 * 4;
-        // On a device that runs on the CPU the read-back goes into an upload's staging buffer
-        // of the same size, read by its copy at the start of the recording: a fresh buffer of
-        // a frame (15 MB at 1280x720) costs its pages' first touch, 5 of the read-back's 6 ms
-        // on lavapipe. A GPU reads back through host-cached memory of its own.
-        let reusable = self.staging.iter().position(|b| {
-            b.size_bytes == size && b.usage().contains(vk::BufferUsageFlags::TRANSFER_DST) && self.gpu.info().on_cpu()
-        });
-        let buffer = match reusable {
-            Some(i) => {
-                let buffer = self.staging.swap_remove(i);
-                // The upload's copy read it -> this copy writes it: a write after a read needs
-                // only the execution dependency (no memory to make available).
-                self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
-                    .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                    .src_access_mask(vk::AccessFlags2::NONE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-                    .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                    .buffer(buffer.buffer)
-                    .offset(0)
-                    .size(vk::WHOLE_SIZE)]);
-                buffer
-            }
-            None => self.gpu.create_buffer(
-                &format!("{} readback", image.name),
-                size,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?,
-        };
+        let buffer = self.gpu.create_buffer(
+            &format!("{} readback", image.name),
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         // Compute writes -> copy reads, moving to the copy's optimal layout. Read-back is the
         // last use of an image in a recording, so nothing moves it back to GENERAL.
         self.image_barriers(&[vk::ImageMemoryBarrier2::default()
@@ -648,9 +684,8 @@ impl Recorder {
             .buffer(buffer.buffer)
             .offset(0)
             .size(vk::WHOLE_SIZE)]);
-        let id = self.downloads.len();
-        self.downloads.push((buffer, id));
-        Ok(Download(id))
+        self.downloads.push(Readback::Buffer(buffer));
+        Ok(Download(self.downloads.len() - 1))
     }
 
     /// Submit, wait, and return the per-pass GPU times and the read-back data (indexed by the
@@ -694,7 +729,20 @@ impl Recorder {
                     });
                 }
             }
-            let data = self.downloads.iter().map(|(buffer, _)| buffer.read_f32()).collect();
+            // The work completed: the images are in the layouts its barriers left them in.
+            for image in &self.images {
+                if let Some(&(_, layout)) = self.layouts.iter().rev().find(|(i, _)| *i == image.image) {
+                    image.set_layout(layout);
+                }
+            }
+            let data = self
+                .downloads
+                .iter()
+                .map(|readback| match readback {
+                    Readback::Buffer(buffer) => buffer.read_f32(),
+                    Readback::Image(image, channels) => image.read_host(*channels),
+                })
+                .collect();
             let checks = self.twin_checks.take().unwrap_or_default();
             let profile = Profile {
                 device: self.gpu.info().to_string(),

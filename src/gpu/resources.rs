@@ -6,6 +6,7 @@ use super::{Gpu, GpuError, GpuResult, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Arc;
 
 /// A 2D image used as a storage image by compute passes (layout GENERAL while in use).
@@ -18,6 +19,20 @@ pub struct GpuImage {
     pub width: u32,
     pub height: u32,
     pub name: String,
+    /// Where its rows lie in its mapped memory, for an image in host memory (see
+    /// [`Gpu::create_image`]); `None` for one the host cannot reach.
+    host_rows: Option<HostRows>,
+    /// The layout the last completed recording that used it left it in (the recorder applies
+    /// its barriers' after the submission): host access needs PREINITIALIZED or GENERAL.
+    layout: AtomicI32,
+}
+
+/// The rows of a linear image in mapped memory: the first row's byte offset from the
+/// allocation's start and the bytes from one row to the next.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HostRows {
+    pub offset_bytes: u64,
+    pub row_pitch_bytes: u64,
 }
 
 /// A buffer: host-visible staging memory or device-local storage.
@@ -54,8 +69,20 @@ impl Gpu {
                 width,
                 height,
                 name: name.to_string(),
+                host_rows: p.host_rows,
+                layout: AtomicI32::new(p.layout.as_raw()),
             });
         }
+        // On a device that runs on the CPU, device memory is the host's: the image is linear in
+        // mapped memory, so that the host writes an upload into it and reads a result out of it
+        // directly (Recorder::upload_images, Recorder::download_image). A staging buffer
+        // between them would cost a copy of the frame and its pages' first touch (scene A's
+        // colour and depth: 18 MB, 4,600 page faults).
+        let in_host_memory = self.shared.host_image_formats.contains(&format);
+        let (tiling, initial_layout, location) = match in_host_memory {
+            true => (vk::ImageTiling::LINEAR, vk::ImageLayout::PREINITIALIZED, MemoryLocation::CpuToGpu),
+            false => (vk::ImageTiling::OPTIMAL, vk::ImageLayout::UNDEFINED, MemoryLocation::GpuOnly),
+        };
         let device = self.device();
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
@@ -64,14 +91,14 @@ impl Gpu {
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
+            .tiling(tiling)
             .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+            .initial_layout(initial_layout);
         unsafe {
             let image = device.create_image(&info, None).vk("vkCreateImage")?;
             let requirements = device.get_image_memory_requirements(image);
-            let allocation = self.allocate(name, requirements, MemoryLocation::GpuOnly, false);
+            let allocation = self.allocate(name, requirements, location, in_host_memory);
             let allocation = match allocation {
                 Ok(a) => a,
                 Err(e) => {
@@ -88,6 +115,13 @@ impl Gpu {
             let view = device.create_image_view(&view_info, None).vk("vkCreateImageView")?;
             self.set_name(image, name);
             self.set_name(view, name);
+            let mapped = allocation.mapped_ptr().is_some();
+            let host_rows = (in_host_memory && mapped).then(|| {
+                let subresource =
+                    vk::ImageSubresource { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, array_layer: 0 };
+                let rows = device.get_image_subresource_layout(image, subresource);
+                HostRows { offset_bytes: rows.offset, row_pitch_bytes: rows.row_pitch }
+            });
             Ok(GpuImage {
                 shared: self.shared.clone(),
                 image,
@@ -97,6 +131,8 @@ impl Gpu {
                 width,
                 height,
                 name: name.to_string(),
+                host_rows,
+                layout: AtomicI32::new(initial_layout.as_raw()),
             })
         }
     }
@@ -181,6 +217,75 @@ impl GpuImage {
             _ => 4,
         }
     }
+
+    /// The layout the last completed recording left it in.
+    pub(crate) fn layout(&self) -> vk::ImageLayout {
+        vk::ImageLayout::from_raw(self.layout.load(Ordering::Relaxed))
+    }
+
+    /// Set by the recorder once the recording that moved it to `layout` completed.
+    pub(crate) fn set_layout(&self, layout: vk::ImageLayout) {
+        self.layout.store(layout.as_raw(), Ordering::Relaxed);
+    }
+
+    /// Whether the host may write it now, as it was left: in mapped host memory and in a
+    /// layout that allows host access (PREINITIALIZED or GENERAL).
+    pub(crate) fn host_writable(&self) -> bool {
+        self.host_rows.is_some() && matches!(self.layout(), vk::ImageLayout::PREINITIALIZED | vk::ImageLayout::GENERAL)
+    }
+
+    /// Whether it lies in mapped host memory (its texels can be read there once the work that
+    /// wrote them completed and was made visible to the host).
+    pub fn in_host_memory(&self) -> bool {
+        self.host_rows.is_some()
+    }
+
+    /// Its mapped memory's start, its rows, and the bytes of a row of `channels` f32 texels;
+    /// `None` for an image the host cannot reach, or whose rows would not fit its allocation.
+    fn host_row_ptrs(&self, channels: u32) -> Option<(*mut u8, HostRows, usize)> {
+        let rows = self.host_rows?;
+        let base = self.allocation.as_ref()?.mapped_ptr()?.as_ptr().cast::<u8>();
+        let row_bytes = self.width as usize * channels as usize * 4;
+        let last =
+            rows.offset_bytes as usize + rows.row_pitch_bytes as usize * (self.height as usize).saturating_sub(1);
+        let size = self.allocation.as_ref()?.size() as usize;
+        (row_bytes <= rows.row_pitch_bytes as usize && last + row_bytes <= size).then_some((base, rows, row_bytes))
+    }
+
+    /// Writes `data` (`width * height * channels` values, row by row) into the image's mapped
+    /// memory; false (nothing written) for an image the host cannot reach or data of another
+    /// size.
+    ///
+    /// # Safety
+    /// No GPU work that uses the image may be pending or running: it is new, or from the idle
+    /// pool, and not yet used by the recording that uploads into it.
+    pub(crate) unsafe fn write_host(&self, data: &[f32]) -> bool {
+        let Some((base, rows, row_bytes)) = self.host_row_ptrs(self.channels()) else { return false };
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() != row_bytes * self.height as usize {
+            return false;
+        }
+        for (y, row) in bytes.chunks_exact(row_bytes.max(1)).enumerate() {
+            let at = rows.offset_bytes as usize + y * rows.row_pitch_bytes as usize;
+            std::ptr::copy_nonoverlapping(row.as_ptr(), base.add(at), row_bytes);
+        }
+        true
+    }
+
+    /// The image's texels from its mapped memory (`channels` f32 per texel, row by row);
+    /// empty for an image the host cannot reach. Call after the work that wrote it completed,
+    /// with its writes made visible to the host.
+    pub(crate) fn read_host(&self, channels: u32) -> Vec<f32> {
+        let Some((base, rows, row_bytes)) = self.host_row_ptrs(channels) else { return Vec::new() };
+        let mut values = vec![0f32; row_bytes / 4 * self.height as usize];
+        let out: &mut [u8] = bytemuck::cast_slice_mut(&mut values);
+        for (y, row) in out.chunks_exact_mut(row_bytes.max(1)).enumerate() {
+            let at = rows.offset_bytes as usize + y * rows.row_pitch_bytes as usize;
+            // SAFETY: host_row_ptrs checked that every row lies inside the mapped allocation.
+            unsafe { std::ptr::copy_nonoverlapping(base.add(at), row.as_mut_ptr(), row_bytes) };
+        }
+        values
+    }
 }
 
 pub fn color_range() -> vk::ImageSubresourceRange {
@@ -239,6 +344,8 @@ impl Drop for GpuImage {
                 format: self.format,
                 width: self.width,
                 height: self.height,
+                host_rows: self.host_rows,
+                layout: self.layout(),
             }));
         }
     }
