@@ -401,6 +401,24 @@ fn the_ideal_lens_takes_any_focal_length_and_does_not_vignette() {
     assert_contains(&render(&dir, &args).success().stderr, "turned off (--no-vignetting)");
 }
 
+/// A render ends its process without closing the GPU (`exit_now`): the pipeline cache, which
+/// closing the device would write, is still written, and every output is complete.
+#[test]
+fn a_render_that_ends_without_closing_the_gpu_still_keeps_its_pipeline_cache() {
+    let dir = TestDir::new("pipeline_cache");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--fstop", "2", "--focus", "1", "--png", &dir.arg("out.png")]));
+    render(&dir, &args).success();
+    let caches: Vec<_> = std::fs::read_dir(&dir.cache).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(caches.len(), 1, "{caches:?}");
+    let name = caches[0].file_name().unwrap().to_string_lossy().into_owned();
+    assert!(name.starts_with("pipelines-") && name.ends_with(".bin"), "{name}");
+    assert!(std::fs::metadata(&caches[0]).unwrap().len() > 0, "{name} is empty");
+    assert_eq!(read_exr_rgba(&dir.join("out.exr")).unwrap().width, 16);
+    assert!(std::fs::metadata(dir.join("out.png")).unwrap().len() > 0);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "out.exr", "out.png"]);
+}
+
 // ---------------------------------------------------------------------------------------------
 // 7: numeric settings
 // ---------------------------------------------------------------------------------------------

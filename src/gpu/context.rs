@@ -422,6 +422,12 @@ impl Gpu {
         &self.shared.info
     }
 
+    /// Writes the pipeline cache to its file if it holds anything new (closing the device does
+    /// too; this is for a process that ends without closing it).
+    pub fn save_pipeline_cache(&self) {
+        self.shared.save_pipeline_cache();
+    }
+
     pub(crate) fn device(&self) -> &ash::Device {
         &self.shared.device
     }

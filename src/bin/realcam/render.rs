@@ -400,7 +400,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for path in render_frame(args, &camera, outputs, &mut session)? {
         eprintln!("wrote {}", path.display());
     }
-    // Every output is written and renamed: the session's GPU is not closed, the OS takes it.
+    // Every output is written and renamed: the session's GPU is not closed, the OS takes it;
+    // only its pipeline cache is kept first, as closing it would.
+    if let Some(gpu) = session.gpu() {
+        gpu.save_pipeline_cache();
+    }
     crate::exit_now()
 }
 
