@@ -159,23 +159,27 @@ pub fn write_exr_channels(
 /// writes them in the order of a hash map, which differs from run to run; EXR leaves the order
 /// free, and a permutation keeps the header's length, so the offset table stays valid. Two
 /// runs with the same inputs then write the same bytes. Anything else is left as it is.
-fn sort_header_attributes(bytes: &mut [u8]) {
+/// `bytes` is the file or its start: false when the header runs past its end (nothing sorted).
+fn sort_header_attributes(bytes: &mut [u8]) -> bool {
     const MULTIPART: u8 = 0x10; // bit 12 of the version field: byte 5, bit 4
     if bytes.len() < 8 || bytes[5] & MULTIPART != 0 {
-        return;
+        return bytes.len() >= 8;
     }
     let mut attributes: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
     let mut pos = 8;
     let nul = |from: usize| bytes.get(from..).and_then(|b| b.iter().position(|&c| c == 0)).map(|i| from + i);
     while bytes.get(pos).is_some_and(|&b| b != 0) {
-        let Some(name_end) = nul(pos) else { return };
-        let Some(type_end) = nul(name_end + 1) else { return };
-        let Some(size) = bytes.get(type_end + 1..type_end + 5) else { return };
+        let Some(name_end) = nul(pos) else { return false };
+        let Some(type_end) = nul(name_end + 1) else { return false };
+        let Some(size) = bytes.get(type_end + 1..type_end + 5) else { return false };
         let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
-        let Some(end) = usize::try_from(size).ok().and_then(|s| (type_end + 5).checked_add(s)) else { return };
-        let Some(attribute) = bytes.get(pos..end) else { return };
+        let Some(end) = usize::try_from(size).ok().and_then(|s| (type_end + 5).checked_add(s)) else { return false };
+        let Some(attribute) = bytes.get(pos..end) else { return false };
         attributes.push((bytes[pos..name_end].to_vec(), attribute.to_vec()));
         pos = end;
+    }
+    if pos >= bytes.len() {
+        return false;
     }
     attributes.sort();
     let mut at = 8;
@@ -183,6 +187,25 @@ fn sort_header_attributes(bytes: &mut [u8]) {
         bytes[at..at + attribute.len()].copy_from_slice(&attribute);
         at += attribute.len();
     }
+    true
+}
+
+/// [`sort_header_attributes`] of an EXR already written to `file`: its start read back (the
+/// whole file if the header is longer), sorted, written over itself.
+fn sort_header_attributes_in_file(file: &mut std::fs::File) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom, Write};
+    let len = file.seek(SeekFrom::End(0))?;
+    let mut start = Vec::new();
+    for bytes in [64u64 << 10, len] {
+        file.seek(SeekFrom::Start(0))?;
+        start.clear();
+        Read::by_ref(file).take(bytes).read_to_end(&mut start)?;
+        if sort_header_attributes(&mut start) {
+            break;
+        }
+    }
+    file.seek(SeekFrom::Start(0))?;
+    file.write_all(&start)
 }
 
 /// [`write_exr_channels`]'s bytes (`path` for messages): the same for the same channels and
@@ -207,6 +230,46 @@ pub fn encode_exr_planes(
     channels: Vec<(&str, Cow<'_, [f32]>)>,
     opts: &ExrWriteOptions,
 ) -> Result<Vec<u8>, IoError> {
+    // Room for the samples uncompressed, the offset table and the header from the start:
+    // grown by doubling instead, the buffer of a 1280x720 float frame passed through five
+    // sizes up to 28 MB.
+    let sample_bytes: usize = channels
+        .iter()
+        .map(|(name, _)| if opts.float32 || opts.float32_channels.iter().any(|c| c == name) { 4 } else { 2 })
+        .sum();
+    let capacity = width as usize * height as usize * sample_bytes + height as usize * 16 + (64 << 10);
+    let mut bytes = std::io::Cursor::new(Vec::with_capacity(capacity));
+    write_exr_planes_to(&mut bytes, path, width, height, channels, opts)?;
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes);
+    Ok(bytes)
+}
+
+/// [`encode_exr_planes`] written into `file` as it is encoded (an empty file opened for reading
+/// and writing; `path` for messages): the same bytes, without the whole file in memory first.
+pub fn write_exr_planes_to_file(
+    file: &mut std::fs::File,
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: Vec<(&str, Cow<'_, [f32]>)>,
+    opts: &ExrWriteOptions,
+) -> Result<(), IoError> {
+    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, &mut *file);
+    write_exr_planes_to(&mut buffered, path, width, height, channels, opts)?;
+    let written = buffered.into_inner().map_err(|e| e.into_error());
+    written.and_then(sort_header_attributes_in_file).map_err(|source| IoError::Write { path: path.into(), source })
+}
+
+/// The EXR of `channels` written to `out`, attributes in the exr crate's order.
+fn write_exr_planes_to(
+    out: &mut (impl std::io::Write + std::io::Seek),
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: Vec<(&str, Cow<'_, [f32]>)>,
+    opts: &ExrWriteOptions,
+) -> Result<(), IoError> {
     let invalid = |reason: String| IoError::InvalidImage { path: path.into(), reason };
     if width == 0 || height == 0 || channels.is_empty() {
         return Err(invalid(format!("nothing to write ({width}x{height} px, {} channel(s))", channels.len())));
@@ -301,19 +364,7 @@ pub fn encode_exr_planes(
     let mut image_attributes = ImageAttributes::new(display);
     image_attributes.chromaticities = chromaticities;
     let image = exr::image::Image::new(image_attributes, layer);
-    // Room for the samples uncompressed, the offset table and the header from the start:
-    // grown by doubling instead, the buffer of a 1280x720 float frame passed through five
-    // sizes up to 28 MB.
-    let sample_bytes: usize = names
-        .iter()
-        .map(|name| if opts.float32 || opts.float32_channels.iter().any(|c| c == name) { 4 } else { 2 })
-        .sum();
-    let capacity = n * sample_bytes + height as usize * 16 + (64 << 10);
-    let mut bytes = std::io::Cursor::new(Vec::with_capacity(capacity));
-    image.write().to_buffered(&mut bytes).map_err(|source| IoError::ExrEncode { path: path.into(), source })?;
-    let mut bytes = bytes.into_inner();
-    sort_header_attributes(&mut bytes);
-    Ok(bytes)
+    image.write().to_buffered(out).map_err(|source| IoError::ExrEncode { path: path.into(), source })
 }
 
 #[cfg(test)]
@@ -331,6 +382,38 @@ mod tests {
         }
         im.data[5] = 1.0e5; // beyond the half range
         im
+    }
+
+    #[test]
+    fn a_file_written_as_it_is_encoded_holds_the_encoders_bytes() {
+        // Streamed into a file, the header's attributes are sorted afterwards in the file: the
+        // same bytes as the encoder's, also for a header longer than the part read back first
+        // (a 100 kB text attribute) and with the attributes given in another order.
+        let dir = test_dir("write-streamed");
+        let im = ramp(13, 7);
+        for long in [false, true] {
+            let text = if long { "x".repeat(100_000) } else { "a 50".into() };
+            let opts = ExrWriteOptions {
+                attributes: vec![
+                    ("realcam/zoom".into(), ExrAttribute::F32(2.0)),
+                    ("realcam/lens".into(), ExrAttribute::Text(text)),
+                ],
+                ..ExrWriteOptions::default()
+            };
+            let path = dir.join(format!("streamed-{long}.exr"));
+            let encoded = encode_exr_planes(&path, 13, 7, rgba_planes(&im), &opts).unwrap();
+            let mut file =
+                std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(true).open(&path).unwrap();
+            write_exr_planes_to_file(&mut file, &path, 13, 7, rgba_planes(&im), &opts).unwrap();
+            drop(file);
+            let written = std::fs::read(&path).unwrap();
+            assert_eq!(written.len(), encoded.len(), "long header: {long}");
+            assert!(written == encoded, "long header: {long}: the bytes differ");
+            let mut reversed = opts.clone();
+            reversed.attributes.reverse();
+            assert!(encode_exr_planes(&path, 13, 7, rgba_planes(&im), &reversed).unwrap() == encoded);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -29,8 +29,8 @@ pub mod sequence;
 
 pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
 pub use exr_write::{
-    encode_exr_channels, encode_exr_planes, encode_exr_rgba, rgba_planes, write_exr_channels, write_exr_rgba,
-    ExrAttribute, ExrCompression, ExrWriteOptions,
+    encode_exr_channels, encode_exr_planes, encode_exr_rgba, rgba_planes, write_exr_channels, write_exr_planes_to_file,
+    write_exr_rgba, ExrAttribute, ExrCompression, ExrWriteOptions,
 };
 pub use png::{encode_png, write_png};
 

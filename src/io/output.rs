@@ -204,6 +204,17 @@ impl Outputs {
 
     /// Writes `bytes` into the temporary of the output named by `field`.
     pub fn write(&mut self, field: &str, bytes: &[u8]) -> Result<(), IoError> {
+        self.write_with(field, |file, path| file.write_all(bytes).map_err(|source| IoError::Write { path, source }))
+    }
+
+    /// Lets `fill` write the temporary of the output named by `field` (an empty file, and the
+    /// output's target path for its errors), then makes it durable: for content written as it
+    /// is made, with no copy of the whole file in memory first.
+    pub fn write_with(
+        &mut self,
+        field: &str,
+        fill: impl FnOnce(&mut std::fs::File, PathBuf) -> Result<(), IoError>,
+    ) -> Result<(), IoError> {
         let Some(out) = self.files.iter_mut().find(|o| o.field == field) else {
             return Err(IoError::Output {
                 field: "output",
@@ -211,12 +222,11 @@ impl Outputs {
                 reason: "no such output was reserved".into(),
             });
         };
-        let result = (|| {
-            let mut file = std::fs::OpenOptions::new().write(true).truncate(true).open(&out.tmp)?;
-            file.write_all(bytes)?;
-            file.sync_all()
-        })();
-        result.map_err(|source| IoError::Write { path: out.path.clone(), source })?;
+        let write_error = |source| IoError::Write { path: out.path.clone(), source };
+        let mut file =
+            std::fs::OpenOptions::new().read(true).write(true).truncate(true).open(&out.tmp).map_err(write_error)?;
+        fill(&mut file, out.path.clone())?;
+        file.sync_all().map_err(write_error)?;
         out.written = true;
         Ok(())
     }

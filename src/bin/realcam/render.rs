@@ -709,8 +709,9 @@ pub fn write_outputs(args: &RenderArgs, mut outputs: Outputs, rendered: &Rendere
         float32_channels: rendered.kept_channels.iter().map(|(name, _)| name.clone()).collect(),
         ..rendered.exr_options.clone()
     };
-    let exr = io::encode_exr_planes(&args.output, image.width, image.height, channels, &exr_options)?;
-    outputs.write("output", &exr)?;
+    outputs.write_with("output", |file, _| {
+        io::write_exr_planes_to_file(file, &args.output, image.width, image.height, channels, &exr_options)
+    })?;
     if let Some(png) = &args.png {
         outputs.write("png", &io::encode_png(png, rendered.preview.as_ref().unwrap_or(image))?)?;
     }
