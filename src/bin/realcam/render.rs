@@ -390,9 +390,11 @@ impl RenderArgs {
     }
 }
 
-pub fn run(args: &RenderArgs) -> Result<()> {
+/// Renders what `args` asks; a single frame's session comes back still open, every output
+/// written and renamed, for `main` to end the process without closing its GPU.
+pub fn run(args: &RenderArgs) -> Result<Option<Session>> {
     if args.sequence.frames.is_some() {
-        return crate::sequence::run(args);
+        return crate::sequence::run(args).map(|()| None);
     }
     let outputs = args.outputs()?;
     let camera = args.camera()?;
@@ -400,12 +402,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for path in render_frame(args, &camera, outputs, &mut session)? {
         eprintln!("wrote {}", path.display());
     }
-    // Every output is written and renamed: the session's GPU is not closed, the OS takes it;
-    // only its pipeline cache is kept first, as closing it would.
-    if let Some(gpu) = session.gpu() {
-        gpu.save_pipeline_cache();
-    }
-    crate::exit_now()
+    Ok(Some(session))
 }
 
 /// The GPU and the pipelines of a run, opened at the first frame that reaches the GPU and kept
