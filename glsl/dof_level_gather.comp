@@ -6,6 +6,15 @@
 // exact gather's rules (include/gather.glsl) on the pyramid, so its cost per tile falls as 1/4^L
 // while the radius doubles. Writes the background, the foreground with its coverage (alpha), and
 // the foreground of large-CoC samples only (for nearly sharp pixels, see dof_composite.comp).
+//
+// The composite of a level-L tile upsamples bilinearly (texels h0 and h0 + 1 of pixel centre
+// (p + 0.5) / 2^L - 0.5), so it reads the tile's own texels and a ring of one texel around it,
+// nothing else. A neighbour tile of another class therefore gathers only its texels in that ring
+// next to a level-L tile (an edge row or column, a corner texel) and stores zero in the others,
+// which no pass reads (a gather of radius -1: its loops take no trip). A neighbour's invocations
+// take its border texels first, around the ring, then the inner ones: lavapipe runs 8 lanes as
+// one SIMD group and a loop costs only where some lane of the group enters it, so an edge's
+// texels, contiguous on the ring, take one or two groups rather than all of them.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
 #define APERTURE_SHAPE_BINDING 9
@@ -31,6 +40,44 @@ layout(push_constant) uniform Push {
     float small_radius_px;      // in level units: larger CoC samples also go to fg_big
 } pc;
 
+// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile tc (the tile itself at bit 4) is of
+// this level's class.
+uint level_neighbours(ivec2 tc) {
+    int tile_count = pc.tiles.x * pc.tiles.y;
+    uint near = 0u;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 n = tc + ivec2(dx, dy);
+            if (outside(n, pc.tiles)) continue;
+            int cls = int(tile_radius_px[2 * tile_count + n.y * pc.tiles.x + n.x]);
+            if (cls == CLASS_LEVEL1 + pc.level - 1) near |= 1u << uint((dy + 1) * 3 + dx + 1);
+        }
+    }
+    return near;
+}
+
+// Whether a composite reads texel xy (in the tile, of side `side`): the tiles it is next to, in
+// the bits of level_neighbours (the tile itself takes every texel), against `near`.
+bool texel_read(ivec2 xy, int side, uint near) {
+    uint xs = 2u | (xy.x == 0 ? 1u : 0u) | (xy.x == side - 1 ? 4u : 0u);
+    uint ys = 2u | (xy.y == 0 ? 1u : 0u) | (xy.y == side - 1 ? 4u : 0u);
+    uint next_to = ((ys & 1u) != 0u ? xs : 0u) | ((ys & 2u) != 0u ? xs << 3 : 0u) | ((ys & 4u) != 0u ? xs << 6 : 0u);
+    return (next_to & near) != 0u;
+}
+
+// Texel k of a neighbour tile (of side `side`) in ring order: its border clockwise from the top
+// left corner (the texels a composite may read), then the inner texels row by row.
+ivec2 ring_texel(int k, int side) {
+    if (side <= 2) return ivec2(k % side, k / side);
+    int border = 4 * side - 4;
+    if (k < side) return ivec2(k, 0);
+    if (k < 2 * side - 1) return ivec2(side - 1, k - side + 1);
+    if (k < 3 * side - 2) return ivec2(3 * side - 3 - k, side - 1);
+    if (k < border) return ivec2(0, 4 * side - 4 - k);
+    int inner = side - 2;
+    return ivec2(1 + (k - border) % inner, 1 + (k - border) / inner);
+}
+
 void main() {
     int side = TILE_SIZE >> pc.level;
     int texels = side * side;
@@ -38,14 +85,20 @@ void main() {
     if (slot >= int(args[ARGS_LEVEL_TILES(pc.level)])) return;
     int tile_count = pc.tiles.x * pc.tiles.y;
     uint t = level_list[(pc.level - 1) * tile_count + slot];
-    int texel = int(gl_LocalInvocationIndex) % texels;
-    ivec2 p = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x)) * side + ivec2(texel % side, texel / side);
+    int lane = int(gl_LocalInvocationIndex) % texels;
+    ivec2 tc = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x));
+    uint near = level_neighbours(tc);
+    // A tile of the level: its texels row by row; a neighbour: in ring order.
+    ivec2 xy = (near & 16u) != 0u ? ivec2(lane % side, lane / side) : ring_texel(lane, side);
+    ivec2 p = tc * side + xy;
     if (outside(p, pc.level_size)) return;
     float to_level = 1.0 / float(1 << pc.level);
     Aperture ap = pc.ap;
     float coc_p = imageLoad(coc_level, p).r * to_level;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
-    int r = int(ceil(tile_radius_px[t] * to_level)) + 1;
+    // No composite reads the texel: radius -1, so the gather's loops take no trip and it stores
+    // zero (the CPU twin's value).
+    int r = texel_read(xy, side, near) ? int(ceil(tile_radius_px[t] * to_level)) + 1 : -1;
     vec4 bg = vec4(0.0), fg = vec4(0.0), fg_big = vec4(0.0);
     float bg_w = 0.0, fg_w = 0.0, fg_big_w = 0.0;
     for (int dy = -r; dy <= r; ++dy) {
