@@ -1,4 +1,5 @@
 #version 450
+#extension GL_EXT_control_flow_attributes : require  // [[dont_unroll]]
 // Tiled depth of field, step 3b: the highlights of the candidate texels dof_downsample.comp
 // listed. A pixel of large CoC much brighter than the dimmest side of the ring 3 px around it
 // gives its excess over that background to a sprite (drawn with the exact aperture shape by
@@ -36,13 +37,21 @@ float luminance(vec3 c) { return dot(c, vec3(pc.luminance_r, pc.luminance_g, pc.
 // The background of a highlight at p: the mean, over the four sides of the ring 3 px away, of
 // each side's dimmest pixel (the other pixels of the same highlight or of a neighbouring one
 // brighten some sides, not all).
+//
+// The sides are a loop that stays a loop ([[dont_unroll]]): lavapipe creates the pipeline's
+// code at vkCreateComputePipelines, and the 24 unrolled reads (with the 9 of
+// neighbourhood_peak) were half its cost, ~6.5 -> ~3.3 ms of start-up CPU on scene A, for a
+// pass that runs over a short list. Each side is the one before turned by a quarter turn:
+// (k, -3), (3, k), (-k, 3), (-3, -k), as a table of four offsets indexed by the side read, but
+// with no array (an array indexed by the loop's counter went to per-lane memory: the pass ran
+// 2x slower).
 float background(ivec2 p) {
     float sum = 0.0, sides = 0.0;
-    for (int side = 0; side < 4; ++side) {
+    ivec2 along = ivec2(1, 0), out_dir = ivec2(0, -1);  // side 0: the row 3 px above
+    [[dont_unroll]] for (int side = 0; side < 4; ++side) {
         float dimmest = 3.0e38;
         for (int k = -3; k < 3; ++k) {
-            ivec2 ring[4] = ivec2[4](ivec2(k, -3), ivec2(3, k), ivec2(-k, 3), ivec2(-3, -k));
-            ivec2 q = p + ring[side];
+            ivec2 q = p + k * along + 3 * out_dir;
             if (outside(q, pc.size)) continue;
             dimmest = min(dimmest, luminance(finite_or_zero(imageLoad(color_in, q)).rgb));
         }
@@ -50,6 +59,9 @@ float background(ivec2 p) {
             sum += dimmest;
             sides += 1.0;
         }
+        // A quarter turn, (x, y) -> (-y, x): the next side, its pixels in the same order.
+        along = ivec2(-along.y, along.x);
+        out_dir = ivec2(-out_dir.y, out_dir.x);
     }
     return sum / max(sides, 1.0);
 }
@@ -57,9 +69,10 @@ float background(ivec2 p) {
 // The brightest luminance of p's 3x3 neighbourhood: the visibility test's, so a highlight's
 // anti-aliased fringe, dimmer than its core, joins the core's sprites (left to the levels, it
 // spread a soft halo around the crisp disc: faint highlights of scene A 2-6% too large).
+// Its rows stay a loop too (as background's sides).
 float neighbourhood_peak(ivec2 p) {
     float peak = -3.0e38;
-    for (int dy = -1; dy <= 1; ++dy) {
+    [[dont_unroll]] for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             ivec2 q = p + ivec2(dx, dy);
             if (outside(q, pc.size)) continue;
