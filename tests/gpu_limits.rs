@@ -135,3 +135,30 @@ fn on_a_device_that_runs_on_the_cpu_images_are_written_and_read_in_host_memory_f
     }
     assert_validation_clean(&gpu);
 }
+
+#[test]
+fn a_render_taking_the_frames_colour_gives_the_same_bits_in_that_colours_memory() {
+    // The command line gives up each frame's colour once it is uploaded: on a device that runs
+    // on the CPU the result is read into the colour's own allocation (no fresh frame of pages),
+    // and it is the same image as a render that keeps the frame.
+    let gpu = gpu();
+    let (w, h) = (48u32, 32u32);
+    let color: Vec<f32> =
+        (0..w * h).flat_map(|i| if i % 53 == 0 { [40.0, 30.0, 20.0, 1.0] } else { [0.2, 0.3, 0.1, 1.0] }).collect();
+    let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
+    let mut frame = realcam::model::frame::Frame::new(w, h, color, depth);
+    let camera = dof_camera(50.0, 1.4, 2.0, 6);
+    let p = plan(&frame, &camera);
+    let renderer = Renderer::new(&gpu, &p).expect("pipelines");
+    let kept = renderer.render(&frame, &p, false).expect("render").rgba;
+    let colour_at = frame.color.as_ptr();
+    let taken = renderer.render_taking_colour(&mut frame, &p, false).expect("render").rgba;
+    assert!(frame.color.is_empty(), "the frame kept its colour");
+    assert_eq!(taken.len(), kept.len());
+    let differ = kept.iter().zip(&taken).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+    assert_eq!(differ, 0, "values differ from the render that kept the frame");
+    if gpu.info().on_cpu() {
+        assert_eq!(taken.as_ptr(), colour_at, "the result is not in the colour's memory");
+    }
+    assert_validation_clean(&gpu);
+}

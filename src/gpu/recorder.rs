@@ -70,8 +70,9 @@ pub struct Download(usize);
 enum Readback {
     /// Copied into a host-visible buffer.
     Buffer(GpuBuffer),
-    /// In the image's own mapped memory (an image in host memory), `channels` f32 per texel.
-    Image(Arc<GpuImage>, u32),
+    /// In the image's own mapped memory (an image in host memory), `channels` f32 per texel;
+    /// read into the vector's allocation.
+    Image(Arc<GpuImage>, u32, Vec<f32>),
 }
 
 impl Recorder {
@@ -630,6 +631,12 @@ impl Recorder {
     /// Read an image back after the submission. The image must have been last written by a
     /// compute shader (every pass's output is).
     pub fn download_image(&mut self, image: &GpuImage, channels: u32) -> GpuResult<Download> {
+        self.download_image_into(image, channels, Vec::new())
+    }
+
+    /// [`Recorder::download_image`] into `memory`'s allocation where it can (an image in host
+    /// memory): a buffer the caller no longer needs, whose pages are already the process's.
+    pub fn download_image_into(&mut self, image: &GpuImage, channels: u32, memory: Vec<f32>) -> GpuResult<Download> {
         // An image in host memory is read where it is, after the fence: no copy on the device.
         let own = self.images.iter().find(|i| i.image == image.image && i.in_host_memory()).cloned();
         if let Some(own) = own {
@@ -644,7 +651,7 @@ impl Recorder {
                 .new_layout(vk::ImageLayout::GENERAL)
                 .image(image.image)
                 .subresource_range(color_range())]);
-            self.downloads.push(Readback::Image(own, channels));
+            self.downloads.push(Readback::Image(own, channels, memory));
             return Ok(Download(self.downloads.len() - 1));
         }
         let size = image.width as u64 * image.height as u64 * channels as u64 * 4;
@@ -735,12 +742,11 @@ impl Recorder {
                     image.set_layout(layout);
                 }
             }
-            let data = self
-                .downloads
-                .iter()
+            let data = std::mem::take(&mut self.downloads)
+                .into_iter()
                 .map(|readback| match readback {
                     Readback::Buffer(buffer) => buffer.read_f32(),
-                    Readback::Image(image, channels) => image.read_host(*channels),
+                    Readback::Image(image, channels, memory) => image.read_host(channels, memory),
                 })
                 .collect();
             let checks = self.twin_checks.take().unwrap_or_default();

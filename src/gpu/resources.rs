@@ -272,12 +272,14 @@ impl GpuImage {
         true
     }
 
-    /// The image's texels from its mapped memory (`channels` f32 per texel, row by row);
-    /// empty for an image the host cannot reach. Call after the work that wrote it completed,
-    /// with its writes made visible to the host.
-    pub(crate) fn read_host(&self, channels: u32) -> Vec<f32> {
-        let Some((base, rows, row_bytes)) = self.host_row_ptrs(channels) else { return Vec::new() };
-        let mut values = vec![0f32; row_bytes / 4 * self.height as usize];
+    /// The image's texels from its mapped memory (`channels` f32 per texel, row by row), in
+    /// `values`' allocation (grown if it is too small); empty for an image the host cannot
+    /// reach. Call after the work that wrote it completed, with its writes made visible to the
+    /// host.
+    pub(crate) fn read_host(&self, channels: u32, mut values: Vec<f32>) -> Vec<f32> {
+        values.clear();
+        let Some((base, rows, row_bytes)) = self.host_row_ptrs(channels) else { return values };
+        values.resize(row_bytes / 4 * self.height as usize, 0.0);
         let out: &mut [u8] = bytemuck::cast_slice_mut(&mut values);
         for (y, row) in out.chunks_exact_mut(row_bytes.max(1)).enumerate() {
             let at = rows.offset_bytes as usize + y * rows.row_pitch_bytes as usize;

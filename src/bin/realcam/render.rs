@@ -481,7 +481,7 @@ impl Session {
 
     /// Renders `frame` by `plan` on the session's GPU, opened (as `args` say) at the first call;
     /// Vulkan validation messages are an error.
-    fn render(&mut self, args: &RenderArgs, frame: &Frame, plan: &Plan) -> Result<Rendered> {
+    fn render(&mut self, args: &RenderArgs, frame: &mut Frame, plan: &Plan) -> Result<Rendered> {
         // The first frame: how its GPU was waited for, and when its pipelines began.
         let mut first = None;
         let opened = match self.gpu.take() {
@@ -495,7 +495,8 @@ impl Session {
         let (gpu, renderer) = self.gpu.insert(opened);
         renderer.prepare(plan)?;
         let messages_before = gpu.validation_message_count();
-        let rendered = renderer.render(frame, plan, false)?;
+        // The frame's colour is not needed after its upload: its memory takes the result.
+        let rendered = renderer.render_taking_colour(frame, plan, false)?;
         // The first frame: from the process's start to its submit, and what came between.
         if let (Some((waited, created)), Some(submitted), Some(start)) =
             (first, rendered.profile.submitted_at, PROCESS_START.get())
@@ -522,12 +523,12 @@ impl Session {
             return Ok(average);
         }
         let Image { width, height, data, .. } = average;
-        let frame = Frame::new(width, height, data, vec![f32::INFINITY; width as usize * height as usize]);
+        let mut frame = Frame::new(width, height, data, vec![f32::INFINITY; width as usize * height as usize]);
         let plan = planner::film_plan(&frame, camera);
         if args.explain {
             eprintln!("the long exposure's {}", plan.explain());
         }
-        let rendered = self.render(args, &frame, &plan)?;
+        let rendered = self.render(args, &mut frame, &plan)?;
         Ok(Image { width, height, channels: 4, data: rendered.rgba })
     }
 }
@@ -612,7 +613,7 @@ pub fn render_loaded(
     loaded: LoadedFrame,
     session: &mut Session,
 ) -> Result<RenderedFrame> {
-    let LoadedFrame { frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning } =
+    let LoadedFrame { mut frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning } =
         loaded;
     if args.explain {
         eprintln!("inputs:\n{}", indent(&channel_report));
@@ -641,7 +642,7 @@ pub fn render_loaded(
         eprintln!("warning: {warning}{hint}");
     }
 
-    let rendered = session.render(args, &frame, &plan)?;
+    let rendered = session.render(args, &mut frame, &plan)?;
     if args.profile {
         eprint!("{}", rendered.profile.table());
         if let Some(line) = session.take_startup() {
