@@ -32,6 +32,15 @@ fn an_image_beyond_the_device_limit_is_an_error_naming_it() {
     assert_validation_clean(&gpu);
 }
 
+/// A `w` x `h` frame defocused at two depths (0.8 m left, 9 m right of the middle) with a
+/// highlight (60, 50, 40) at every `every`-th pixel over a dim background.
+fn highlights_over_two_depths(w: u32, h: u32, every: u32) -> realcam::model::frame::Frame {
+    let color: Vec<f32> =
+        (0..w * h).flat_map(|i| if i % every == 0 { [60.0, 50.0, 40.0, 1.0] } else { [0.2, 0.3, 0.1, 1.0] }).collect();
+    let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
+    realcam::model::frame::Frame::new(w, h, color, depth)
+}
+
 #[test]
 fn the_next_frame_of_the_same_size_reuses_the_last_frames_images_and_buffers_and_gives_the_same_bits() {
     // A defocused frame with highlights (the tiled path's many images and buffers, counters
@@ -39,11 +48,7 @@ fn the_next_frame_of_the_same_size_reuses_the_last_frames_images_and_buffers_and
     // buffer goes to the pool, the later frames take theirs from it (the pool holds as many
     // afterwards, none created anew), and the stale contents change no bit of the output.
     let gpu = gpu();
-    let (w, h) = (96u32, 64u32);
-    let color: Vec<f32> =
-        (0..w * h).flat_map(|i| if i % 97 == 0 { [60.0, 50.0, 40.0, 1.0] } else { [0.2, 0.3, 0.1, 1.0] }).collect();
-    let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
-    let frame = realcam::model::frame::Frame::new(w, h, color, depth);
+    let frame = highlights_over_two_depths(96, 64, 97);
     let camera = dof_camera(50.0, 1.4, 2.0, 6);
     let p = plan(&frame, &camera);
     assert!(p.runs("bokeh_tiled"), "{}", p.explain());
@@ -142,11 +147,7 @@ fn a_render_taking_the_frames_colour_gives_the_same_bits_in_that_colours_memory(
     // on the CPU the result is read into the colour's own allocation (no fresh frame of pages),
     // and it is the same image as a render that keeps the frame.
     let gpu = gpu();
-    let (w, h) = (48u32, 32u32);
-    let color: Vec<f32> =
-        (0..w * h).flat_map(|i| if i % 53 == 0 { [40.0, 30.0, 20.0, 1.0] } else { [0.2, 0.3, 0.1, 1.0] }).collect();
-    let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
-    let mut frame = realcam::model::frame::Frame::new(w, h, color, depth);
+    let mut frame = highlights_over_two_depths(48, 32, 53);
     let camera = dof_camera(50.0, 1.4, 2.0, 6);
     let p = plan(&frame, &camera);
     let renderer = Renderer::new(&gpu, &p).expect("pipelines");
