@@ -22,8 +22,9 @@ pub struct GpuImage {
     /// Where its rows lie in its mapped memory, for an image in host memory (see
     /// [`Gpu::create_image`]); `None` for one the host cannot reach.
     host_rows: Option<HostRows>,
-    /// The layout the last completed recording that used it left it in (the recorder applies
-    /// its barriers' after the submission): host access needs PREINITIALIZED or GENERAL.
+    /// The layout the last completed recording that used it left it in (the recorder sets the
+    /// last new layout of its barriers after the submission): host access needs PREINITIALIZED
+    /// or GENERAL.
     layout: AtomicI32,
 }
 
