@@ -2,7 +2,7 @@
 //! invocation per sprite. Shader: glsl/dof_bin.comp.
 
 use super::barriers::{args_for_indirect, buffer_after_compute_write, buffer_after_fill};
-use crate::gpu::shaders::dof_tiles::{ARGS_BIN_OVERFLOWS, ARGS_SPRITE_COUNT, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
+use crate::gpu::shaders::dof_tiles::{ARGS_BIN_OVERFLOWS, BIN_CAPACITY, CLASS_LEVEL1, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_bin";
@@ -36,7 +36,7 @@ impl Shader for BinShader {
 
 impl Twin for BinShader {
     fn cpu(pc: &BinPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let count = (b[0].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
+        let count = super::twin::sprites_written(b[0].words(), pc.sprite_capacity);
         let sprites = super::twin::floats(&b[1].words()[..count * SPRITE_WORDS as usize]);
         let radius = super::twin::floats(b[2].words());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;

@@ -7,7 +7,7 @@ use super::barriers::{after_compute_write, buffer_after_compute_write, write_aft
 use super::bokeh_gather::gather_exact;
 use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
-use crate::gpu::shaders::dof_tiles::{ARGS_SPRITE_COUNT, BIN_CAPACITY, LIST_BLURRED_LEVEL1, SPRITE_WORDS};
+use crate::gpu::shaders::dof_tiles::{BIN_CAPACITY, LIST_BLURRED_LEVEL1, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_composite";
@@ -96,7 +96,7 @@ impl Twin for CompositeShader {
         let (lists, radii) = (b[5].words().to_vec(), floats(b[9].words()));
         let data = ApertureData::from_bindings(&b[6], &b[13], pc.aperture.shape_radius);
         let (coc_level, fg_big_level) = (b[7].image().clone(), b[8].image().clone());
-        let sprite_count = (b[14].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
+        let sprite_count = super::twin::sprites_written(b[14].words(), pc.sprite_capacity);
         let sprites = floats(&b[10].words()[..sprite_count * SPRITE_WORDS as usize]);
         let (counts, bins) = (b[11].words().to_vec(), b[12].words().to_vec());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;

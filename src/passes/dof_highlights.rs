@@ -155,7 +155,7 @@ impl Twin for HighlightsShader {
 
     /// Sprites take slots with atomics, in any order: sort them by their centre.
     fn canonical(pc: &HighlightsPush, b: &mut [HostData]) {
-        let count = (b[3].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
+        let count = super::twin::sprites_written(b[3].words(), pc.sprite_capacity);
         super::dof_downsample::sort_sprites(b[5].words_mut(), count);
     }
 }

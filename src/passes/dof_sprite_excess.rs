@@ -5,7 +5,7 @@
 
 use super::barriers::{args_for_indirect, buffer_after_compute_write, update_in_place};
 use super::twin::finite_or_zero;
-use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, ARGS_SPRITE_COUNT, SPRITE_WORDS};
+use crate::gpu::shaders::dof_tiles::{ARGS_BIN_DISPATCH, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_sprite_excess";
@@ -39,7 +39,7 @@ impl Shader for SpriteExcessShader {
 
 impl Twin for SpriteExcessShader {
     fn cpu(pc: &SpriteExcessPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let count = (b[1].words()[ARGS_SPRITE_COUNT as usize] as usize).min(pc.sprite_capacity.max(0) as usize);
+        let count = super::twin::sprites_written(b[1].words(), pc.sprite_capacity);
         let sprites = b[2].words()[..count * SPRITE_WORDS as usize].to_vec();
         let mut saved = b[3].words().to_vec();
         let color = b[0].image_mut();

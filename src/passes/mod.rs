@@ -451,6 +451,14 @@ pub mod twin {
         words.iter().map(|&w| f32::from_bits(w)).collect()
     }
 
+    /// How many sprites the tiled path's sprite buffer holds, from its args buffer's words:
+    /// dof_highlights' counter, at most `sprite_capacity` (a sprite past it is counted as
+    /// dropped, not written).
+    pub fn sprites_written(args: &[u32], sprite_capacity: i32) -> usize {
+        let counted = args[crate::gpu::shaders::dof_tiles::ARGS_SPRITE_COUNT as usize] as usize;
+        counted.min(sprite_capacity.max(0) as usize)
+    }
+
     /// A tile read from a tile list by one workgroup of an indirect dispatch.
     pub struct ListedTile {
         /// The tile's index (row-major over the tile grid).
