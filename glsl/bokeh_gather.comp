@@ -34,5 +34,7 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
     Aperture ap = pc.ap;
-    imageStore(color_out, p, gather_exact(p, pc.size, pc.radius_px, ap, pc.layer_transition_px));
+    // radius_px - 1: the largest CoC radius, rounded up.
+    float disc_px = tap_disc_px(float(pc.radius_px - 1));
+    imageStore(color_out, p, gather_exact(p, pc.size, disc_px, ap, pc.layer_transition_px));
 }

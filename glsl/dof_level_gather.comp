@@ -96,15 +96,18 @@ void main() {
     Aperture ap = pc.ap;
     float coc_p = imageLoad(coc_level, p).r * to_level;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
-    // No composite reads the texel: radius -1, so the gather's loops take no trip and it stores
-    // zero (the CPU twin's value).
-    int r = texel_read(xy, side, near) ? int(ceil(tile_radius_px[t] * to_level)) + 1 : -1;
+    // The taps' disc (aperture.glsl): no sample near the tile reaches farther than the tile's
+    // radius (its CoC here is a weighted mean of CoCs that radius bounds). No composite reads
+    // the texel: a disc of radius -1, so the gather's loops take no trip and it stores zero
+    // (the CPU twin's value).
+    float tap_disc = texel_read(xy, side, near) ? tap_disc_px(tile_radius_px[t] * to_level) : -1.0;
+    int r = int(floor(tap_disc));
     vec4 bg = vec4(0.0), fg = vec4(0.0), fg_big = vec4(0.0);
     float bg_w = 0.0, fg_w = 0.0, fg_big_w = 0.0;
     for (int dy = -r; dy <= r; ++dy) {
-        // The row of the disc dx^2 + dy^2 <= r^2 + r (a loop bound, not a skipped tap: lavapipe
-        // runs a skipped tap's work anyway).
-        int half_width = int(floor(sqrt(float(r * r + r - dy * dy))));
+        // The disc's row (a loop bound, not a skipped tap: lavapipe runs a skipped tap's work
+        // anyway).
+        int half_width = int(floor(sqrt(tap_disc * tap_disc - float(dy * dy))));
         for (int dx = -half_width; dx <= half_width; ++dx) {
             ivec2 q = clamp(p + ivec2(dx, dy), ivec2(0), pc.level_size - 1);
             vec2 cw = imageLoad(coc_level, q).rg;

@@ -37,7 +37,7 @@ void main() {
     // the focus plane) can reach farther, and the tile knows the largest of those.
     float radius_p = 0.5 * abs(imageLoad(coc_px, p).r);
     float fg_radius = tile_radius_px[pc.tiles.x * pc.tiles.y + int(t)];
-    int r = int(ceil(min(tile_radius_px[t], max(radius_p, fg_radius)))) + 1;
     Aperture ap = pc.ap;
-    imageStore(color_out, p, gather_exact(p, pc.size, r, ap, pc.layer_transition_px));
+    float disc_px = tap_disc_px(min(tile_radius_px[t], max(radius_p, fg_radius)));
+    imageStore(color_out, p, gather_exact(p, pc.size, disc_px, ap, pc.layer_transition_px));
 }

@@ -178,6 +178,15 @@ float aperture_weight_at(ivec2 o, float r, Aperture ap, vec2 sample_px, float fl
     return cov / (ap.area_factor * r * r);
 }
 
+// The radius of the disc of offsets at which samples reaching at most reach_px can weigh (the
+// gathers' taps): an aperture's image ends half a pixel beyond its reach (the coverage ramp;
+// the cat's eye only cuts it), the user's aperture image, bilinear over its square, up to the
+// reach + 1 that the gathers test. Every reach is at least 0.5.
+float tap_disc_px(float reach_px) {
+    bool image = APERTURE_GENERAL && aperture_mask[0] > 0.0;
+    return max(reach_px, 0.5) + (image ? 1.0 : 0.5);
+}
+
 // Spherical aberration's intensity for a sample of signed CoC coc_q at offset o (1 without it).
 float sa_weight(vec2 o, float radius_q, float coc_q, Aperture ap) {
     if (!APERTURE_ABERRATION || (ap.sa_amount == 0.0 && ap.sa_lsa_coc_px == 0.0)) return 1.0;

@@ -7,18 +7,22 @@
 #include "aperture.glsl"
 
 // Needs, declared by the including shader: images color_in (rgba32f) and coc_px (r32f).
-// Beyond the frame the edge pixels continue (clamp to edge).
-vec4 gather_exact(ivec2 p, ivec2 size, int r, Aperture ap, float layer_transition_px) {
+// Beyond the frame the edge pixels continue (clamp to edge). The taps: the disc of radius
+// disc_px around p (tap_disc_px in aperture.glsl of the largest reach of a sample near p, which
+// holds every tap that can weigh; the hidden fill below takes only positions within radius_p,
+// which is at most that reach).
+vec4 gather_exact(ivec2 p, ivec2 size, float disc_px, Aperture ap, float layer_transition_px) {
     float coc_p = imageLoad(coc_px, p).r;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
     vec4 bg = vec4(0.0), fg = vec4(0.0), hidden = vec4(0.0);
     float bg_w = 0.0, fg_w = 0.0, hidden_n = 0.0, hidden_near_w = 0.0, own_n = 0.0;
     // A sample spread over p's own CoC would carry 1 / (this) at p.
     float area_p_px2 = ap.area_factor * radius_p * radius_p;
+    // The disc's rows are the loop's bounds, as lavapipe pays for every tap a loop visits,
+    // skipped or not.
+    int r = int(floor(disc_px));
     for (int dy = -r; dy <= r; ++dy) {
-        // The taps lie in the disc dx^2 + dy^2 <= r^2: its rows are the loop's bounds, as
-        // lavapipe pays for every tap a loop visits, skipped or not.
-        int half_width = int(floor(sqrt(float(r * r - dy * dy))));
+        int half_width = int(floor(sqrt(disc_px * disc_px - float(dy * dy))));
         for (int dx = -half_width; dx <= half_width; ++dx) {
             // Beyond the frame the edge pixels continue (clamp to edge), so pixels near the
             // border see as much light from outside as a uniform scene would send them.

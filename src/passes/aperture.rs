@@ -287,6 +287,14 @@ pub fn tap_weight(
         * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, p)
 }
 
+/// The gathers' taps around a pixel (glsl/include/gather.glsl, glsl/dof_level_gather.comp): the
+/// disc of radius `tap_disc_px` ([`ApertureData::tap_disc_px`]; negative: none), row by row as
+/// `(dy, half_width)`, in the shaders' f32 arithmetic.
+pub fn tap_disc_rows(tap_disc_px: f32) -> impl Iterator<Item = (i32, i32)> {
+    let r = tap_disc_px.floor() as i32;
+    (-r..=r).map(move |dy| (dy, (tap_disc_px * tap_disc_px - (dy * dy) as f32).sqrt().floor() as i32))
+}
+
 /// The aperture's data on the CPU: the user's aperture image ([`mask_buffer_data`]) and the
 /// shape table ([`ApertureConstants::with_shape_table`]) of a depth-of-field run.
 #[derive(Clone, Debug, PartialEq)]
@@ -321,6 +329,15 @@ impl ApertureData {
             || self.shape_radius == 0;
         let aberration = constants.sa_amount != 0.0 || constants.sa_lsa_coc_px != 0.0;
         [general as u32, aberration as u32]
+    }
+
+    /// The radius of the disc of offsets at which samples reaching at most `reach_px` can weigh
+    /// (tap_disc_px in glsl/include/aperture.glsl): half a pixel beyond the reach (the coverage
+    /// ramp, [`aperture_weight_at`]), a pixel with the user's aperture image; every reach is
+    /// at least 0.5.
+    pub fn tap_disc_px(&self, reach_px: f32) -> f32 {
+        let image = self.mask.first().is_some_and(|&size| size > 0.0);
+        reach_px.max(0.5) + if image { 1.0 } else { 0.5 }
     }
 
     /// The data back from a shader's bindings (twins): the mask buffer and the shape image.
@@ -416,5 +433,53 @@ mod tests {
             ApertureConstants { sa_lsa_coc_px: -3.0, ..ApertureConstants::new(&hexagon, 40.0, [0.0; 2], 8, 8) };
         let (traced, data) = ApertureData::new(traced, None, 22);
         assert_eq!(data.specialization(&traced), [0, 1]);
+    }
+
+    /// The gathers' tap disc holds every offset at which a sample of any reach up to its
+    /// bound weighs, for bladed, round and cat's-eye apertures and the user's aperture image,
+    /// in front of and behind the focus plane; and it is tighter than the whole-pixel disc
+    /// (ceil(reach) + 1) the gathers took before.
+    #[test]
+    fn the_tap_disc_holds_every_tap_that_weighs() {
+        let hexagon = ApertureShape { blades: 6, curvature: 0.0, ..ApertureShape::CIRCLE };
+        let mask = ApertureMask { values: vec![1.0; (MASK_SIZE * MASK_SIZE) as usize], mean: 1.0 };
+        let apertures = [
+            (hexagon, None),
+            (ApertureShape { blades: 5, curvature: 0.4, rotation_deg: 17.0, ..hexagon }, None),
+            (ApertureShape::CIRCLE, None),
+            (ApertureShape { cats_eye: 0.5, ..hexagon }, None),
+            (hexagon, Some(&mask)),
+        ];
+        for (shape, mask) in apertures {
+            let constants = ApertureConstants::new(&shape, 40.0, [0.0, 0.0], 64, 64);
+            let (constants, data) = ApertureData::new(constants, mask, shape_radius_for(2.0 * 6.0));
+            let (mut disc_taps, mut whole_pixel_taps) = (0, 0);
+            for quarter in 0..=24 {
+                let reach_max = quarter as f32 * 0.25;
+                let rows: Vec<(i32, i32)> = tap_disc_rows(data.tap_disc_px(reach_max)).collect();
+                let in_disc = |d: [i32; 2]| rows.iter().any(|&(dy, half)| dy == d[1] && d[0].abs() <= half);
+                disc_taps += rows.iter().map(|&(_, half)| 2 * half + 1).sum::<i32>();
+                let r = reach_max.ceil() as i32 + 1;
+                whole_pixel_taps += (-r..=r).map(|dy| 2 * ((r * r - dy * dy) as f32).sqrt() as i32 + 1).sum::<i32>();
+                // Samples of CoCs whose reach is within the bound (both ends exactly), at a pixel
+                // of CoC 0 and at one behind them all.
+                let steps = 20 * quarter;
+                let cocs = (0..=steps).map(|i| 2.0 * reach_max * (2.0 * i as f32 / steps.max(1) as f32 - 1.0));
+                for coc_q in cocs.chain([-2.0 * reach_max, 2.0 * reach_max]) {
+                    for dy in -8..=8 {
+                        for dx in -8..=8 {
+                            let w = tap_weight([dx, dy], 0.0, coc_q, &constants, [30.5 + dx as f32, 20.5], &data);
+                            let w_behind = tap_weight([dx, dy], 2.0 * reach_max, coc_q, &constants, [30.5, 20.5], &data);
+                            assert!(
+                                (w <= 0.0 && w_behind <= 0.0) || in_disc([dx, dy]),
+                                "{shape:?} mask {}: CoC {coc_q} weighs at ({dx}, {dy}) outside the disc of reach {reach_max}",
+                                mask.is_some()
+                            );
+                        }
+                    }
+                }
+            }
+            assert!(disc_taps < whole_pixel_taps, "{disc_taps} taps against {whole_pixel_taps}");
+        }
     }
 }

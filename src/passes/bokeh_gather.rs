@@ -1,7 +1,7 @@
 //! Depth-of-field gather pass: aperture-shaped circles of confusion, background and foreground
 //! kept apart (see glsl/bokeh_gather.comp for the rules), energy spread over each CoC's area.
 
-use super::aperture::{shape_radius_for, tap_weight, ApertureConstants, ApertureData};
+use super::aperture::{shape_radius_for, tap_disc_rows, tap_weight, ApertureConstants, ApertureData};
 use super::barriers::{after_compute_write, overwrite};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::twin::finite_or_zero;
@@ -47,10 +47,12 @@ impl GatherPush {
 pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherPush, aperture: &ApertureData) -> Vec<f32> {
     let (w, h) = (p.size[0], p.size[1]);
     let mut out = vec![0.0f32; rgba.len()];
+    // radius_px - 1: the largest CoC radius, rounded up.
+    let disc_px = aperture.tap_disc_px((p.radius_px - 1) as f32);
     for y in 0..h {
         for x in 0..w {
             let texel =
-                gather_exact(rgba, coc_px, [w, h], [x, y], p.radius_px, &p.aperture, p.layer_transition_px, aperture);
+                gather_exact(rgba, coc_px, [w, h], [x, y], disc_px, &p.aperture, p.layer_transition_px, aperture);
             let o = (y * w + x) as usize * 4;
             out[o..o + 4].copy_from_slice(&texel);
         }
@@ -58,7 +60,7 @@ pub fn gather_cpu(rgba: &[f32], coc_px: &[f32], p: &GatherPush, aperture: &Apert
     out
 }
 
-/// The exact gather at pixel `p` over samples within `r` px (gather_exact in
+/// The exact gather at pixel `p` over the taps in the disc of radius `disc_px` (gather_exact in
 /// glsl/include/gather.glsl): RGBA `color` and signed `coc_px` of a `size[0] x size[1]` image.
 #[allow(clippy::too_many_arguments)]
 pub fn gather_exact(
@@ -66,7 +68,7 @@ pub fn gather_exact(
     coc_px: &[f32],
     size: [i32; 2],
     p: [i32; 2],
-    r: i32,
+    disc_px: f32,
     aperture: &ApertureConstants,
     layer_transition_px: f32,
     data: &ApertureData,
@@ -79,9 +81,7 @@ pub fn gather_exact(
     let (mut bg, mut fg, mut hidden) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
     let (mut bg_w, mut fg_w, mut own_n) = (0.0f32, 0.0f32, 0.0f32);
     let (mut hidden_n, mut hidden_near_w) = (0.0f32, 0.0f32);
-    for dy in -r..=r {
-        // The row of the disc dx^2 + dy^2 <= r^2, as the shader's loop bound.
-        let half_width = ((r * r - dy * dy) as f32).sqrt().floor() as i32;
+    for (dy, half_width) in tap_disc_rows(disc_px) {
         for dx in -half_width..=half_width {
             // Clamp to edge, like the shader.
             let (ux, uy) = (p[0] + dx, p[1] + dy);

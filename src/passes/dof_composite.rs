@@ -136,9 +136,10 @@ impl Twin for CompositeShader {
                 let mut base = bg;
                 if blurred < 1.0 {
                     let fg_radius = radii[tile_count + t];
-                    let r = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() as i32 + 1;
+                    // The shader's disc: whole pixels, one beyond the capped reach.
+                    let disc_px = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() + 1.0;
                     let (a, l) = (&pc.aperture, pc.layer_transition_px);
-                    let mut exact = gather_exact(&color.texels, &coc.texels, pc.size, p, r, a, l, &data);
+                    let mut exact = gather_exact(&color.texels, &coc.texels, pc.size, p, disc_px, a, l, &data);
                     let big = bilinear(&fg_big_level, h0, f);
                     for k in 0..3 {
                         exact[k] = exact[k] * (1.0 - big[3]) + big[k] * big[3];

@@ -1,7 +1,7 @@
 //! Tiled depth of field: the gather of one pyramid level's tiles at that level's resolution.
 //! Shader: glsl/dof_level_gather.comp.
 
-use super::aperture::{tap_weight, ApertureConstants, ApertureData};
+use super::aperture::{tap_disc_rows, tap_weight, ApertureConstants, ApertureData};
 use super::barriers::{after_compute_write, overwrite};
 use super::dof_classify::tiles_per_group;
 use super::twin::floats;
@@ -109,14 +109,11 @@ impl Twin for LevelGatherShader {
                     continue;
                 }
                 let coc_p = coc.clamped(p[0], p[1])[0] * to_level;
-                let r = (radii[t] * to_level).ceil() as i32 + 1;
+                let tap_disc = data.tap_disc_px(radii[t] * to_level);
                 let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
                 let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
-                for dy in -r..=r {
-                    for dx in -r..=r {
-                        if dx * dx + dy * dy > r * r + r {
-                            continue;
-                        }
+                for (dy, half_width) in tap_disc_rows(tap_disc) {
+                    for dx in -half_width..=half_width {
                         let q =
                             [(p[0] + dx).clamp(0, pc.level_size[0] - 1), (p[1] + dy).clamp(0, pc.level_size[1] - 1)];
                         let cw = coc.clamped(q[0], q[1]);

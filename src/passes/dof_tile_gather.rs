@@ -61,9 +61,9 @@ impl Twin for TileGatherShader {
                     // Samples behind p reach no farther than p's own CoC; only foreground
                     // samples can reach farther, and the tile knows the largest of those.
                     let radius_p = 0.5 * coc.clamped(p[0], p[1])[0].abs();
-                    let r = radii[t].min(radius_p.max(radii[tile_count + t])).ceil() as i32 + 1;
+                    let disc_px = data.tap_disc_px(radii[t].min(radius_p.max(radii[tile_count + t])));
                     let (a, l) = (&pc.aperture, pc.layer_transition_px);
-                    gather_exact(&color.texels, &coc.texels, pc.size, p, r, a, l, &data).to_vec()
+                    gather_exact(&color.texels, &coc.texels, pc.size, p, disc_px, a, l, &data).to_vec()
                 };
                 out.texel_mut(x, y).copy_from_slice(&texel);
             }
