@@ -119,9 +119,8 @@ void main() {
         for (int once = 0; once < exact_trips; ++once) {
             // As in dof_tile_gather: only foreground samples reach farther than p's own CoC.
             float fg_radius = tile_radius_px[tile_count + int(t)];
-            // A disc of whole pixels one beyond the reach, which is capped: the larger
-            // foreground samples come with fg_big below, those in the disc here too.
-            float disc_px = ceil(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius))) + 1.0;
+            // The reach is capped: the larger foreground samples come with fg_big below.
+            float disc_px = tap_disc_px(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)));
             vec4 exact = gather_exact(p, pc.size, disc_px, ap, pc.layer_transition_px);
             vec4 fg_big = bilinear_level(2, h0, f);
             exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);

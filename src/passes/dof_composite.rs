@@ -136,8 +136,7 @@ impl Twin for CompositeShader {
                 let mut base = bg;
                 if blurred < 1.0 {
                     let fg_radius = radii[tile_count + t];
-                    // The shader's disc: whole pixels, one beyond the capped reach.
-                    let disc_px = (pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)).ceil() + 1.0;
+                    let disc_px = data.tap_disc_px((pc.small_radius_px + 1.0).min(radius_p.max(fg_radius)));
                     let (a, l) = (&pc.aperture, pc.layer_transition_px);
                     let mut exact = gather_exact(&color.texels, &coc.texels, pc.size, p, disc_px, a, l, &data);
                     let big = bilinear(&fg_big_level, h0, f);
