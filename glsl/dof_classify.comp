@@ -42,6 +42,8 @@ void main() {
         args[ARGS_BIN_DISPATCH + 2] = 1u;
         args[ARGS_HIGHLIGHT_DISPATCH + 1] = 1u;
         args[ARGS_HIGHLIGHT_DISPATCH + 2] = 1u;
+        args[ARGS_SPRITE_TILES + 1] = 1u;
+        args[ARGS_SPRITE_TILES + 2] = 1u;
     }
     if (t >= tile_count) return;
     ivec2 tc = ivec2(t % pc.tiles.x, t / pc.tiles.x);

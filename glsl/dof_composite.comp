@@ -1,15 +1,14 @@
 #version 450
 // Tiled depth of field, the level tiles at full resolution: the background upsampled from the
 // tile's pyramid level, or for pixels that are themselves nearly sharp the exact gather (so a
-// sharp subject stays sharp at full resolution), the level's foreground composited over, then
-// the highlight sprites binned to the tile (dof_bin.comp), each with the exact aperture shape,
-// under the gather's occlusion rule: a sprite behind a pixel spreads no farther than the
-// pixel's own CoC. One workgroup per tile, dispatched over the lists of the four levels: each
-// level's class list with the exact gather, its blurred list (tiles with no nearly sharp pixel,
-// dof_classify.comp) with a pipeline that has no exact gather in its code at all.
+// sharp subject stays sharp at full resolution), the level's foreground composited over. The
+// highlight sprites come after, over the tiles that have any (dof_sprites.comp). One workgroup
+// per tile, dispatched over the lists of the four levels: each level's class list with the
+// exact gather, its blurred list (tiles with no nearly sharp pixel, dof_classify.comp) with a
+// pipeline that has no exact gather in its code at all.
 #include "common.glsl"
 #define APERTURE_MASK_BINDING 6
-#define APERTURE_SHAPE_BINDING 13
+#define APERTURE_SHAPE_BINDING 10
 #include "aperture.glsl"
 #include "dof_tiles.glsl"
 
@@ -29,10 +28,6 @@ layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
 layout(binding = 7, rg32f) uniform readonly image2D coc_level;
 layout(binding = 8, rgba32f) uniform readonly image2D fg_big_level;
 layout(binding = 9, std430) readonly buffer TileRadius { float tile_radius_px[]; };
-layout(binding = 10, std430) readonly buffer Sprites { Sprite sprites[]; };
-layout(binding = 11, std430) readonly buffer BinCounts { uint bin_count[]; };
-layout(binding = 12, std430) readonly buffer Bins { uint bin[]; };
-layout(binding = 14, std430) readonly buffer Args { uint args[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -42,7 +37,6 @@ layout(push_constant) uniform Push {
     float small_radius_px;
     Aperture ap;
     float layer_transition_px;
-    int sprite_capacity;
     int list;   // the tile list this dispatch takes (the level's class list, or its blurred list)
 } pc;
 
@@ -56,18 +50,6 @@ vec4 load_level(int which, ivec2 q) {
 vec4 bilinear_level(int which, ivec2 h0, vec2 f) {
     return mix(mix(load_level(which, h0), load_level(which, h0 + ivec2(1, 0)), f.x),
                mix(load_level(which, h0 + ivec2(0, 1)), load_level(which, h0 + ivec2(1, 1)), f.x), f.y);
-}
-
-// The light of one sprite at pixel p (of signed CoC coc_p).
-vec3 sprite_light(Sprite s, ivec2 p, float coc_p, Aperture ap) {
-    float radius_p = max(0.5 * abs(coc_p), 0.5);
-    float radius_q = max(0.5 * abs(s.coc_px), 0.5);
-    float reach = s.coc_px > coc_p ? min(radius_q, radius_p) : radius_q;
-    int flip = s.coc_px < 0.0 ? -1 : 1;
-    // Sprites sit at pixel centres: the offset is a whole number of pixels.
-    ivec2 o = (p - ivec2(floor(s.centre_px))) * flip;
-    return s.color.rgb * (aperture_weight_at(o, reach, ap, s.centre_px, float(flip), 1.0)
-        * sa_weight(vec2(o), radius_q, s.coc_px, ap));
 }
 
 void main() {
@@ -129,13 +111,5 @@ void main() {
         }
     }
     vec3 color = mix(base.rgb, fg.rgb, fg.a);
-    // The sprites of the tile's bin; all of them if the bin overflowed.
-    uint count = bin_count[t];
-    uint listed = min(count, uint(BIN_CAPACITY));
-    uint total = count > uint(BIN_CAPACITY) ? min(args[ARGS_SPRITE_COUNT], uint(pc.sprite_capacity)) : listed;
-    for (uint k = 0u; k < total; ++k) {
-        uint i = count > uint(BIN_CAPACITY) ? k : bin[int(t) * BIN_CAPACITY + int(k)];
-        color += sprite_light(sprites[i], p, coc_here, ap);
-    }
     if (inside) imageStore(color_out, p, vec4(color, base.a));
 }

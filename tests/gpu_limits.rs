@@ -74,11 +74,11 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
     // frame is still being read (Renderer::create_likely). For the tiled depth of field that is
     // every pipeline the plan uses: the CoC pass's (its specialisation is the camera's alone),
     // its edge resolve's where the camera resolves depth edges (coc_edges, specialised by the
-    // camera's field curvature alone), the tiled path's nine unspecialised ones, and the four
-    // the lens specialises (the two gathers and the composite with and without its exact
-    // gather, each with or without the aberration's path); the plan adds none. A likely
-    // pipeline the plan did not use, or a specialisation other than the plan's, shows as a
-    // count off by one or four.
+    // camera's field curvature alone), the tiled path's nine unspecialised ones, and the five
+    // the lens specialises (the two gathers, the composite with and without its exact gather,
+    // and the sprites, each with or without the aberration's path); the plan adds none. A
+    // likely pipeline the plan did not use, or a specialisation other than the plan's, shows as
+    // a count off by one or five.
     let (w, h) = (64u32, 48u32);
     let color: Vec<f32> = (0..w * h).flat_map(|i| [0.2 + (i % 7) as f32 * 0.1, 0.3, 0.1, 1.0]).collect();
     let depth: Vec<f32> = (0..w * h).map(|i| if (i % w) < w / 2 { 0.8 } else { 9.0 }).collect();
@@ -96,18 +96,18 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         renderer.prepare(&p).expect("the plan's pipelines");
         let added = warm.pipelines_created() - likely;
         let case = format!("resolve_depth_edges {resolve_depth_edges}, spherical aberration {spherical_aberration}");
-        // coc, coc_edges with the resolve, and the tiled path's thirteen.
+        // coc, coc_edges with the resolve, and the tiled path's fourteen.
         let coc_pipelines = if resolve_depth_edges { 2 } else { 1 };
-        assert_eq!((likely, added), (coc_pipelines + 13, 0), "{case}");
+        assert_eq!((likely, added), (coc_pipelines + 14, 0), "{case}");
         renderer.render(&frame, &p, false).expect("render");
         assert_eq!(warm.pipelines_created(), likely + added, "{case}: the render created a pipeline the plan had not");
         assert_validation_clean(&warm);
 
-        // Without the head start, the plan creates them all (fifteen, fourteen without the
+        // Without the head start, the plan creates them all (sixteen, fifteen without the
         // resolve).
         let cold = gpu();
         Renderer::new(&cold, &p).expect("pipelines");
-        assert_eq!(cold.pipelines_created(), coc_pipelines + 13);
+        assert_eq!(cold.pipelines_created(), coc_pipelines + 14);
     }
 }
 

@@ -238,6 +238,8 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     // The composite's two pipelines (with the exact gather over a level's class list, without
     // it over the level's blurred list) each checked on tiles.
     let mut composite_lists = BTreeSet::new();
+    // The sprites' dispatch, on tiles that have sprites (it has no workgroup where none has).
+    let mut sprite_tiles_checked = 0;
     // The bare pass of the benchmark is no pass of a render: check it on its own.
     let copy = realcam::gpu::Kernel::new(&gpu).expect("copy pipeline");
     let (_, checks) = realcam::tools::bench::run_bare_pass(&gpu, &copy, &busy_frame(20, 12), true).expect("bare pass");
@@ -270,6 +272,9 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
             if c.shader == "dof_composite" && c.groups[0] > 0 {
                 composite_lists.insert(c.pass.ends_with("_blurred"));
             }
+            if c.shader == "dof_sprites" {
+                sprite_tiles_checked += c.groups[0];
+            }
             if let Err(e) = c.result {
                 failures.push(format!("{name}: pass {}: {e}", c.pass));
             }
@@ -284,6 +289,7 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
         assert!(checked.contains(shader), "shader {shader} was never checked against a twin");
     }
     assert_eq!(composite_lists.len(), 2, "the composite ran on tiles of only one kind of list: {composite_lists:?}");
+    assert!(sprite_tiles_checked > 0, "the sprites were checked on no tile with sprites");
 }
 
 #[test]

@@ -14,9 +14,11 @@
 #define LEVEL_RADIUS 2
 // The tile lists: one per class, then per level the level's tiles with no nearly sharp pixel
 // (every pixel's CoC radius at least the small-CoC radius), which the composite takes without
-// its exact gather; the level classes' own lists keep the others.
+// its exact gather; the level classes' own lists keep the others. Last, the level tiles whose
+// bin holds a sprite (dof_bin_order.comp lists them, dof_sprites.comp takes them).
 #define LIST_BLURRED_LEVEL1 6  // CLASS_COUNT
-#define LIST_COUNT 10
+#define LIST_SPRITE_TILES 10
+#define LIST_COUNT 11
 
 // The args buffer of indirect dispatches (x, y, z): per class one workgroup per tile (its x is
 // the class's tile count), per level the level gather's workgroups, the sprite binning's (one
@@ -40,7 +42,9 @@
 // The composite's dispatches over the blurred lists, one workgroup per tile (x, y, z per level).
 #define ARGS_BLURRED_TILES_BASE 44
 #define ARGS_BLURRED_TILES(level) (ARGS_BLURRED_TILES_BASE + ((level) - 1) * ARGS_DISPATCH_WORDS)
-#define ARGS_WORDS 56
+// The sprites' dispatch over the tiles with sprites, one workgroup per tile (x, y, z).
+#define ARGS_SPRITE_TILES 56
+#define ARGS_WORDS 59
 
 // Invocations per workgroup of the level gathers and of the sprite binning.
 #define GROUP_SIZE 64

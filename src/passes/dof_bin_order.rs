@@ -1,10 +1,11 @@
 //! Tiled depth of field: each tile's bin of sprites put in a fixed order (by the sprites'
-//! centres), so that the composite adds their light in the same order on every run: dof_bin
-//! fills the bins with atomics, in an order that changes from run to run. One invocation per
-//! tile. Shader: glsl/dof_bin_order.comp.
+//! centres), so that dof_sprites adds their light in the same order on every run: dof_bin fills
+//! the bins with atomics, in an order that changes from run to run. The tiles whose bin holds a
+//! sprite are listed for dof_sprites. One invocation per tile. Shader: glsl/dof_bin_order.comp.
 
 use super::barriers::buffer_after_compute_write;
-use crate::gpu::shaders::dof_tiles::{BIN_CAPACITY, GROUP_SIZE, SPRITE_WORDS};
+use super::dof_classify::list_tiles_args_word;
+use crate::gpu::shaders::dof_tiles::{BIN_CAPACITY, GROUP_SIZE, LIST_SPRITE_TILES, SPRITE_WORDS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
 pub const NAME: &str = "dof_bin_order";
@@ -21,6 +22,8 @@ crate::shader_bindings! {
         sprites: buffer(Sprites),
         bin_counts: buffer(BinCounts),
         bins: buffer(Bins),
+        args: buffer(Args),
+        tile_lists: buffer(TileLists),
     }
 }
 
@@ -48,18 +51,35 @@ impl Twin for BinOrderShader {
     fn cpu(pc: &BinOrderPush, _groups: [u32; 3], b: &mut [HostData]) {
         let sprites = b[0].words().to_vec();
         let counts = b[1].words().to_vec();
+        let tile_count = pc.tile_count.max(0) as usize;
         let bins = b[2].words_mut();
-        for (t, &n) in counts.iter().enumerate().take(pc.tile_count.max(0) as usize) {
+        for (t, &n) in counts.iter().enumerate().take(tile_count) {
             if n > BIN_CAPACITY {
                 continue;
             }
             let start = t * BIN_CAPACITY as usize;
             order_bin(&mut bins[start..start + n as usize], &sprites);
         }
+        // The tiles with sprites, listed and counted (in tile order; the GPU's order is any).
+        let listed: Vec<u32> = (0..tile_count as u32).filter(|&t| counts[t as usize] > 0).collect();
+        b[3].words_mut()[list_tiles_args_word(LIST_SPRITE_TILES)] += listed.len() as u32;
+        let start = LIST_SPRITE_TILES as usize * tile_count;
+        b[4].words_mut()[start..start + listed.len()].copy_from_slice(&listed);
+    }
+
+    /// Tiles are appended to the list with atomics, in any order: sort it.
+    fn canonical(pc: &BinOrderPush, b: &mut [HostData]) {
+        let tile_count = pc.tile_count.max(0) as usize;
+        let count = b[3].words()[list_tiles_args_word(LIST_SPRITE_TILES)] as usize;
+        let start = LIST_SPRITE_TILES as usize * tile_count;
+        let lists = b[4].words_mut();
+        let end = (start + count).min(lists.len());
+        lists[start..end].sort_unstable();
     }
 }
 
-/// Record the ordering of every tile's bin, after dof_bin filled them.
+/// Record the ordering of every tile's bin, after dof_bin filled them, and the list of the tiles
+/// with sprites.
 pub fn record(
     kernel: &Kernel<BinOrderShader>,
     rec: &mut Recorder,
@@ -69,7 +89,15 @@ pub fn record(
     rec.begin_pass(NAME);
     // bins, bin counts: written by dof_bin with atomics; read and reordered here. The sprites
     // were made visible to compute before dof_bin read them.
-    rec.buffer_barriers(&[buffer_after_compute_write(b.bins), buffer_after_compute_write(b.bin_counts)]);
+    // args: its counters updated by dof_bin (the bins' overflows); the sprite tiles counted up
+    //   here. tile_lists: dof_classify's lists, read by the tile passes; the sprite tiles'
+    //   list written here (write-after-read and -write).
+    rec.buffer_barriers(&[
+        buffer_after_compute_write(b.bins),
+        buffer_after_compute_write(b.bin_counts),
+        buffer_after_compute_write(b.args),
+        buffer_after_compute_write(b.tile_lists),
+    ]);
     let push = BinOrderPush { tile_count: tile_count as i32 };
     kernel.dispatch(rec, b, &push, [tile_count.div_ceil(GROUP_SIZE), 1, 1])?;
     rec.end_pass();

@@ -7,8 +7,8 @@ use super::barriers::{buffer_after_compute_write, buffer_after_fill};
 use super::TILE_SIZE;
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_BLURRED_TILES_BASE, ARGS_DISPATCH_WORDS, ARGS_HIGHLIGHT_DISPATCH, ARGS_LEVEL_GATHER_BASE,
-    CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL, GROUP_SIZE, LEVELS, LEVEL_RADIUS, LIST_BLURRED_LEVEL1,
-    LIST_COUNT,
+    ARGS_SPRITE_TILES, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL, GROUP_SIZE, LEVELS, LEVEL_RADIUS,
+    LIST_BLURRED_LEVEL1, LIST_COUNT, LIST_SPRITE_TILES,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 
@@ -136,12 +136,14 @@ pub fn tiles_per_group(level: u32) -> u32 {
     GROUP_SIZE / (side * side)
 }
 
-/// The word of the args buffer holding the number of tiles in tile list `list` (a class's, or
-/// from `LIST_BLURRED_LEVEL1` a level's blurred tiles): the x of its one-workgroup-per-tile
-/// dispatch.
+/// The word of the args buffer holding the number of tiles in tile list `list` (a class's, from
+/// `LIST_BLURRED_LEVEL1` a level's blurred tiles, or `LIST_SPRITE_TILES`): the x of its
+/// one-workgroup-per-tile dispatch.
 pub fn list_tiles_args_word(list: u32) -> usize {
     if list < CLASS_COUNT {
         (list * ARGS_DISPATCH_WORDS) as usize
+    } else if list == LIST_SPRITE_TILES {
+        ARGS_SPRITE_TILES as usize
     } else {
         (ARGS_BLURRED_TILES_BASE + (list - LIST_BLURRED_LEVEL1) * ARGS_DISPATCH_WORDS) as usize
     }

@@ -1,14 +1,14 @@
 //! Tiled depth of field: the level tiles at full resolution (the tile's level upsampled, the
-//! exact gather for nearly sharp pixels, the binned highlight sprites). Shader:
+//! exact gather for nearly sharp pixels; the highlight sprites come after, dof_sprites). Shader:
 //! glsl/dof_composite.comp.
 
-use super::aperture::{aperture_weight_at, sa_weight, ApertureConstants, ApertureData};
-use super::barriers::{after_compute_write, buffer_after_compute_write, write_after_write};
+use super::aperture::{ApertureConstants, ApertureData};
+use super::barriers::{after_compute_write, args_for_indirect, buffer_after_compute_write, write_after_write};
 use super::bokeh_gather::gather_exact;
 use super::twin::{floats, listed_tiles};
 use super::TILE_SIZE;
-use crate::gpu::shaders::dof_tiles::{BIN_CAPACITY, LIST_BLURRED_LEVEL1, SPRITE_WORDS};
-use crate::gpu::{GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
+use crate::gpu::shaders::dof_tiles::LIST_BLURRED_LEVEL1;
+use crate::gpu::{GpuBuffer, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 
 pub const NAME: &str = "dof_composite";
 
@@ -22,7 +22,6 @@ pub struct CompositePush {
     pub small_radius_px: f32,
     pub aperture: ApertureConstants,
     pub layer_transition_px: f32,
-    pub sprite_capacity: i32,
     /// The tile list the dispatch takes: the level's class list (`CLASS_LEVEL1 + level - 1`),
     /// or its blurred list (`LIST_BLURRED_LEVEL1 + level - 1`, the pipeline without the exact
     /// gather).
@@ -42,11 +41,7 @@ crate::shader_bindings! {
         coc_level: image(coc_level),
         fg_big_level: image(fg_big_level),
         tile_radius: buffer(TileRadius),
-        sprites: buffer(Sprites),
-        bin_counts: buffer(BinCounts),
-        bins: buffer(Bins),
         aperture_shape: image(aperture_shape),
-        args: buffer(Args),
     }
 }
 
@@ -76,29 +71,13 @@ fn bilinear(img: &HostImage, h0: [i32; 2], f: [f32; 2]) -> [f32; 4] {
     mix4(&top, &bottom, f[1])
 }
 
-/// The light of one sprite (its 8 words) at pixel p of signed CoC `coc_p`.
-pub fn sprite_light(s: &[f32], p: [i32; 2], coc_p: f32, ap: &ApertureConstants, data: &ApertureData) -> [f32; 3] {
-    let (centre, coc_q) = ([s[0], s[1]], s[2]);
-    let radius_p = (0.5 * coc_p.abs()).max(0.5);
-    let radius_q = (0.5 * coc_q.abs()).max(0.5);
-    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
-    let flip = if coc_q < 0.0 { -1 } else { 1 };
-    let o = [(p[0] - centre[0].floor() as i32) * flip, (p[1] - centre[1].floor() as i32) * flip];
-    let w = aperture_weight_at(o, reach, ap, centre, flip as f32, 1.0, data)
-        * sa_weight([o[0] as f32, o[1] as f32], radius_q, coc_q, ap);
-    [s[4] * w, s[5] * w, s[6] * w]
-}
-
 impl Twin for CompositeShader {
     fn cpu(pc: &CompositePush, groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
         let (bg_level, fg_level) = (b[2].image().clone(), b[3].image().clone());
         let (lists, radii) = (b[5].words().to_vec(), floats(b[9].words()));
-        let data = ApertureData::from_bindings(&b[6], &b[13], pc.aperture.shape_radius);
+        let data = ApertureData::from_bindings(&b[6], &b[10], pc.aperture.shape_radius);
         let (coc_level, fg_big_level) = (b[7].image().clone(), b[8].image().clone());
-        let sprite_count = super::twin::sprites_written(b[14].words(), pc.sprite_capacity);
-        let sprites = floats(&b[10].words()[..sprite_count * SPRITE_WORDS as usize]);
-        let (counts, bins) = (b[11].words().to_vec(), b[12].words().to_vec());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let scale = (1 << pc.level) as f32;
         let out = b[4].image_mut();
@@ -146,30 +125,11 @@ impl Twin for CompositeShader {
                     base = mix4(&exact, &bg, blurred);
                     fg[3] *= blurred;
                 }
-                let mut rgb: [f32; 3] = std::array::from_fn(|k| base[k] * (1.0 - fg[3]) + fg[k] * fg[3]);
-                let n = counts[t];
-                let indices: Vec<usize> = if n > BIN_CAPACITY {
-                    (0..sprite_count).collect()
-                } else {
-                    bins[t * BIN_CAPACITY as usize..t * BIN_CAPACITY as usize + n as usize]
-                        .iter()
-                        .map(|&i| i as usize)
-                        .collect()
-                };
-                for i in indices {
-                    let s = &sprites[i * SPRITE_WORDS as usize..(i + 1) * SPRITE_WORDS as usize];
-                    let light = sprite_light(s, p, coc_here, &pc.aperture, &data);
-                    for k in 0..3 {
-                        rgb[k] += light[k];
-                    }
-                }
+                let rgb: [f32; 3] = std::array::from_fn(|k| base[k] * (1.0 - fg[3]) + fg[k] * fg[3]);
                 out.texel_mut(x, y).copy_from_slice(&[rgb[0], rgb[1], rgb[2], base[3]]);
             }
         }
     }
-
-    /// A pixel sums many sprites, in the bin's order on the GPU: a little more room.
-    const TOLERANCE: f32 = 2e-4;
 }
 
 /// The composite's specialisation: the aperture's two constants, then whether the exact gather is
@@ -184,6 +144,7 @@ pub fn record(
     specialization: &[u32],
     rec: &mut Recorder,
     b: &CompositeBindings<'_>,
+    args: &GpuBuffer,
     push: &CompositePush,
 ) -> GpuResult<()> {
     let blurred = push.list as u32 >= LIST_BLURRED_LEVEL1;
@@ -194,7 +155,9 @@ pub fn record(
     // output: the full-resolution tile passes and the other composites (the other levels', and
     //   the level's other list) wrote other tiles of it; the write-after-write dependency keeps
     //   sync validation (which tracks whole images) and any driver honest.
-    // bins, bin counts: written by dof_bin and put in order by dof_bin_order (read-after-write).
+    // tile_lists, args (this dispatch's list and size): dof_classify wrote them, and
+    //   dof_bin_order has since appended its list of sprite tiles and counted them (another
+    //   list, other words; sync validation tracks whole buffers).
     rec.image_barriers(&[
         after_compute_write(b.color),
         after_compute_write(b.coc_level),
@@ -203,9 +166,9 @@ pub fn record(
         after_compute_write(b.fg_big_level),
         write_after_write(b.output),
     ]);
-    rec.buffer_barriers(&[buffer_after_compute_write(b.bins), buffer_after_compute_write(b.bin_counts)]);
+    rec.buffer_barriers(&[buffer_after_compute_write(b.tile_lists), args_for_indirect(args)]);
     let offset = super::dof_classify::list_tiles_args_word(push.list as u32) as u64 * 4;
-    kernel.dispatch_indirect(rec, specialization, b, push, b.args, offset)?;
+    kernel.dispatch_indirect(rec, specialization, b, push, args, offset)?;
     rec.end_pass();
     Ok(())
 }

@@ -31,6 +31,7 @@ pub mod dof_level_gather;
 pub mod dof_level_lists;
 pub mod dof_pyramid;
 pub mod dof_sprite_excess;
+pub mod dof_sprites;
 pub mod dof_tile_gather;
 pub mod dof_tiles;
 pub mod film;

@@ -1,8 +1,8 @@
 //! The tiled depth-of-field path (`--bokeh tiled`, the default), in order: tiles -> classify ->
 //! copy tiles and exact small-CoC tiles at full resolution; for the rest a pyramid of the
 //! blurring pixels (halving down to 1/16, highlights taken out as sprites), a gather per tile at
-//! the level where its radius is a couple of texels, sprites binned per tile, and a composite at
-//! full resolution. Its cost is nearly flat in the CoC radius: full-resolution gathers are
+//! the level where its radius is a couple of texels, sprites binned per tile, a composite at full
+//! resolution, and the sprites drawn over the tiles that have any. Its cost is nearly flat in the CoC radius: full-resolution gathers are
 //! bounded by `small_radius_px`, a level's gather has a bounded number of taps per texel while
 //! the texels are 4x fewer per level, and only highlights are scattered. Each step is its own
 //! module with its shader and CPU twin; this pass plans the path, owns the buffers the steps
@@ -22,13 +22,14 @@ use super::dof_level_gather::{LevelGatherBindings, LevelGatherPush, LevelGatherS
 use super::dof_level_lists::{LevelListsBindings, LevelListsShader};
 use super::dof_pyramid::{PyramidBindings, PyramidShader};
 use super::dof_sprite_excess::{saved_buffer_bytes, SpriteExcessBindings, SpriteExcessPush, SpriteExcessShader};
+use super::dof_sprites::{SpritesBindings, SpritesPush, SpritesShader};
 use super::dof_tile_gather::{TileGatherBindings, TileGatherPush, TileGatherShader};
 use super::dof_tiles::{TilesPush, TilesShader};
 use super::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use super::{
     dof_bin, dof_bin_order, dof_classify, dof_composite, dof_downsample, dof_level_gather, dof_level_lists, dof_pyramid,
 };
-use super::{dof_highlights, dof_sprite_excess, dof_tile_gather, dof_tiles};
+use super::{dof_highlights, dof_sprite_excess, dof_sprites, dof_tile_gather, dof_tiles};
 use super::{Decision, FrameImages, Pass, TILE_SIZE};
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_LEVEL1, LEVELS, LIST_BLURRED_LEVEL1, LIST_COUNT,
@@ -121,6 +122,7 @@ pub struct TiledDof {
     level_lists: Kernel<LevelListsShader>,
     level_gather: SpecializedKernel<LevelGatherShader>,
     composite: SpecializedKernel<CompositeShader>,
+    sprites: SpecializedKernel<SpritesShader>,
 }
 
 /// One level of the pyramid: its colour and CoC, and the layers its gather writes.
@@ -214,18 +216,23 @@ impl Pass for TiledDof {
                 level_lists,
                 level_gather: SpecializedKernel::new(gpu)?,
                 composite: SpecializedKernel::new(gpu)?,
+                sprites: SpecializedKernel::new(gpu)?,
             })
         })
     }
 
-    /// The gathers' and the composite's pipelines for this lens (the composite with and without
-    /// its exact gather), compiled side by side.
+    /// The gathers', the composite's and the sprites' pipelines for this lens (the composite with
+    /// and without its exact gather), compiled side by side.
     fn prepare(&self, p: &TiledDofParams) -> GpuResult<()> {
         let specialization = p.aperture_data.specialization(&p.aperture);
         let constants = &specialization[..];
         let [exact, blurred] = [true, false].map(|on| dof_composite::specialization(specialization, on));
         std::thread::scope(|scope| {
-            let gathers = scope.spawn(|| self.tile_gather.prepare(constants).and(self.level_gather.prepare(constants)));
+            let gathers = scope.spawn(|| {
+                self.tile_gather.prepare(constants)?;
+                self.level_gather.prepare(constants)?;
+                self.sprites.prepare(constants)
+            });
             let composites = self.composite.prepare(&exact).and(self.composite.prepare(&blurred));
             gathers.join().unwrap_or_else(|_| Err(GpuError::Internal("creating a pipeline panicked".into())))?;
             composites
@@ -372,7 +379,13 @@ impl Pass for TiledDof {
         };
         let bin_push = BinPush { tiles, sprite_capacity: p.sprite_capacity as i32 };
         dof_bin::record(&self.bin, rec, &bin_bindings, &bin_push, ARGS_BIN_DISPATCH as u64 * 4)?;
-        let order_bindings = BinOrderBindings { sprites: &sprites, bin_counts: &bin_counts, bins: &bins };
+        let order_bindings = BinOrderBindings {
+            sprites: &sprites,
+            bin_counts: &bin_counts,
+            bins: &bins,
+            args: &args,
+            tile_lists: &tile_lists,
+        };
         dof_bin_order::record(&self.bin_order, rec, &order_bindings, (tiles[0] * tiles[1]) as u32)?;
 
         for (level, l) in (1..).zip(&levels) {
@@ -415,7 +428,6 @@ impl Pass for TiledDof {
                     small_radius_px: p.small_radius_px,
                     aperture,
                     layer_transition_px,
-                    sprite_capacity: p.sprite_capacity as i32,
                     list: list as i32,
                 };
                 let b = CompositeBindings {
@@ -430,15 +442,25 @@ impl Pass for TiledDof {
                     coc_level: &l.coc,
                     fg_big_level: &l.fg_big,
                     tile_radius: &tile_radius,
-                    sprites: &sprites,
-                    bin_counts: &bin_counts,
-                    bins: &bins,
                     aperture_shape: &aperture_shape,
-                    args: &args,
                 };
-                dof_composite::record(&self.composite, &constants[..], rec, &b, &push)?;
+                dof_composite::record(&self.composite, &constants[..], rec, &b, &args, &push)?;
             }
         }
+        // The highlight sprites over the composites, on the tiles that have any.
+        let sprites_bindings = SpritesBindings {
+            output: &output,
+            coc: &coc,
+            tile_lists: &tile_lists,
+            sprites: &sprites,
+            bin_counts: &bin_counts,
+            bins: &bins,
+            args: &args,
+            aperture_mask: &aperture_mask,
+            aperture_shape: &aperture_shape,
+        };
+        let sprites_push = SpritesPush { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
+        dof_sprites::record(&self.sprites, &specialization, rec, &sprites_bindings, &sprites_push)?;
         if p.channel.is_some() {
             // Longitudinal colour: each channel's run reads the input colour, which stays the
             // frame's colour after this run (the next channel's run and the passes before
