@@ -109,14 +109,19 @@ pub fn run_bare_pass(
     Ok((profile, checks))
 }
 
-/// GPU ms of the bare pass on a `width x height` frame: the median of `runs` after a warm-up.
+/// The bare pass is timed at least this often: it takes a few ms, the noisiest figure of a run
+/// on lavapipe (its two threads waking for one short dispatch), and every multiple divides by it.
+const BARE_PASS_MIN_RUNS: usize = 15;
+
+/// GPU ms of the bare pass on a `width x height` frame: the median of `runs` (at least
+/// BARE_PASS_MIN_RUNS) after a warm-up.
 pub fn bare_pass_ms(gpu: &Gpu, width: u32, height: u32, runs: usize) -> GpuResult<f64> {
     let kernel = Kernel::<CopyShader>::new(gpu)?;
     let camera = bench_camera(width, height, BokehMode::Tiled);
     let frame = bench_frame(width, height, 8.0, &camera);
     let time = || run_bare_pass(gpu, &kernel, &frame, false).map(|(p, _)| p.pass_ms(copy::NAME).unwrap_or(f64::NAN));
     time()?;
-    let times = (0..runs.max(1)).map(|_| time()).collect::<GpuResult<Vec<_>>>()?;
+    let times = (0..runs.max(BARE_PASS_MIN_RUNS)).map(|_| time()).collect::<GpuResult<Vec<_>>>()?;
     Ok(median(times))
 }
 
