@@ -469,7 +469,8 @@ mod tests {
                     for dy in -8..=8 {
                         for dx in -8..=8 {
                             let w = tap_weight([dx, dy], 0.0, coc_q, &constants, [30.5 + dx as f32, 20.5], &data);
-                            let w_behind = tap_weight([dx, dy], 2.0 * reach_max, coc_q, &constants, [30.5, 20.5], &data);
+                            let w_behind =
+                                tap_weight([dx, dy], 2.0 * reach_max, coc_q, &constants, [30.5, 20.5], &data);
                             assert!(
                                 (w <= 0.0 && w_behind <= 0.0) || in_disc([dx, dy]),
                                 "{shape:?} mask {}: CoC {coc_q} weighs at ({dx}, {dy}) outside the disc of reach {reach_max}",
