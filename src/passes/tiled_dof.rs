@@ -2,9 +2,10 @@
 //! copy tiles and exact small-CoC tiles at full resolution; for the rest a pyramid of the
 //! blurring pixels (halving down to 1/16, highlights taken out as sprites), a gather per tile at
 //! the level where its radius is a couple of texels, sprites binned per tile, a composite at full
-//! resolution, and the sprites drawn over the tiles that have any. Its cost is nearly flat in the CoC radius: full-resolution gathers are
-//! bounded by `small_radius_px`, a level's gather has a bounded number of taps per texel while
-//! the texels are 4x fewer per level, and only highlights are scattered. Each step is its own
+//! resolution, and the sprites drawn over the tiles that have any. Its cost is nearly flat in the
+//! CoC radius: full-resolution gathers are bounded by `small_radius_px`, a level's gather has a
+//! bounded number of taps per texel while the texels are 4x fewer per level, and only highlights
+//! are scattered. Each step is its own
 //! module with its shader and CPU twin; this pass plans the path, owns the buffers the steps
 //! share and the barriers between the classification and its indirect dispatches.
 
