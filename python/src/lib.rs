@@ -2,38 +2,21 @@
 //!
 //! The settings are the flags of `realcam render`, given as keyword arguments
 //! (`Camera(fstop=2, focus=3.5, lens="ideal")` is `--fstop=2 --focus=3.5 --lens=ideal`): they are
-//! parsed by the command line's own parser and turned into a camera by its own code (the modules
-//! below are the command line's files, compiled into this crate), so the defaults, the lens and
-//! film files and every error message are the CLI's. A `Camera` keeps its GPU device and
+//! parsed by the command line's own parser (`realcam::flags`) and rendered by the library's
+//! render session (`realcam::session`), the one the command line runs, so the defaults, the lens
+//! and film files and every error message are the CLI's. A `Camera` keeps its GPU device and
 //! pipelines across `render` calls.
-
-// The command line's modules, as the `realcam` binary compiles them (src/bin/realcam/); this
-// package uses the parts that parse and render, not the subcommands' `run`.
-#[allow(dead_code)]
-#[path = "../../src/bin/realcam/common.rs"]
-mod common;
-#[allow(dead_code)]
-#[path = "../../src/bin/realcam/flags.rs"]
-mod flags;
-#[allow(dead_code)]
-#[path = "../../src/bin/realcam/motion_args.rs"]
-mod motion_args;
-#[allow(dead_code)]
-#[path = "../../src/bin/realcam/render.rs"]
-mod render;
-#[allow(dead_code)]
-#[path = "../../src/bin/realcam/sequence.rs"]
-mod sequence;
 
 mod arrays;
 
 use clap::Parser;
-use flags::{error_text, NameFlags};
+use realcam::flags::RenderArgs;
+use realcam::session::errors::{error_text, NameFlags};
+use realcam::session::{RenderSettings, Session, StderrReport};
 use numpy::PyReadonlyArrayDyn;
 use pyo3::exceptions::{PyException, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use render::{RenderArgs, Session};
 
 pyo3::create_exception!(realcam, RealcamError, PyException, "A realcam error; its message is the command line's.");
 
@@ -106,7 +89,7 @@ fn py_err(e: anyhow::Error) -> PyErr {
 /// opens the GPU at its first render and keeps the device and pipelines for the next.
 #[pyclass(unsendable, module = "realcam")]
 struct Camera {
-    args: RenderArgs,
+    settings: RenderSettings,
     camera: realcam::model::camera::Camera,
     session: Session,
     gpu_opens: u32,
@@ -122,10 +105,12 @@ impl Camera {
     fn new(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Camera> {
         let args = parse_flags("<arrays>", flag_words(kwargs)?)?;
         let camera = args.camera().map_err(py_err)?;
+        let settings = args.settings();
+        let session = Session::new(&settings.gpu, std::sync::Arc::new(StderrReport::new(None)));
         Ok(Camera {
-            args,
+            settings,
             camera,
-            session: Session::default(),
+            session,
             gpu_opens: 0,
             plan: Vec::new(),
             explain: String::new(),
@@ -162,7 +147,7 @@ impl Camera {
             channel_report,
         )
         .map_err(py_err)?;
-        let planned = render::plan_frame(&self.args, &self.camera, passes).map_err(py_err)?;
+        let planned = realcam::session::plan_frame(&self.settings, &self.camera, passes).map_err(py_err)?;
         self.explain = planned.plan.explain();
         self.plan = planned
             .plan
@@ -172,7 +157,7 @@ impl Camera {
             .map(|p| (p.name.to_string(), p.runs(), p.why.clone()))
             .collect();
         let opened_before = self.session.gpu().is_some();
-        let rendered = render::render_loaded(&self.args, &self.camera, planned, &mut self.session);
+        let rendered = realcam::session::render_loaded(&self.settings, &self.camera, planned, &mut self.session);
         if !opened_before && self.session.gpu().is_some() {
             self.gpu_opens += 1;
         }
@@ -221,7 +206,7 @@ impl Camera {
 #[pyo3(signature = (path, **kwargs))]
 fn read_passes<'py>(py: Python<'py>, path: &str, kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyDict>> {
     let args = parse_flags(path, flag_words(kwargs)?)?;
-    let passes = realcam::io::load_passes(&args.sources()).name_flags().map_err(py_err)?;
+    let passes = realcam::io::load_passes(&args.settings().sources).name_flags().map_err(py_err)?;
     arrays::passes_dict(py, passes)
 }
 

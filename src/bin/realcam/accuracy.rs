@@ -1,12 +1,12 @@
 //! `realcam accuracy`: every depth-of-field method on a frame against the diffraction reference.
 
 use crate::common::{command_line, progress_bar, write_text, GpuArgs, LensArgs};
-use crate::flags::NameFlags;
 use anyhow::{Context, Result};
 use clap::Args;
 use realcam::io::{load_passes, DepthKind, PassSources};
 use realcam::model::camera::{BokehMode, Camera, CameraRequest};
 use realcam::model::frame::Frame;
+use realcam::session::errors::NameFlags;
 use realcam::tools::accuracy::{csv, markdown, svg};
 use std::path::PathBuf;
 

@@ -2,11 +2,11 @@
 //! time side by side).
 
 use crate::common::{command_line, progress_bar, write_text, GpuArgs, LensArgs};
-use crate::flags::NameFlags;
 use anyhow::{Context, Result};
 use clap::Args;
 use realcam::model::camera::{Camera, CameraRequest};
 use realcam::model::settings::parse_size_px;
+use realcam::session::errors::NameFlags;
 use realcam::tools::accuracy_flare::{markdown, run as run_report, FlareAccuracyOptions};
 use std::path::PathBuf;
 

@@ -2,13 +2,13 @@
 //! measured-ghost primitives and written as the lens file's `[[fitted_ghost]]` section.
 
 use crate::common::{progress_bar, LensArgs};
-use crate::flags::NameFlags;
 use anyhow::{Context, Result};
 use clap::Args;
 use realcam::io::lens_file::LensFileWriter;
 use realcam::io::output::Outputs;
 use realcam::model::camera::{Camera, CameraRequest};
 use realcam::model::settings::parse_size_px;
+use realcam::session::errors::NameFlags;
 use realcam::tools::flare_fit::{fit_traced_ghosts, FitOptions, TracedFitOptions};
 use std::path::PathBuf;
 

@@ -1,11 +1,11 @@
 //! `realcam lens analyze` and `realcam lens import-lensfun`.
 
 use crate::common::write_text;
-use crate::flags::NameFlags;
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use realcam::io::lens_analysis;
 use realcam::io::lensfun::{import, ImportOptions};
+use realcam::session::errors::NameFlags;
 use std::path::{Path, PathBuf};
 
 #[derive(Subcommand)]

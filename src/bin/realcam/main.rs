@@ -1,6 +1,7 @@
 //! The realcam command line. Only argument handling lives here; the work is in the library.
-//! One module per subcommand; [`common`] holds the argument groups they share, [`flags`] the
-//! flag of each library field that library errors name.
+//! One module per subcommand; [`common`] holds what they share. The render session and the
+//! render flags live in the library (`realcam::session`, `realcam::flags`), shared with the
+//! Python package.
 
 mod accuracy;
 mod bench;
@@ -8,14 +9,11 @@ mod common;
 mod compare;
 mod devices;
 mod dof;
-mod flags;
 mod flare;
 mod flare_fit;
 mod flare_predict;
 mod lens;
-mod motion_args;
 mod render;
-mod sequence;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -32,7 +30,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render color + depth (+ velocity) EXR passes through a camera.
-    Render(Box<render::RenderArgs>),
+    Render(Box<realcam::flags::RenderArgs>),
     /// Print focusing, field of view, exposure and depth-of-field numbers for a lens setting.
     Dof(dof::DofArgs),
     /// List the Vulkan devices.
@@ -88,7 +86,7 @@ enum Command {
 }
 
 fn main() {
-    render::PROCESS_START.get_or_init(std::time::Instant::now);
+    realcam::session::PROCESS_START.get_or_init(std::time::Instant::now);
     // First, before any thread starts: SIGINT/SIGTERM remove the temporary outputs.
     realcam::io::output::remove_temporaries_on_signals();
     keep_freed_memory();
@@ -114,12 +112,12 @@ fn main() {
         Command::Synth { out } => synth::run(&out),
     };
     if let Err(e) = result {
-        eprintln!("error: {}", error_text(&e));
+        realcam::session::report::say_on_stderr(&format!("error: {}", error_text(&e)));
         std::process::exit(1);
     }
 }
 
-pub(crate) use flags::error_text;
+pub(crate) use realcam::session::errors::error_text;
 
 /// Ends a successful render whose every output is written and renamed, at once: no destructor
 /// or exit handler runs after this. Its last step would otherwise be to close the session's GPU
@@ -127,7 +125,7 @@ pub(crate) use flags::error_text;
 /// which the OS does faster when the process ends: scene A's whole render, 11 interleaved runs
 /// on lavapipe, 202 -> 190 ms median. Only the pipeline cache is written first, as closing the
 /// device would.
-fn exit_leaving_open(session: render::Session) -> ! {
+fn exit_leaving_open(session: realcam::session::Session) -> ! {
     if let Some(gpu) = session.gpu() {
         gpu.save_pipeline_cache();
     }
@@ -168,16 +166,16 @@ mod tests {
         command.get_subcommands().for_each(|c| long_flags(c, out));
     }
 
-    /// Here, not in flags.rs, which the Python package shares without the command line.
+    /// Here, not in the library's errors module: it needs the whole command line.
     #[test]
     fn every_field_has_a_flag_of_the_command_line() {
         let mut flags = Vec::new();
         long_flags(&super::Cli::command(), &mut flags);
-        for (field, flag) in super::flags::FLAGS {
+        for (field, flag) in realcam::session::errors::FLAGS {
             assert!(flags.iter().any(|f| f == flag), "{field}: {flag} is no flag of realcam");
         }
         for field in realcam::model::camera::CameraField::ALL {
-            assert_ne!(super::flags::flag(field.name()), field.name(), "{field:?} has no flag");
+            assert_ne!(realcam::session::errors::flag(field.name()), field.name(), "{field:?} has no flag");
         }
     }
 

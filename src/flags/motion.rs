@@ -1,11 +1,11 @@
 //! The motion-blur flags of `render` (and `accuracy`, `compare`'s renders): how the velocity pass
 //! is read, the frame rate, and the shutter in time.
 
+use crate::io::{PassSources, VelocityFormat};
+use crate::model::camera::{CameraRequest, MotionBlurMode};
+use crate::optics::shutter::{RollingDirection, ShutterCurve, ShutterPosition};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use realcam::io::{PassSources, VelocityFormat};
-use realcam::model::camera::{CameraRequest, MotionBlurMode};
-use realcam::optics::shutter::{RollingDirection, ShutterCurve, ShutterPosition};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum VelocityFormatArg {
@@ -117,8 +117,7 @@ impl MotionArgs {
         let shutter_curve = parse_curve(&self.shutter_curve).context("--shutter-curve")?;
         let rolling_shutter_s = match &self.rolling_shutter {
             Some(text) => Some(
-                realcam::model::settings::parse_shutter_s(text)
-                    .with_context(|| format!("--rolling-shutter {text:?}"))?,
+                crate::model::settings::parse_shutter_s(text).with_context(|| format!("--rolling-shutter {text:?}"))?,
             ),
             None => None,
         };

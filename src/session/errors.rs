@@ -2,13 +2,13 @@
 //! set those with flags. [`FLAGS`] is the one table from field to flag, and [`NameFlags`]
 //! shows a library error with the flag that sets its field.
 
+use crate::io::lens_analysis::LensAnalysisError;
+use crate::io::IoError;
+use crate::model::camera::{CameraError, CameraField};
 use anyhow::anyhow;
-use realcam::io::lens_analysis::LensAnalysisError;
-use realcam::io::IoError;
-use realcam::model::camera::{CameraError, CameraField};
 
 /// The flag that sets each field a library error can name.
-pub(crate) const FLAGS: [(&str, &str); 35] = [
+pub const FLAGS: [(&str, &str); 35] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -77,13 +77,13 @@ impl FieldError for IoError {
     }
 }
 
-impl FieldError for realcam::io::lensfun::LensfunError {
+impl FieldError for crate::io::lensfun::LensfunError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()
     }
 }
 
-impl FieldError for realcam::model::aperture::ApertureMaskError {
+impl FieldError for crate::model::aperture::ApertureMaskError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()
     }
@@ -135,24 +135,24 @@ mod tests {
 
     #[test]
     fn errors_show_the_flag() {
-        let lens = realcam::io::lens_file::LensFile::default_lens();
-        let camera = |req| realcam::model::camera::Camera::new(&lens, &req).name_flags().map(|_| ()).unwrap_err();
-        let req = realcam::model::camera::CameraRequest {
-            max_coc: realcam::model::camera::CocLimit::Px(-1.0),
+        let lens = crate::io::lens_file::LensFile::default_lens();
+        let camera = |req| crate::model::camera::Camera::new(&lens, &req).name_flags().map(|_| ()).unwrap_err();
+        let req = crate::model::camera::CameraRequest {
+            max_coc: crate::model::camera::CocLimit::Px(-1.0),
             ..Default::default()
         };
         assert_eq!(
             camera(req).to_string(),
             "maximum CoC diameter must be a diameter >= 0 (px, or mm on the film), got -1 (--max-coc)"
         );
-        let req = realcam::model::camera::CameraRequest { f_number: Some(1.0), ..Default::default() };
+        let req = crate::model::camera::CameraRequest { f_number: Some(1.0), ..Default::default() };
         assert_eq!(
             camera(req).to_string(),
             "f/1 is outside what the lens \"realcam standard 50 mm f/1.4\" allows (f/1.4 to f/16); \
              pass --force to use it anyway"
         );
-        let passes = realcam::io::PassSources { depth_unit_m: 0.0, ..realcam::io::PassSources::new("c.exr") };
-        let err = realcam::io::load_passes(&passes).name_flags().map(|_| ()).unwrap_err();
+        let passes = crate::io::PassSources { depth_unit_m: 0.0, ..crate::io::PassSources::new("c.exr") };
+        let err = crate::io::load_passes(&passes).name_flags().map(|_| ()).unwrap_err();
         assert_eq!(
             err.to_string(),
             "depth_unit_m must be a positive number of metres per depth unit, got 0 (--depth-unit)"

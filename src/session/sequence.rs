@@ -1,0 +1,219 @@
+//! A frame sequence through one GPU and one set of pipelines: every path carries the frame
+//! number (`crate::io::sequence`); the next frame is read while the GPU renders this one and
+//! the last one is written behind it; progress goes to the session's [`Report`].
+
+use super::frame::{load_frame, render_loaded, write_outputs, LoadedFrame, RenderedFrame};
+use super::settings::Patterns;
+use super::{errors::error_text, long_exposure, RenderSettings, Report, SequenceSettings, Session};
+use crate::io::output::Outputs;
+use crate::io::sequence::IoPriority;
+use crate::model::camera::Camera;
+use anyhow::{bail, Result};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Renders the frames of `sequence` through `camera`, each frame's paths from `settings`'
+/// patterns; a long exposure accumulates them into one output. Fails when a frame failed
+/// (after the others ran, unless `fail_fast`).
+pub fn render_sequence(
+    settings: &RenderSettings,
+    sequence: &SequenceSettings,
+    camera: &Camera,
+    report: Arc<dyn Report>,
+) -> Result<()> {
+    let patterns = Patterns::new(settings, sequence.long_exposure)?;
+    if sequence.long_exposure {
+        return long_exposure::render(settings, sequence, &patterns, camera, report);
+    }
+    let range = &sequence.range;
+    // The first frame's outputs are checked (folders, inputs, each other) before any work.
+    if let Some(&first) = range.frames.first() {
+        drop(patterns.at_frame(settings, first).outputs()?);
+    }
+    let started = Instant::now();
+    let total = range.frames.len();
+    let jobs: Vec<(i64, RenderSettings, bool)> = range
+        .frames
+        .iter()
+        .map(|&frame| {
+            let one = patterns.at_frame(settings, frame);
+            let skip = sequence.skip_existing && one.output_paths().iter().all(|p| p.exists());
+            (frame, one, skip)
+        })
+        .collect();
+    let fail_fast = sequence.fail_fast;
+    let stop = AtomicBool::new(false);
+    // The reading and writing threads yield to a GPU that runs on the CPU (io::sequence).
+    let priority = IoPriority::default();
+    let tally = std::thread::scope(|scope| {
+        let read = read_ahead(scope, jobs, camera, &stop, &priority);
+        let (finish, finished) = sync_channel(1);
+        let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority, &*report));
+        let mut session = Session::opening(&settings.gpu, camera, report.clone());
+        for ReadFrame { frame, settings: one, loaded } in read {
+            if stop.load(Ordering::Relaxed) {
+                break;
+            }
+            let item = match loaded {
+                None => Finished::Skipped { frame, output: one.output.clone() },
+                Some(loaded) => {
+                    let rendered = loaded.and_then(|loaded| {
+                        let outputs = one.outputs()?;
+                        Ok((outputs, render_loaded(&one, camera, loaded, &mut session)?))
+                    });
+                    if let Some(gpu) = session.gpu() {
+                        priority.device_opened(gpu.info().on_cpu());
+                    }
+                    match rendered {
+                        Ok((outputs, rendered)) => {
+                            Finished::Rendered { frame, settings: Box::new(one), outputs, rendered: Box::new(rendered) }
+                        }
+                        Err(error) => Finished::Failed { frame, error },
+                    }
+                }
+            };
+            let failed = matches!(item, Finished::Failed { .. });
+            if finish.send(item).is_err() || (fail_fast && failed) {
+                stop.store(true, Ordering::Relaxed);
+                break;
+            }
+        }
+        drop(finish);
+        writer.join().map_err(|_| anyhow::anyhow!("the thread writing the frames' outputs panicked"))
+    })?;
+    summary(&*report, tally.done, tally.skipped, tally.failed.len(), total, started, "(--fail-fast)");
+    if !tally.failed.is_empty() {
+        let list: Vec<String> = tally.failed.iter().map(i64::to_string).collect();
+        bail!("{} of {total} frames failed: {}", tally.failed.len(), list.join(", "));
+    }
+    Ok(())
+}
+
+/// The summary line: frames done, skipped, failed and not run (`why`), wall time, frames per second.
+pub(super) fn summary(
+    report: &dyn Report,
+    done: usize,
+    skipped: usize,
+    failed: usize,
+    total: usize,
+    started: Instant,
+    why: &str,
+) {
+    let wall_s = started.elapsed().as_secs_f64();
+    let not_run = total - done - skipped - failed;
+    report.say(&format!(
+        "frames: {done} done, {skipped} skipped, {failed} failed{} of {total} in {wall_s:.1} s ({:.2} frames/s)",
+        if not_run > 0 { format!(", {not_run} not run {why}") } else { String::new() },
+        if wall_s > 0.0 { done as f64 / wall_s } else { 0.0 }
+    ));
+}
+
+/// A frame of the sequence as the reader thread hands it on: its settings and its passes read
+/// and planned, or None for a frame it was told to skip.
+pub(super) struct ReadFrame {
+    pub frame: i64,
+    pub settings: RenderSettings,
+    pub loaded: Option<Result<LoadedFrame>>,
+}
+
+/// Reads the frames of `jobs` (frame, its settings, whether to skip it) in order on a thread of
+/// `scope`, at most two frames ahead of the receiver (one in the channel, one being read), so
+/// that the next frame's EXRs are read while the GPU renders this one. Stops when `stop` is set
+/// or the receiver is gone.
+pub(super) fn read_ahead<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    jobs: Vec<(i64, RenderSettings, bool)>,
+    camera: &'scope Camera,
+    stop: &'scope AtomicBool,
+    priority: &'scope IoPriority,
+) -> Receiver<ReadFrame> {
+    let (send, receive) = sync_channel(1);
+    scope.spawn(move || {
+        let mut lowered = false;
+        for (frame, settings, skip) in jobs {
+            priority.before_frame(&mut lowered);
+            if stop.load(Ordering::Relaxed) {
+                break;
+            }
+            let loaded = (!skip).then(|| load_frame(&settings, camera));
+            if send.send(ReadFrame { frame, settings, loaded }).is_err() {
+                break;
+            }
+        }
+    });
+    receive
+}
+
+/// What the render loop hands the writer thread, in frame order.
+enum Finished {
+    Skipped { frame: i64, output: PathBuf },
+    Failed { frame: i64, error: anyhow::Error },
+    Rendered { frame: i64, settings: Box<RenderSettings>, outputs: Outputs, rendered: Box<RenderedFrame> },
+}
+
+/// The frames the writer thread counted.
+#[derive(Default)]
+struct Tally {
+    done: usize,
+    skipped: usize,
+    failed: Vec<i64>,
+}
+
+/// The writer thread: writes each rendered frame's outputs (atomically, as a single frame's)
+/// while the GPU renders the next, and reports every frame in order: its line, then the
+/// progress. With `fail_fast`, the first failure sets `stop` and the frames after it are
+/// dropped unwritten (their temporaries removed).
+fn write_behind(
+    finished: Receiver<Finished>,
+    total: usize,
+    fail_fast: bool,
+    stop: &AtomicBool,
+    priority: &IoPriority,
+    report: &dyn Report,
+) -> Tally {
+    let mut tally = Tally::default();
+    let mut lowered = false;
+    let mut count = 0;
+    for item in finished {
+        priority.before_frame(&mut lowered);
+        if fail_fast && !tally.failed.is_empty() {
+            continue;
+        }
+        let frame = match item {
+            Finished::Skipped { frame, output } => {
+                tally.skipped += 1;
+                report.say(&format!("frame {frame}: skipped, {} exists", output.display()));
+                frame
+            }
+            Finished::Failed { frame, error } => {
+                tally.failed.push(frame);
+                report.say(&format!("error: frame {frame}: {}", error_text(&error)));
+                frame
+            }
+            Finished::Rendered { frame, settings, outputs, rendered } => {
+                match write_outputs(&settings, outputs, &rendered) {
+                    Ok(paths) => {
+                        tally.done += 1;
+                        let paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+                        report.say(&format!("frame {frame}: wrote {}", paths.join(", ")));
+                    }
+                    Err(error) => {
+                        tally.failed.push(frame);
+                        report.say(&format!("error: frame {frame}: {}", error_text(&error)));
+                    }
+                }
+                frame
+            }
+        };
+        count += 1;
+        report.frame_finished(frame, count, total);
+        if fail_fast && !tally.failed.is_empty() {
+            stop.store(true, Ordering::Relaxed);
+        }
+    }
+    report.finish();
+    tally
+}
