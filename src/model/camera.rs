@@ -10,6 +10,9 @@ use crate::optics::sensor::SensorFit;
 use crate::optics::{Num, OpticsError, Sensor, ThinLens};
 use std::path::Path;
 
+/// Defined with the thin lens (a lens file names it too); kept here, where a camera is set up.
+pub use crate::optics::lens::CocModel;
+
 /// Why [`Camera::new`] refused a request. A refused setting is named by its field, with the
 /// value and what is allowed.
 #[derive(Debug, thiserror::Error)]
@@ -186,17 +189,6 @@ impl std::fmt::Display for CocLimit {
             CocLimit::Px(px) => write!(f, "{} px", Num(*px)),
         }
     }
-}
-
-/// How the circle of confusion follows depth (see [`crate::optics::ThinLens::coc_renderer_mm`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CocModel {
-    /// Kyaw 2013 eq 5.3: the film at the image distance v, the exit pupil v/(N' P).
-    #[default]
-    Physical,
-    /// The renderers' thin lens: aperture f/N at the pinhole, image scale f.
-    Renderer,
 }
 
 /// Which depth-of-field method renders the bokeh.

@@ -98,7 +98,7 @@ pub struct LensFile {
     /// image scale of the focal length, as Cycles, Arnold and RenderMan draw it). Default:
     /// physical, or renderer for an ideal lens.
     #[serde(default)]
-    pub coc_model: Option<crate::model::camera::CocModel>,
+    pub coc_model: Option<crate::optics::lens::CocModel>,
     /// Whether the lens has natural (cos^4) vignetting; default: yes, except for an ideal lens.
     #[serde(default)]
     pub natural_vignetting: Option<bool>,
