@@ -151,6 +151,16 @@ fn version_string(v: u32) -> String {
     format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
 }
 
+/// What [`Gpu::create_instance`] made: the instance, its debug utils and the validation
+/// messenger with the log it writes to (null and None without validation).
+struct InstanceParts {
+    instance: ash::Instance,
+    debug_utils: bool,
+    debug_instance: Option<ash::ext::debug_utils::Instance>,
+    messenger: vk::DebugUtilsMessengerEXT,
+    validation_log: Option<Box<ValidationLog>>,
+}
+
 impl Gpu {
     /// Open the instance and the best (or the requested) device.
     pub fn new(options: &GpuOptions) -> GpuResult<Gpu> {
@@ -160,6 +170,96 @@ impl Gpu {
     unsafe fn open(options: &GpuOptions) -> GpuResult<Gpu> {
         let entry = ash::Entry::load().map_err(|e| GpuError::Loader(e.to_string()))?;
 
+        let InstanceParts { instance, debug_utils, debug_instance, messenger, validation_log } =
+            Self::create_instance(&entry, options)?;
+
+        // From here on, failures must tear down what exists.
+        let result = Self::open_device(&instance, options);
+        let (physical_device, info, queue_family) = match result {
+            Ok(v) => v,
+            Err(e) => {
+                if let Some(d) = &debug_instance {
+                    d.destroy_debug_utils_messenger(messenger, None);
+                }
+                instance.destroy_instance(None);
+                return Err(e);
+            }
+        };
+
+        let props = instance.get_physical_device_properties(physical_device);
+        let core13 = props.api_version >= vk::API_VERSION_1_3;
+        let device = match Self::create_device(&instance, physical_device, queue_family, core13) {
+            Ok(d) => d,
+            Err(result) => {
+                if let Some(d) = &debug_instance {
+                    d.destroy_debug_utils_messenger(messenger, None);
+                }
+                instance.destroy_instance(None);
+                return Err(GpuError::Vk { call: "vkCreateDevice", result });
+            }
+        };
+        let queue = device.get_device_queue(queue_family, 0);
+        let debug_device = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let sync2_khr = (!core13).then(|| ash::khr::synchronization2::Device::new(&instance, &device));
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| GpuError::Alloc { name: "allocator".into(), source })?;
+
+        let cache_file = cache_path(options, &props);
+        let cache_loaded = cache_file.as_ref().and_then(|p| std::fs::read(p).ok()).unwrap_or_default();
+        // A stale or foreign cache is harmless: the driver checks the header and ignores it.
+        let cache_info = vk::PipelineCacheCreateInfo::default().initial_data(&cache_loaded);
+        let pipeline_cache = device
+            .create_pipeline_cache(&cache_info, None)
+            .or_else(|_| device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None))
+            .vk("vkCreatePipelineCache")?;
+
+        let families = instance.get_physical_device_queue_family_properties(physical_device);
+        let timestamps =
+            families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
+
+        let device_local_bytes = Self::device_local_bytes(&instance, physical_device);
+        let host_image_formats = Self::host_image_formats(&instance, physical_device, &info);
+        log::info!("GPU: {info}");
+        let shared = Shared {
+            _entry: entry,
+            instance,
+            debug_instance,
+            messenger,
+            validation: validation_log,
+            device,
+            debug_device,
+            sync2_khr,
+            queue,
+            queue_family,
+            allocator: Mutex::new(Some(allocator)),
+            pool: Mutex::new(ResourcePool::default()),
+            pipeline_cache,
+            cache_file,
+            cache_loaded,
+            info,
+            timestamp_period_ns: props.limits.timestamp_period as f64,
+            timestamps,
+            max_image_dimension_px: props.limits.max_image_dimension2_d,
+            device_local_bytes,
+            pipelines_created: AtomicU64::new(0),
+            host_image_formats,
+        };
+        let gpu = Gpu { shared: Arc::new(shared) };
+        gpu.set_name(gpu.shared.queue, "realcam compute queue");
+        Ok(gpu)
+    }
+
+    /// The instance, with debug utils where the loader has them and the validation layer
+    /// (its messages to a [`ValidationLog`]) when asked for.
+    unsafe fn create_instance(entry: &ash::Entry, options: &GpuOptions) -> GpuResult<InstanceParts> {
         // The layers are listed only to find the validation layer: the loader reads every layer's
         // manifest and loads the implicit ones' libraries for the list (lavapipe on 2 cores:
         // 3-7 ms of the 28-31 ms it takes to open the GPU), which a run without validation
@@ -222,7 +322,7 @@ impl Gpu {
         }
         let instance = entry.create_instance(&create_info, None).vk("vkCreateInstance")?;
 
-        let debug_instance = debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &instance));
+        let debug_instance = debug_utils.then(|| ash::ext::debug_utils::Instance::new(entry, &instance));
         let messenger = match (&debug_instance, options.validation) {
             (Some(d), true) => d
                 // A copy without the instance chain: this call's pNext must be null.
@@ -230,22 +330,17 @@ impl Gpu {
                 .vk("vkCreateDebugUtilsMessengerEXT")?,
             _ => vk::DebugUtilsMessengerEXT::null(),
         };
+        Ok(InstanceParts { instance, debug_utils, debug_instance, messenger, validation_log })
+    }
 
-        // From here on, failures must tear down what exists.
-        let result = Self::open_device(&instance, options);
-        let (physical_device, info, queue_family) = match result {
-            Ok(v) => v,
-            Err(e) => {
-                if let Some(d) = &debug_instance {
-                    d.destroy_debug_utils_messenger(messenger, None);
-                }
-                instance.destroy_instance(None);
-                return Err(e);
-            }
-        };
-
-        let props = instance.get_physical_device_properties(physical_device);
-        let core13 = props.api_version >= vk::API_VERSION_1_3;
+    /// The logical device with one queue of `queue_family` and synchronization2 (core in
+    /// Vulkan 1.3, else the KHR extension).
+    unsafe fn create_device(
+        instance: &ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        queue_family: u32,
+        core13: bool,
+    ) -> Result<ash::Device, vk::Result> {
         let priorities = [1.0f32];
         let queue_infos =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
@@ -258,51 +353,27 @@ impl Gpu {
         let mut device_info =
             vk::DeviceCreateInfo::default().queue_create_infos(&queue_infos).enabled_extension_names(&dev_exts);
         device_info = if core13 { device_info.push_next(&mut f13) } else { device_info.push_next(&mut sync2) };
-        let device = match instance.create_device(physical_device, &device_info, None) {
-            Ok(d) => d,
-            Err(result) => {
-                if let Some(d) = &debug_instance {
-                    d.destroy_debug_utils_messenger(messenger, None);
-                }
-                instance.destroy_instance(None);
-                return Err(GpuError::Vk { call: "vkCreateDevice", result });
-            }
-        };
-        let queue = device.get_device_queue(queue_family, 0);
-        let debug_device = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-        let sync2_khr = (!core13).then(|| ash::khr::synchronization2::Device::new(&instance, &device));
+        instance.create_device(physical_device, &device_info, None)
+    }
 
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        })
-        .map_err(|source| GpuError::Alloc { name: "allocator".into(), source })?;
-
-        let cache_file = cache_path(options, &props);
-        let cache_loaded = cache_file.as_ref().and_then(|p| std::fs::read(p).ok()).unwrap_or_default();
-        // A stale or foreign cache is harmless: the driver checks the header and ignores it.
-        let cache_info = vk::PipelineCacheCreateInfo::default().initial_data(&cache_loaded);
-        let pipeline_cache = device
-            .create_pipeline_cache(&cache_info, None)
-            .or_else(|_| device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None))
-            .vk("vkCreatePipelineCache")?;
-
-        let families = instance.get_physical_device_queue_family_properties(physical_device);
-        let timestamps =
-            families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
-
+    /// The size of the largest device-local memory heap (bytes).
+    unsafe fn device_local_bytes(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> u64 {
         let memory = instance.get_physical_device_memory_properties(physical_device);
-        let device_local_bytes = memory.memory_heaps[..(memory.memory_heap_count as usize).min(vk::MAX_MEMORY_HEAPS)]
+        memory.memory_heaps[..(memory.memory_heap_count as usize).min(vk::MAX_MEMORY_HEAPS)]
             .iter()
             .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
             .map(|h| h.size)
             .max()
-            .unwrap_or(0);
-        let host_image_formats = match info.on_cpu() {
+            .unwrap_or(0)
+    }
+
+    /// The formats of [`HOST_IMAGE_FORMATS`] a CPU device can keep as linear storage images.
+    unsafe fn host_image_formats(
+        instance: &ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        info: &DeviceInfo,
+    ) -> Vec<vk::Format> {
+        match info.on_cpu() {
             true => HOST_IMAGE_FORMATS
                 .into_iter()
                 .filter(|&f| {
@@ -316,35 +387,7 @@ impl Gpu {
                 })
                 .collect(),
             false => Vec::new(),
-        };
-        log::info!("GPU: {info}");
-        let shared = Shared {
-            _entry: entry,
-            instance,
-            debug_instance,
-            messenger,
-            validation: validation_log,
-            device,
-            debug_device,
-            sync2_khr,
-            queue,
-            queue_family,
-            allocator: Mutex::new(Some(allocator)),
-            pool: Mutex::new(ResourcePool::default()),
-            pipeline_cache,
-            cache_file,
-            cache_loaded,
-            info,
-            timestamp_period_ns: props.limits.timestamp_period as f64,
-            timestamps,
-            max_image_dimension_px: props.limits.max_image_dimension2_d,
-            device_local_bytes,
-            pipelines_created: AtomicU64::new(0),
-            host_image_formats,
-        };
-        let gpu = Gpu { shared: Arc::new(shared) };
-        gpu.set_name(gpu.shared.queue, "realcam compute queue");
-        Ok(gpu)
+        }
     }
 
     /// Choose the physical device: `--device` if given, else discrete > integrated > virtual > CPU.

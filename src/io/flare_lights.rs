@@ -12,7 +12,7 @@
 //! Positions may lie outside the frame (a light just out of view still flares). Every error
 //! names the file and the line or the light.
 
-use crate::model::flare::FlareLight;
+use crate::optics::flare::FlareLight;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]

@@ -6,33 +6,8 @@ use crate::optics::flare::starburst::Halo;
 use crate::optics::prescription::Prescription;
 use std::sync::Arc;
 
-/// A light given by position and energy rather than found in the frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FlareLight {
-    /// Position in the image's pixels (x right, y down, pixel centres at +0.5); may lie outside
-    /// the frame.
-    pub x_px: f64,
-    pub y_px: f64,
-    /// Energy per channel: the sum of the scene values of the pixels it would cover (value x
-    /// pixels), before the exposure.
-    pub energy: [f64; 3],
-    /// Its visible area in pixels (at least 1).
-    pub area_px: f64,
-}
-
-impl FlareLight {
-    /// A white light of `energy` per channel covering one pixel.
-    pub fn white(x_px: f64, y_px: f64, energy: f64) -> FlareLight {
-        FlareLight { x_px, y_px, energy: [energy; 3], area_px: 1.0 }
-    }
-
-    /// Every number finite, the energy non-negative and the area at least 0.
-    pub fn is_valid(&self) -> bool {
-        [self.x_px, self.y_px, self.area_px].iter().chain(&self.energy).all(|v| v.is_finite())
-            && self.energy.iter().all(|&e| e >= 0.0)
-            && self.area_px >= 0.0
-    }
-}
+/// Defined with the flare optics (the flare-lights file reads it too).
+pub use crate::optics::flare::FlareLight;
 
 /// The flare settings of a camera.
 #[derive(Clone, Debug, PartialEq)]

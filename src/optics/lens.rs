@@ -32,6 +32,17 @@ pub enum OpticsError {
     InvalidChromaticities { chromaticities: [[f64; 2]; 4], why: String },
 }
 
+/// How the circle of confusion follows depth (see [`ThinLens::coc_renderer_mm`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CocModel {
+    /// Kyaw 2013 eq 5.3: the film at the image distance v, the exit pupil v/(N' P).
+    #[default]
+    Physical,
+    /// The renderers' thin lens: aperture f/N at the pinhole, image scale f.
+    Renderer,
+}
+
 pub(crate) fn require_finite(name: &'static str, value: f64) -> Result<f64, OpticsError> {
     if value.is_finite() {
         Ok(value)

@@ -14,140 +14,11 @@ impl Prescription {
         let par = lens.paraxial(LAMBDA_D_NM);
         let par_f = lens.paraxial(LAMBDA_F_NM);
         let par_c = lens.paraxial(LAMBDA_C_NM);
-        let z_img = par.rear_focal_z_mm;
-        let efl = par.efl_mm;
-        let ep_sd = par.entrance_pupil_semi_diameter_mm;
-        let ep_z = par.entrance_pupil_z_mm;
-
-        // Longitudinal spherical aberration at pupil zones.
-        let zones = [0.2, 0.4, 0.6, std::f64::consts::FRAC_1_SQRT_2, 0.8, 0.9, 1.0];
-        let spherical: Vec<LsaSample> = zones
-            .iter()
-            .map(|&rho| {
-                let h = rho * ep_sd;
-                LsaSample {
-                    zone: rho,
-                    height_mm: h,
-                    lsa_mm: lens.axial_intercept_z_mm(h, LAMBDA_D_NM).map(|z| z - z_img),
-                    clipped: lens.trace(&Ray::new([0.0, h, -1.0], [0.0, 0.0, 1.0]), LAMBDA_D_NM, true).err(),
-                }
-            })
-            .collect();
-        // least squares LSA = a h^2 + b h^4
-        let (mut s44, mut s46, mut s66, mut r4, mut r6) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for smp in &spherical {
-            if let Some(l) = smp.lsa_mm {
-                let h2 = smp.height_mm * smp.height_mm;
-                s44 += h2 * h2;
-                s46 += h2 * h2 * h2;
-                s66 += h2 * h2 * h2 * h2;
-                r4 += l * h2;
-                r6 += l * h2 * h2;
-            }
-        }
-        // NaN (no fit) when fewer than two zones pass or the system is singular.
-        let det = s44 * s66 - s46 * s46;
-        let (lsa_a, lsa_b) = if det.abs() > 1e-12 * (s44 * s66).abs() && det.is_finite() {
-            ((r4 * s66 - r6 * s46) / det, (s44 * r6 - s46 * r4) / det)
-        } else {
-            (f64::NAN, f64::NAN)
-        };
-
-        // Relative illumination reference: rays over a square 1.5x the pupil, on axis.
-        let grid = 64usize;
-        let count_passing = |theta: f64, yc: f64| -> usize {
-            let w = 1.5 * ep_sd;
-            let mut n = 0;
-            for i in 0..grid {
-                for j in 0..grid {
-                    let x = -w + (i as f64 + 0.5) * 2.0 * w / grid as f64;
-                    let y = yc - w + (j as f64 + 0.5) * 2.0 * w / grid as f64;
-                    if lens.trace(&Self::field_ray(theta, x, y, ep_z), LAMBDA_D_NM, true).is_ok() {
-                        n += 1;
-                    }
-                }
-            }
-            n
-        };
-        let on_axis_count = count_passing(0.0, 0.0).max(1);
-
-        let delta = 1e-3 * ep_sd;
-        let fields = field_angles_deg
-            .iter()
-            .map(|&deg| {
-                let theta = deg.to_radians();
-                let ideal = efl * theta.tan();
-                let mut fs = FieldSample { angle_deg: deg, ideal_height_mm: ideal, ..FieldSample::default() };
-                let Some(yc) = lens.chief_ray_pupil_height(theta, LAMBDA_D_NM) else {
-                    return fs;
-                };
-                let chief = Self::field_ray(theta, 0.0, yc, ep_z);
-                fs.chief_ray_clipped = lens.trace(&chief, LAMBDA_D_NM, true).err();
-                if let Ok(r) = lens.trace(&chief, LAMBDA_D_NM, false) {
-                    let h = r.at_z(z_img).p[1];
-                    fs.image_height_mm = Some(h);
-                    fs.distortion_percent = Some(if ideal.abs() < 1e-12 { 0.0 } else { 100.0 * (h - ideal) / ideal });
-                }
-                // tangential focus: rays at +-delta in y around the chief ray
-                let tp = lens.trace(&Self::field_ray(theta, 0.0, yc + delta, ep_z), LAMBDA_D_NM, false);
-                let tm = lens.trace(&Self::field_ray(theta, 0.0, yc - delta, ep_z), LAMBDA_D_NM, false);
-                if let (Ok(a), Ok(b)) = (tp, tm) {
-                    let (a, b) = (a.at_z(z_img), b.at_z(z_img));
-                    let (sa, sb) = (a.d[1] / a.d[2], b.d[1] / b.d[2]);
-                    if sa != sb {
-                        fs.tangential_focus_mm = Some(-(a.p[1] - b.p[1]) / (sa - sb));
-                    }
-                }
-                // sagittal focus: a ray at +delta in x crosses the meridional plane
-                if let Ok(a) = lens.trace(&Self::field_ray(theta, delta, yc, ep_z), LAMBDA_D_NM, false) {
-                    let a = a.at_z(z_img);
-                    if a.d[0] != 0.0 {
-                        fs.sagittal_focus_mm = Some(-a.p[0] * a.d[2] / a.d[0]);
-                    }
-                }
-                if let (Some(t), Some(s)) = (fs.tangential_focus_mm, fs.sagittal_focus_mm) {
-                    fs.astigmatism_mm = Some(t - s);
-                }
-                let frac = count_passing(theta, yc) as f64 / on_axis_count as f64;
-                fs.pupil_transmission = frac;
-                fs.relative_illumination = frac * theta.cos().powi(4);
-                // lateral colour: F and C chief rays (each through the stop centre) on the
-                // d-line image plane
-                let h_at = |lambda: f64| -> Option<f64> {
-                    let y = lens.chief_ray_pupil_height(theta, lambda)?;
-                    let r = lens.trace(&Self::field_ray(theta, 0.0, y, ep_z), lambda, false).ok()?;
-                    Some(r.at_z(z_img).p[1])
-                };
-                if let (Some(hf), Some(hc)) = (h_at(LAMBDA_F_NM), h_at(LAMBDA_C_NM)) {
-                    fs.lateral_color_f_minus_c_mm = Some(hf - hc);
-                    if let Some(hd) = fs.image_height_mm {
-                        fs.lateral_color_c_minus_d_mm = Some(hc - hd);
-                        fs.lateral_color_f_minus_d_mm = Some(hf - hd);
-                    }
-                }
-                // Coma: the rim rays of the meridional fan (upper and lower edge of the pupil)
-                // and a sagittal rim ray, on the paraxial image plane, against the chief ray.
-                // Defocus, astigmatism and spherical aberration move the two meridional rim
-                // rays by equal and opposite amounts, so their mean minus the chief ray is the
-                // tangential coma; the sagittal rim ray's height minus the chief ray is the
-                // sagittal coma (a third of it in third-order theory). Unclipped rays: the
-                // aberration of the design, not of the vignetted pupil.
-                if let Some(h) = fs.image_height_mm {
-                    let y_at = |x: f64, y: f64| -> Option<f64> {
-                        let r = lens.trace(&Self::field_ray(theta, x, y, ep_z), LAMBDA_D_NM, false).ok()?;
-                        Some(r.at_z(z_img).p[1])
-                    };
-                    let outward = if h < 0.0 { -1.0 } else { 1.0 };
-                    if let (Some(a), Some(b)) = (y_at(0.0, yc + ep_sd), y_at(0.0, yc - ep_sd)) {
-                        fs.tangential_coma_mm = Some(outward * (0.5 * (a + b) - h));
-                    }
-                    if let Some(a) = y_at(ep_sd, yc) {
-                        fs.sagittal_coma_mm = Some(outward * (a - h));
-                    }
-                }
-                fs
-            })
-            .collect();
+        let spherical = lens.lsa_zones(&par);
+        let (lsa_a, lsa_b) = lsa_fit(&spherical);
+        // Relative illumination reference: the rays passing on axis.
+        let on_axis_count = lens.count_passing(&par, 0.0, 0.0).max(1);
+        let fields = field_angles_deg.iter().map(|&deg| lens.field_sample(&par, deg, on_axis_count)).collect();
 
         LensAnalysis {
             name: lens.name.clone(),
@@ -166,6 +37,148 @@ impl Prescription {
             },
             fields,
         }
+    }
+
+    /// Longitudinal spherical aberration at pupil zones (`par`: the d-line paraxial data).
+    fn lsa_zones(&self, par: &Paraxial) -> Vec<LsaSample> {
+        let (z_img, ep_sd) = (par.rear_focal_z_mm, par.entrance_pupil_semi_diameter_mm);
+        let zones = [0.2, 0.4, 0.6, std::f64::consts::FRAC_1_SQRT_2, 0.8, 0.9, 1.0];
+        zones
+            .iter()
+            .map(|&rho| {
+                let h = rho * ep_sd;
+                LsaSample {
+                    zone: rho,
+                    height_mm: h,
+                    lsa_mm: self.axial_intercept_z_mm(h, LAMBDA_D_NM).map(|z| z - z_img),
+                    clipped: self.trace(&Ray::new([0.0, h, -1.0], [0.0, 0.0, 1.0]), LAMBDA_D_NM, true).err(),
+                }
+            })
+            .collect()
+    }
+
+    /// How many rays of a grid over a square 1.5x the entrance pupil, at field angle `theta`
+    /// and centred at pupil height `yc`, pass the lens.
+    fn count_passing(&self, par: &Paraxial, theta: f64, yc: f64) -> usize {
+        let (ep_sd, ep_z) = (par.entrance_pupil_semi_diameter_mm, par.entrance_pupil_z_mm);
+        let grid = 64usize;
+        let w = 1.5 * ep_sd;
+        let mut n = 0;
+        for i in 0..grid {
+            for j in 0..grid {
+                let x = -w + (i as f64 + 0.5) * 2.0 * w / grid as f64;
+                let y = yc - w + (j as f64 + 0.5) * 2.0 * w / grid as f64;
+                if self.trace(&Self::field_ray(theta, x, y, ep_z), LAMBDA_D_NM, true).is_ok() {
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
+    /// The analysis at field angle `deg`: image height and distortion, tangential and sagittal
+    /// focus, relative illumination (against `on_axis_count` passing rays), lateral colour and
+    /// coma.
+    fn field_sample(&self, par: &Paraxial, deg: f64, on_axis_count: usize) -> FieldSample {
+        let lens = self;
+        let z_img = par.rear_focal_z_mm;
+        let efl = par.efl_mm;
+        let ep_sd = par.entrance_pupil_semi_diameter_mm;
+        let ep_z = par.entrance_pupil_z_mm;
+        let delta = 1e-3 * ep_sd;
+        let theta = deg.to_radians();
+        let ideal = efl * theta.tan();
+        let mut fs = FieldSample { angle_deg: deg, ideal_height_mm: ideal, ..FieldSample::default() };
+        let Some(yc) = lens.chief_ray_pupil_height(theta, LAMBDA_D_NM) else {
+            return fs;
+        };
+        let chief = Self::field_ray(theta, 0.0, yc, ep_z);
+        fs.chief_ray_clipped = lens.trace(&chief, LAMBDA_D_NM, true).err();
+        if let Ok(r) = lens.trace(&chief, LAMBDA_D_NM, false) {
+            let h = r.at_z(z_img).p[1];
+            fs.image_height_mm = Some(h);
+            fs.distortion_percent = Some(if ideal.abs() < 1e-12 { 0.0 } else { 100.0 * (h - ideal) / ideal });
+        }
+        // tangential focus: rays at +-delta in y around the chief ray
+        let tp = lens.trace(&Self::field_ray(theta, 0.0, yc + delta, ep_z), LAMBDA_D_NM, false);
+        let tm = lens.trace(&Self::field_ray(theta, 0.0, yc - delta, ep_z), LAMBDA_D_NM, false);
+        if let (Ok(a), Ok(b)) = (tp, tm) {
+            let (a, b) = (a.at_z(z_img), b.at_z(z_img));
+            let (sa, sb) = (a.d[1] / a.d[2], b.d[1] / b.d[2]);
+            if sa != sb {
+                fs.tangential_focus_mm = Some(-(a.p[1] - b.p[1]) / (sa - sb));
+            }
+        }
+        // sagittal focus: a ray at +delta in x crosses the meridional plane
+        if let Ok(a) = lens.trace(&Self::field_ray(theta, delta, yc, ep_z), LAMBDA_D_NM, false) {
+            let a = a.at_z(z_img);
+            if a.d[0] != 0.0 {
+                fs.sagittal_focus_mm = Some(-a.p[0] * a.d[2] / a.d[0]);
+            }
+        }
+        if let (Some(t), Some(s)) = (fs.tangential_focus_mm, fs.sagittal_focus_mm) {
+            fs.astigmatism_mm = Some(t - s);
+        }
+        let frac = self.count_passing(par, theta, yc) as f64 / on_axis_count as f64;
+        fs.pupil_transmission = frac;
+        fs.relative_illumination = frac * theta.cos().powi(4);
+        // lateral colour: F and C chief rays (each through the stop centre) on the
+        // d-line image plane
+        let h_at = |lambda: f64| -> Option<f64> {
+            let y = lens.chief_ray_pupil_height(theta, lambda)?;
+            let r = lens.trace(&Self::field_ray(theta, 0.0, y, ep_z), lambda, false).ok()?;
+            Some(r.at_z(z_img).p[1])
+        };
+        if let (Some(hf), Some(hc)) = (h_at(LAMBDA_F_NM), h_at(LAMBDA_C_NM)) {
+            fs.lateral_color_f_minus_c_mm = Some(hf - hc);
+            if let Some(hd) = fs.image_height_mm {
+                fs.lateral_color_c_minus_d_mm = Some(hc - hd);
+                fs.lateral_color_f_minus_d_mm = Some(hf - hd);
+            }
+        }
+        // Coma: the rim rays of the meridional fan (upper and lower edge of the pupil)
+        // and a sagittal rim ray, on the paraxial image plane, against the chief ray.
+        // Defocus, astigmatism and spherical aberration move the two meridional rim
+        // rays by equal and opposite amounts, so their mean minus the chief ray is the
+        // tangential coma; the sagittal rim ray's height minus the chief ray is the
+        // sagittal coma (a third of it in third-order theory). Unclipped rays: the
+        // aberration of the design, not of the vignetted pupil.
+        if let Some(h) = fs.image_height_mm {
+            let y_at = |x: f64, y: f64| -> Option<f64> {
+                let r = lens.trace(&Self::field_ray(theta, x, y, ep_z), LAMBDA_D_NM, false).ok()?;
+                Some(r.at_z(z_img).p[1])
+            };
+            let outward = if h < 0.0 { -1.0 } else { 1.0 };
+            if let (Some(a), Some(b)) = (y_at(0.0, yc + ep_sd), y_at(0.0, yc - ep_sd)) {
+                fs.tangential_coma_mm = Some(outward * (0.5 * (a + b) - h));
+            }
+            if let Some(a) = y_at(ep_sd, yc) {
+                fs.sagittal_coma_mm = Some(outward * (a - h));
+            }
+        }
+        fs
+    }
+}
+
+/// Least squares LSA = a h^2 + b h^4 over the zones that pass: (a, b); NaN (no fit) when fewer
+/// than two zones pass or the system is singular.
+fn lsa_fit(spherical: &[LsaSample]) -> (f64, f64) {
+    let (mut s44, mut s46, mut s66, mut r4, mut r6) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for smp in spherical {
+        if let Some(l) = smp.lsa_mm {
+            let h2 = smp.height_mm * smp.height_mm;
+            s44 += h2 * h2;
+            s46 += h2 * h2 * h2;
+            s66 += h2 * h2 * h2 * h2;
+            r4 += l * h2;
+            r6 += l * h2 * h2;
+        }
+    }
+    let det = s44 * s66 - s46 * s46;
+    if det.abs() > 1e-12 * (s44 * s66).abs() && det.is_finite() {
+        ((r4 * s66 - r6 * s46) / det, (s44 * r6 - s46 * r4) / det)
+    } else {
+        (f64::NAN, f64::NAN)
     }
 }
 
