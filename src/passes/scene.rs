@@ -1,7 +1,7 @@
 //! What every pass plans from: the frame, the camera, and the facts several passes share,
 //! computed once (the pixel pitch, the depth range, the signed CoC range, longitudinal colour).
 
-use super::coc;
+use super::dof::coc;
 use crate::model::camera::{BokehMode, Camera};
 use crate::model::frame::Frame;
 
