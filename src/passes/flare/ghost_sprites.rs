@@ -3,8 +3,8 @@
 //! whatever the number of sprites. Shader: glsl/flare/ghost_sprites.comp. Further ghost primitives
 //! (Walch's fitted Bezier shapes) are further kinds of sprite here.
 
-use super::bins::ghost_channel;
-use super::{constants_of, FlareConstants};
+use super::sprite::{ghost_channel, ray_in_box};
+use super::types::{constants_of, FlareConstants};
 use crate::gpu::shaders::flare::{
     ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW,
     KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST, SPRITE_SOFTNESS,
@@ -39,24 +39,6 @@ impl Shader for GhostSpritesShader {
     const NAME: &'static str = NAME;
     type Bindings<'a> = GhostSpritesBindings<'a>;
     type Push = [i32; 3];
-}
-
-/// The part [t0, t1] of the ray o + t d, t in [t_min, t_max], inside the box lo..hi (t0 >= t1:
-/// none); an axis the ray runs along counts the box half-open.
-pub fn ray_in_box(o: [f64; 2], d: [f64; 2], t_min: f64, t_max: f64, lo: [f64; 2], hi: [f64; 2]) -> (f64, f64) {
-    let (mut t0, mut t1) = (t_min, t_max);
-    for a in 0..2 {
-        if d[a].abs() < 1e-12 {
-            if o[a] < lo[a] || o[a] >= hi[a] {
-                return (1.0, 0.0);
-            }
-        } else {
-            let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
-            t0 = t0.max(ta.min(tb));
-            t1 = t1.min(ta.max(tb));
-        }
-    }
-    (t0, t1)
 }
 
 /// The light sprite `s` (its words) adds to pixel (x, y), per channel.

@@ -2,7 +2,7 @@
 //! lights after them), each light's starburst and halo radii, and every (light, element) pair
 //! as a sprite for the ghost-sprite kernel. One workgroup. Shader: glsl/flare/flare_lights.comp.
 
-use super::{constants_of, ghost_from_table, FlareConstants};
+use super::types::{constants_of, ghost_from_table, FlareConstants};
 use crate::gpu::shaders::flare::{
     ARGS_BIN_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY, EXPLICIT_WORDS,
     EXPLICIT_X, EXPLICIT_Y, GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST, KIND_GLOW, KIND_NONE,

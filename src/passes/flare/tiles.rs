@@ -1,7 +1,7 @@
 //! Lens flare, step 1: the light pixels of each 16x16 tile (a channel at or over the threshold)
 //! summed: energy per channel, count, energy-weighted position. Shader: glsl/flare/flare_tiles.comp.
 
-use super::{constants_of, FlareConstants};
+use super::types::{constants_of, FlareConstants};
 use crate::gpu::shaders::flare::{TILE_COUNT, TILE_LIGHT, TILE_W, TILE_WORDS, TILE_WX, TILE_WY};
 use crate::gpu::{GpuBuffer, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::after_compute_write;
