@@ -3,176 +3,20 @@
 //! glsl/dof/coc.comp (every pixel's CoC from its own depth, and the list of edge pixels) and
 //! glsl/dof/coc_edges.comp (an indirect dispatch over that list).
 
+use super::coc_edges::{self, at_edge, pack_pixel, resolved_inverse_depth, CocEdgesBindings, CocEdgesShader};
+use super::coc_push::{table_data, CocPush};
 use crate::gpu::shaders::coc::{COC_ARGS_COUNT, COC_ARGS_DISPATCH, COC_ARGS_WORDS, EDGE_GROUP_SIZE};
 use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
-use crate::model::camera::{BokehMode, Camera, CocModel};
-use crate::model::frame::Frame;
-use crate::optics::ThinLens;
+use crate::model::camera::{BokehMode, Camera};
 use crate::passes::barriers::{
     args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write,
 };
 use crate::passes::scene::{Channel, PlanInput, VISIBLE_COC_PX};
-use crate::passes::twin::{finite_or_zero, floats};
+use crate::passes::twin::floats;
 use crate::passes::{groups_for, Decision, FrameImages, Input, Pass};
 use ash::vk;
 
 pub const NAME: &str = "coc";
-/// The edge resolve's dispatch (glsl/dof/coc_edges.comp), also its span in `--profile`.
-pub const EDGES_NAME: &str = "coc_edges";
-
-/// Push constants of glsl/dof/coc.comp and glsl/dof/coc_edges.comp (glsl/include/coc.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct CocPush {
-    pub size: [i32; 2],
-    /// v^2 / (N' P) / pixel pitch: eq 5.3 is C_px = coc_scale_px_mm * (1/S - 1/u).
-    pub coc_scale_px_mm: f32,
-    pub inv_focus_distance_per_mm: f32,
-    pub max_coc_px: f32,
-    pub mm_per_depth_unit: f32,
-    pub centre_px: [f32; 2],
-    pub pixel_pitch_mm: f32,
-    pub image_distance_mm: f32,
-    pub inv_focal_length_per_mm: f32,
-    /// v / (N' P) / pixel pitch: eq 5.3 is C_px = aperture_px (v w - 1), w = 1/f - 1/u.
-    pub aperture_px: f32,
-    /// Entries of the field-curvature table; 0: none.
-    pub entries: i32,
-    /// Added to the signed CoC (longitudinal colour: a channel focusing behind or in front of
-    /// green); 0 for green.
-    pub coc_offset_px: f32,
-    /// 1: each pixel at an anti-aliased depth edge takes the depth of the layer that brings most
-    /// of its light (glsl/dof/coc_edges.comp); 0: the depth as stored.
-    pub resolve_edges: i32,
-}
-
-/// The field-curvature buffer: heights, then offsets in mm; `[0]` for none.
-pub fn table_data(table: Option<&crate::optics::distortion::HeightTable>) -> Vec<f32> {
-    match table {
-        None => vec![0.0],
-        Some(t) => t.image_height_mm.iter().chain(&t.values).map(|&v| v as f32).collect(),
-    }
-}
-
-impl CocPush {
-    /// The camera's CoC on this frame (its size and optical centre), before any channel offset.
-    pub fn for_frame(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> CocPush {
-        let push = CocPush::new(
-            &camera.lens,
-            pixel_pitch_mm,
-            crate::passes::scene::coc_clamp_px(camera, pixel_pitch_mm, frame),
-            frame.width,
-            frame.height,
-            frame.centre_px,
-            camera.field_curvature.as_ref(),
-        );
-        let push = CocPush { resolve_edges: camera.resolve_depth_edges as i32, ..push };
-        match camera.coc_model {
-            CocModel::Physical => push,
-            // The renderers' CoC, f^2/N (1/S - 1/u) (ThinLens::coc_renderer_mm); a film offset
-            // (field curvature) scales with it: aperture_px v = coc_scale, as in eq 5.3's form.
-            CocModel::Renderer => {
-                let f = camera.lens.focal_length_mm;
-                let scale_px_mm = f * f / camera.lens.f_number / pixel_pitch_mm;
-                CocPush {
-                    coc_scale_px_mm: scale_px_mm as f32,
-                    aperture_px: (scale_px_mm / camera.lens.image_distance_mm()) as f32,
-                    ..push
-                }
-            }
-        }
-    }
-
-    /// `field_curvature`: the film-plane offset (mm) of the sharp image surface against height,
-    /// with the optical centre `centre_px`.
-    pub fn new(
-        lens: &ThinLens,
-        pixel_pitch_mm: f64,
-        max_coc_px: f64,
-        width: u32,
-        height: u32,
-        centre_px: [f64; 2],
-        field_curvature: Option<&crate::optics::distortion::HeightTable>,
-    ) -> CocPush {
-        let v_mm = lens.image_distance_mm();
-        // Kyaw 2013 eq 5.3: C = v^2 |S - u| / (u S N' P) = v^2/(N' P) * (1/S - 1/u), signed.
-        let scale_mm2 = v_mm * v_mm / (lens.effective_f_number() * lens.pupil_magnification);
-        CocPush {
-            size: [width as i32, height as i32],
-            coc_scale_px_mm: (scale_mm2 / pixel_pitch_mm) as f32,
-            inv_focus_distance_per_mm: (1.0 / lens.focus_distance_mm) as f32,
-            max_coc_px: max_coc_px as f32,
-            mm_per_depth_unit: 1000.0,
-            centre_px: [centre_px[0] as f32, centre_px[1] as f32],
-            pixel_pitch_mm: pixel_pitch_mm as f32,
-            image_distance_mm: v_mm as f32,
-            inv_focal_length_per_mm: (1.0 / lens.focal_length_mm) as f32,
-            aperture_px: (v_mm / (lens.effective_f_number() * lens.pupil_magnification) / pixel_pitch_mm) as f32,
-            entries: field_curvature.map_or(0, |t| t.image_height_mm.len() as i32),
-            coc_offset_px: 0.0,
-            resolve_edges: 0,
-        }
-    }
-
-    /// The shader's specialization constants for these constants: `RESOLVE_EDGES` and
-    /// `FIELD_CURVATURE` (a table of entries), so a run's pipeline holds only its own paths.
-    pub fn specialization(&self) -> [u32; 2] {
-        [u32::from(self.resolve_edges != 0), u32::from(self.entries > 0)]
-    }
-
-    /// glsl/dof/coc_edges.comp's specialization constant: `FIELD_CURVATURE`.
-    pub fn edge_specialization(&self) -> [u32; 1] {
-        [u32::from(self.entries > 0)]
-    }
-
-    /// [`CocPush::specialization`] of every run through `camera` (it depends on the camera
-    /// alone: its edge resolve and its field curvature).
-    pub fn specialization_for(camera: &Camera) -> [u32; 2] {
-        [u32::from(camera.resolve_depth_edges), u32::from(camera.field_curvature.is_some())]
-    }
-
-    /// The depth in mm of a depth value as the shader reads it (at least 1e-30).
-    pub fn depth_mm(&self, depth_m: f32) -> f32 {
-        (depth_m * self.mm_per_depth_unit).max(1.0e-30)
-    }
-
-    /// The inverse depth (1/mm) of a depth value as the shader reads it.
-    pub fn inverse_depth(&self, depth_m: f32) -> f32 {
-        1.0 / self.depth_mm(depth_m)
-    }
-
-    /// CPU twin at pixel (x, y) with the field-curvature table (`table_data` layout).
-    pub fn coc_px_at(&self, depth_m: f32, x: u32, y: u32, table: &[f32]) -> f32 {
-        self.coc_px_of_inverse_depth(self.inverse_depth(depth_m), x, y, table)
-    }
-
-    /// The shader's CoC at pixel (x, y) for an inverse depth `inv_u` (1/mm).
-    pub fn coc_px_of_inverse_depth(&self, inv_u: f32, x: u32, y: u32, table: &[f32]) -> f32 {
-        let n = self.entries as usize;
-        let coc = if n == 0 {
-            self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - inv_u)
-        } else {
-            let (dx, dy) = (x as f32 + 0.5 - self.centre_px[0], y as f32 + 0.5 - self.centre_px[1]);
-            let h = (dx * dx + dy * dy).sqrt() * self.pixel_pitch_mm;
-            let delta = crate::passes::height_table_lookup(table, 1, n, h);
-            let w = self.inv_focal_length_per_mm - inv_u;
-            self.aperture_px * (self.image_distance_mm * w / (1.0 + delta * w) - 1.0)
-        };
-        (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
-    }
-
-    /// CPU twin of the shader for one depth value, in the same f32 arithmetic.
-    pub fn coc_px(&self, depth_m: f32) -> f32 {
-        let coc = self.coc_scale_px_mm * (self.inv_focus_distance_per_mm - self.inverse_depth(depth_m));
-        (coc + self.coc_offset_px).clamp(-self.max_coc_px, self.max_coc_px)
-    }
-}
-
-/// CPU twin without the edge resolve: the CoC of every pixel from its own depth.
-pub fn coc_cpu(depth_m: &[f32], push: &CocPush, table: &[f32]) -> Vec<f32> {
-    let w = push.size[0].max(1) as u32;
-    depth_m.iter().enumerate().map(|(i, &d)| push.coc_px_at(d, i as u32 % w, i as u32 / w, table)).collect()
-}
 
 /// CPU twin of the whole pass: the CoC of every pixel from the depth its colour belongs to
 /// (the edge resolve when `push.resolve_edges` is set). `rgba` is the colour pass.
@@ -187,102 +31,6 @@ pub fn coc_resolved_cpu(depth_m: &[f32], rgba: &[f32], push: &CocPush, table: &[
             push.coc_px_of_inverse_depth(inv_u, x, y, table)
         })
         .collect()
-}
-
-/// The edge resolve looks at a pixel only where the CoC diameters in its 3x3 neighbourhood span
-/// more than this (px; glsl/dof/coc.comp has the same number). At 1 px, the fringe of a highlight
-/// 0.5 m in front of a wall 8 m away kept the wall's CoC, up to a pixel wider: scene A's
-/// background highlights came out 1-3.5% larger in area than Cycles' (a fringe holds some 10-30%
-/// of a small sphere's light). A quarter pixel leaves at most 0.3% at f/2; the coc pass's time on
-/// scene A did not change (11.3 ms on lavapipe).
-pub const EDGE_RESOLVE_MIN_PX: f32 = 0.25;
-
-/// Whether the edge resolve looks at pixel (x, y): the CoCs of the nearest and the farthest
-/// depth of its 3x3 neighbourhood differ by more than [`EDGE_RESOLVE_MIN_PX`]. glsl/dof/coc.comp's
-/// `at_edge`, which lists such pixels for glsl/dof/coc_edges.comp, in the same f32 arithmetic.
-pub fn at_edge(depth: &HostImage, push: &CocPush, x: i32, y: i32) -> bool {
-    let d_p = push.depth_mm(depth.clamped(x, y)[0]);
-    let (d_min, d_max) = (0..9)
-        .map(|i| push.depth_mm(depth.clamped(x + i % 3 - 1, y + i / 3 - 1)[0]))
-        .fold((d_p, d_p), |(lo, hi), d| (lo.min(d), hi.max(d)));
-    push.coc_scale_px_mm * (1.0 / d_min - 1.0 / d_max) > EDGE_RESOLVE_MIN_PX
-}
-
-/// The inverse depth (1/mm) whose light pixel (x, y) mostly holds: its own, or where the edge
-/// resolve is on and the pixel is [`at_edge`], [`edge_inverse_depth`].
-pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
-    if push.resolve_edges != 0 && at_edge(depth, push, x, y) {
-        edge_inverse_depth(depth, color, push, x, y)
-    } else {
-        push.inverse_depth(depth.clamped(x, y)[0])
-    }
-}
-
-/// The inverse depth (1/mm) whose light a pixel (x, y) at an edge mostly holds:
-/// glsl/dof/coc_edges.comp's, in the same f32 arithmetic.
-pub fn edge_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
-    let w_p = push.inverse_depth(depth.clamped(x, y)[0]);
-    let offset = |i: i32| (x + i % 3 - 1, y + i / 3 - 1);
-    let w: Vec<f32> = (0..9).map(offset).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
-    let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
-    let w_mid = 0.5 * (w_near + w_far);
-    let brightness = |c: [f32; 3]| c.iter().map(|v| v.max(0.0)).sum::<f32>();
-    let c9: Vec<[f32; 3]> =
-        (0..9).map(offset).map(|(qx, qy)| std::array::from_fn(|k| finite_or_zero(color.clamped(qx, qy)[k]))).collect();
-    let b9: Vec<f32> = c9.iter().map(|&c| brightness(c)).collect();
-    let is_near = |i: usize| w[i] > w_mid;
-    let (mut near, mut far) = (([0.0f32; 3], 0.0f32, 0.0f32), (0.0f32, 0.0f32));
-    for i in (0..9).filter(|&i| i != 4) {
-        if is_near(i) {
-            for (sum, v) in near.0.iter_mut().zip(c9[i]) {
-                *sum += v;
-            }
-            near.1 += 1.0;
-            near.2 += w[i];
-        } else {
-            far.0 += 1.0;
-            far.1 += w[i];
-        }
-    }
-    if near.1 == 0.0 || far.0 == 0.0 {
-        return w_p;
-    }
-    let c_near = near.0.map(|v| v / near.1);
-    // The far layer's colour: its neighbour of median brightness (the darker middle one of an
-    // even count, ties by position), not its mean, which a small highlight's other fringe
-    // pixels inflate (glsl/dof/coc_edges.comp).
-    let rank = (far.0 - 1.0) as usize / 2;
-    let far_of = || (0..9).filter(|&i| i != 4 && !is_near(i));
-    let c_far = far_of()
-        .find(|&i| far_of().filter(|&j| b9[j] < b9[i] || (b9[j] == b9[i] && j < i)).count() == rank)
-        .map_or([0.0; 3], |i| c9[i]);
-    let d: [f32; 3] = std::array::from_fn(|k| c_near[k] - c_far[k]);
-    let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if dd <= 1.0e-12 {
-        return w_p;
-    }
-    let c_p: [f32; 3] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
-    // Along the line from the far layer's colour to the near one's mean, the own layer's pixels
-    // span a range of alpha: a near pixel inside it (a textured surface at a hard edge) stays.
-    let own_near = w_p > w_mid;
-    let alpha_of = |c: [f32; 3]| (0..3).map(|k| (c[k] - c_far[k]) * d[k]).sum::<f32>() / dd;
-    let (lo, hi) = (0..9)
-        .filter(|&i| i != 4 && is_near(i) == own_near)
-        .map(|i| alpha_of(c9[i]))
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
-    let alpha_p = alpha_of(c_p);
-    if own_near && alpha_p >= lo && alpha_p <= hi {
-        return w_p;
-    }
-    let alpha = alpha_p.clamp(0.0, 1.0);
-    let to_near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
-    if to_near == own_near {
-        w_p
-    } else if to_near {
-        near.2 / near.1
-    } else {
-        far.1 / far.0
-    }
 }
 
 crate::shader_bindings! {
@@ -303,16 +51,6 @@ impl Shader for CocShader {
     const NAME: &'static str = NAME;
     type Bindings<'a> = CocBindings<'a>;
     type Push = CocPush;
-}
-
-/// A pixel in the edge list: x | y << 16.
-pub fn pack_pixel(x: i32, y: i32) -> u32 {
-    x as u32 | ((y as u32) << 16)
-}
-
-/// The pixel of an edge-list entry.
-pub fn unpack_pixel(v: u32) -> (i32, i32) {
-    ((v & 0xffff) as i32, (v >> 16) as i32)
 }
 
 impl Twin for CocShader {
@@ -353,41 +91,6 @@ impl Twin for CocShader {
         let words = b[4].words_mut();
         let count = count.min(words.len());
         words[..count].sort_unstable();
-    }
-}
-
-crate::shader_bindings! {
-    /// The bindings of glsl/dof/coc_edges.comp.
-    pub struct CocEdgesBindings {
-        depth_m: image(depth_m),
-        coc_px: image(coc_px),
-        field_curvature: buffer(FieldCurvature),
-        color_in: image(color_in),
-        args: buffer(Args),
-        edge_pixels: buffer(EdgePixels),
-    }
-}
-
-/// glsl/dof/coc_edges.comp: one invocation per pixel of the edge list (indirect).
-pub struct CocEdgesShader;
-
-impl Shader for CocEdgesShader {
-    const NAME: &'static str = EDGES_NAME;
-    type Bindings<'a> = CocEdgesBindings<'a>;
-    type Push = CocPush;
-}
-
-impl Twin for CocEdgesShader {
-    fn cpu(push: &CocPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let table = floats(b[2].words());
-        let (depth, color) = (b[0].image().clone(), b[3].image().clone());
-        let count = b[4].words()[COC_ARGS_COUNT as usize] as usize;
-        let listed = b[5].words()[..count].to_vec();
-        let out = b[1].image_mut();
-        for (x, y) in listed.into_iter().map(unpack_pixel) {
-            let inv_u = edge_inverse_depth(&depth, &color, push, x, y);
-            out.texel_mut(x as u32, y as u32)[0] = push.coc_px_of_inverse_depth(inv_u, x as u32, y as u32, &table);
-        }
     }
 }
 
@@ -443,7 +146,7 @@ impl Pass for Coc {
         }
         // The edge resolve is a second dispatch (coc_edges) over the pixels coc lists.
         let why = if camera.resolve_depth_edges {
-            format!("{why}; anti-aliased depth edges resolved over the listed edge pixels ({EDGES_NAME})")
+            format!("{why}; anti-aliased depth edges resolved over the listed edge pixels ({})", coc_edges::NAME)
         } else {
             format!("{why}; depth kept as stored at edges (--keep-edge-depth)")
         };
@@ -529,7 +232,7 @@ impl Pass for Coc {
         let constants = p.push.specialization();
         self.kernel.dispatch(rec, &constants, &bindings, &p.push, groups_for(images.width, images.height))?;
         if resolve {
-            rec.begin_pass(EDGES_NAME);
+            rec.begin_pass(coc_edges::NAME);
             // args (this dispatch's size, the count) and the edge list: written by coc.comp with
             //   atomics; read here as indirect arguments and by the shader.
             // coc: written by coc.comp; overwritten here at the listed pixels (write-after-write).
@@ -557,8 +260,10 @@ impl Pass for Coc {
 
 #[cfg(test)]
 mod tests {
+    use super::super::coc_push::coc_cpu;
     use super::*;
     use crate::optics::distortion::HeightTable;
+    use crate::optics::ThinLens;
 
     #[test]
     fn field_curvature_blurs_the_focus_plane_off_axis_like_the_geometric_cone() {

@@ -8,6 +8,8 @@ pub mod bin_order;
 pub mod bokeh_gather;
 pub mod classify;
 pub mod coc;
+pub mod coc_edges;
+pub mod coc_push;
 pub mod composite;
 pub mod diffraction;
 pub mod downsample;
