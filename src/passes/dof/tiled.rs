@@ -32,7 +32,7 @@ use super::{
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_LEVEL1, LEVELS, LIST_BLURRED_LEVEL1, LIST_COUNT,
 };
-use crate::gpu::{Gpu, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
+use crate::gpu::{Gpu, GpuBuffer, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
 use crate::model::camera::{BokehMode, Camera};
 use crate::passes::barriers::{after_compute_write, args_for_indirect, buffer_after_compute_write, overwrite};
@@ -245,6 +245,51 @@ impl Pass for TiledDof {
     /// that reads it as it was has; a per-channel run (longitudinal colour) puts those pixels
     /// back at its end, for the next channel's run and the passes after.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &TiledDofParams) -> GpuResult<()> {
+        let run = Run::create(rec, images, p)?;
+        self.record_classification(rec, &run, p)?;
+        self.record_full_resolution(rec, &run)?;
+        self.record_highlights(rec, &run, p)?;
+        self.record_pyramid_and_bins(rec, &run, p)?;
+        self.record_level_gathers(rec, &run, p)?;
+        self.record_composites(rec, &run, p)?;
+        self.record_sprites(rec, &run, p)?;
+        images.set_color(p.channel, run.output);
+        Ok(())
+    }
+}
+
+/// One run's images and buffers, shared by its steps: created by [`Run::create`], then each
+/// stage of [`TiledDof::record`] records its steps on them, in this order.
+struct Run {
+    /// The frame's colour (the sprites' excess is taken out of it, and for a per-channel run put
+    /// back) and the run's CoC.
+    color: Arc<GpuImage>,
+    coc: Arc<GpuImage>,
+    /// The new colour, written for every pixel by the tile passes.
+    output: Arc<GpuImage>,
+    args: Arc<GpuBuffer>,
+    tile_coc: Arc<GpuBuffer>,
+    tile_lists: Arc<GpuBuffer>,
+    level_lists: Arc<GpuBuffer>,
+    tile_radius: Arc<GpuBuffer>,
+    sprites: Arc<GpuBuffer>,
+    candidates: Arc<GpuBuffer>,
+    bin_counts: Arc<GpuBuffer>,
+    bins: Arc<GpuBuffer>,
+    saved: Arc<GpuBuffer>,
+    levels: Vec<Level>,
+    aperture_mask: Arc<GpuBuffer>,
+    aperture_shape: Arc<GpuImage>,
+    aperture: ApertureConstants,
+    size: [i32; 2],
+    tiles: [i32; 2],
+    layer_transition_px: f32,
+    /// The gathers' and sprites' pipelines without the aperture paths this lens never takes.
+    specialization: [u32; 2],
+}
+
+impl Run {
+    fn create(rec: &mut Recorder, images: &FrameImages, p: &TiledDofParams) -> GpuResult<Run> {
         let (color, coc) = (images.color().clone(), images.coc(p.channel)?.clone());
         let tiles = p.tiles();
         let tile_count = (tiles[0] * tiles[1]) as u64;
@@ -287,41 +332,96 @@ impl Pass for TiledDof {
         let (aperture, size, layer_transition_px) = (p.aperture, [p.width as i32, p.height as i32], 1.0);
         // The gathers' and sprites' pipelines without the aperture paths this lens never takes.
         let specialization = p.aperture_data.specialization(&aperture);
+        Ok(Run {
+            color,
+            coc,
+            output,
+            args,
+            tile_coc,
+            tile_lists,
+            level_lists,
+            tile_radius,
+            sprites,
+            candidates,
+            bin_counts,
+            bins,
+            saved,
+            levels,
+            aperture_mask,
+            aperture_shape,
+            aperture,
+            size,
+            tiles,
+            layer_transition_px,
+            specialization,
+        })
+    }
 
-        tiles::record(&self.tiles, rec, &coc, &tile_coc, &TilesPush { size, tiles })?;
+    /// The bindings of both sprite_excess dispatches: the excess taken out, and put back.
+    fn excess_bindings(&self) -> SpriteExcessBindings<'_> {
+        SpriteExcessBindings { color: &self.color, args: &self.args, sprites: &self.sprites, saved: &self.saved }
+    }
+}
+
+/// The stages of [`TiledDof::record`], in recording order.
+impl TiledDof {
+    /// The tiles' CoC ranges, their classes and lists, and the level gathers' lists.
+    fn record_classification(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
+        let (size, tiles) = (r.size, r.tiles);
+        tiles::record(&self.tiles, rec, &r.coc, &r.tile_coc, &TilesPush { size, tiles })?;
         let search_tiles = (0.5 * p.max_abs_coc_px / TILE_SIZE as f32).ceil() as i32 + 1;
         let classify = ClassifyPush { tiles, search_tiles, small_radius_px: p.small_radius_px };
-        let classify_bindings =
-            ClassifyBindings { tile_coc: &tile_coc, args: &args, tile_lists: &tile_lists, tile_radius: &tile_radius };
+        let classify_bindings = ClassifyBindings {
+            tile_coc: &r.tile_coc,
+            args: &r.args,
+            tile_lists: &r.tile_lists,
+            tile_radius: &r.tile_radius,
+        };
         classify::record(&self.classify, rec, &classify_bindings, &classify)?;
 
         // The classification -> everything after it: the args feed indirect dispatches
         // (DRAW_INDIRECT stage, indirect-command reads) and the counters; the lists and radii are
         // read by the tile passes. `output` is written from scratch by the tile passes.
         rec.buffer_barriers(&[
-            args_for_indirect(&args),
-            buffer_after_compute_write(&tile_lists),
-            buffer_after_compute_write(&tile_radius),
+            args_for_indirect(&r.args),
+            buffer_after_compute_write(&r.tile_lists),
+            buffer_after_compute_write(&r.tile_radius),
         ]);
-        rec.image_barriers(&[overwrite(&output)]);
-        let lists_bindings = LevelListsBindings { args: &args, tile_radius: &tile_radius, level_lists: &level_lists };
+        rec.image_barriers(&[overwrite(&r.output)]);
+        let lists_bindings =
+            LevelListsBindings { args: &r.args, tile_radius: &r.tile_radius, level_lists: &r.level_lists };
         level_lists::record(&self.level_lists, rec, &lists_bindings, tiles)?;
         // The level lists and their counts -> the level gathers' indirect dispatches and reads.
-        rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&level_lists)]);
+        rec.buffer_barriers(&[args_for_indirect(&r.args), buffer_after_compute_write(&r.level_lists)]);
+        Ok(())
+    }
 
+    /// The copy tiles and the exact small-CoC tiles, at full resolution.
+    fn record_full_resolution(&self, rec: &mut Recorder, r: &Run) -> GpuResult<()> {
         let gather_bindings = TileGatherBindings {
-            color: &color,
-            coc: &coc,
-            output: &output,
-            tile_lists: &tile_lists,
-            tile_radius: &tile_radius,
-            aperture_mask: &aperture_mask,
-            aperture_shape: &aperture_shape,
+            color: &r.color,
+            coc: &r.coc,
+            output: &r.output,
+            tile_lists: &r.tile_lists,
+            tile_radius: &r.tile_radius,
+            aperture_mask: &r.aperture_mask,
+            aperture_shape: &r.aperture_shape,
         };
-        let tile_gather = TileGatherPush { size, tiles, tile_class: 0, aperture, layer_transition_px };
-        tile_gather::record(&self.tile_gather, &specialization, rec, &gather_bindings, &args, &tile_gather)?;
+        let tile_gather = TileGatherPush {
+            size: r.size,
+            tiles: r.tiles,
+            tile_class: 0,
+            aperture: r.aperture,
+            layer_transition_px: r.layer_transition_px,
+        };
+        tile_gather::record(&self.tile_gather, &r.specialization, rec, &gather_bindings, &r.args, &tile_gather)
+    }
 
-        let level1 = &levels[0];
+    /// The first level of the pyramid with its highlight candidates, the highlights taken as
+    /// sprites, and the sprites' excess taken out of the colour.
+    fn record_highlights(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
+        let size = r.size;
+        let level1 = &r.levels[0];
         let downsample = DownsamplePush {
             size,
             half_size: [level1.color.width as i32, level1.color.height as i32],
@@ -330,12 +430,12 @@ impl Pass for TiledDof {
             luminance_weights: p.luminance_weights,
         };
         let downsample_bindings = DownsampleBindings {
-            color: &color,
-            coc: &coc,
+            color: &r.color,
+            coc: &r.coc,
             color_half: &level1.color,
             coc_half: &level1.coc,
-            args: &args,
-            candidates: &candidates,
+            args: &r.args,
+            candidates: &r.candidates,
         };
         downsample::record(&self.downsample, rec, &downsample_bindings, &downsample)?;
         let highlights = HighlightsPush {
@@ -348,21 +448,25 @@ impl Pass for TiledDof {
             luminance_weights: p.luminance_weights,
         };
         let highlights_bindings = HighlightsBindings {
-            color: &color,
-            coc: &coc,
+            color: &r.color,
+            coc: &r.coc,
             color_half: &level1.color,
-            args: &args,
-            candidates: &candidates,
-            sprites: &sprites,
+            args: &r.args,
+            candidates: &r.candidates,
+            sprites: &r.sprites,
         };
         highlights::record(&self.highlights, rec, &highlights_bindings, &highlights)?;
         // Every step that reads the colour as it was has recorded its reads (the copy and small
         // tiles, dof_downsample, dof_highlights; the pyramid and the level gathers read the
         // levels): the sprites' excess now leaves their pixels, for the composite's exact gathers.
-        let excess_bindings = SpriteExcessBindings { color: &color, args: &args, sprites: &sprites, saved: &saved };
         let excess = SpriteExcessPush { sprite_capacity: p.sprite_capacity as i32, restore: 0 };
-        sprite_excess::record(&self.sprite_excess, rec, &excess_bindings, &excess)?;
-        for (level, pair) in (2..).zip(levels.windows(2)) {
+        sprite_excess::record(&self.sprite_excess, rec, &r.excess_bindings(), &excess)
+    }
+
+    /// The rest of the pyramid, and the sprites binned per tile.
+    fn record_pyramid_and_bins(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
+        let tiles = r.tiles;
+        for (level, pair) in (2..).zip(r.levels.windows(2)) {
             let b = PyramidBindings {
                 color_fine: &pair[0].color,
                 coc_fine: &pair[0].coc,
@@ -372,31 +476,34 @@ impl Pass for TiledDof {
             pyramid::record(&self.pyramid, rec, &b, level)?;
         }
         let bin_bindings = BinBindings {
-            args: &args,
-            sprites: &sprites,
-            tile_radius: &tile_radius,
-            bin_counts: &bin_counts,
-            bins: &bins,
+            args: &r.args,
+            sprites: &r.sprites,
+            tile_radius: &r.tile_radius,
+            bin_counts: &r.bin_counts,
+            bins: &r.bins,
         };
         let bin_push = BinPush { tiles, sprite_capacity: p.sprite_capacity as i32 };
         bin::record(&self.bin, rec, &bin_bindings, &bin_push, ARGS_BIN_DISPATCH as u64 * 4)?;
         let order_bindings = BinOrderBindings {
-            sprites: &sprites,
-            bin_counts: &bin_counts,
-            bins: &bins,
-            args: &args,
-            tile_lists: &tile_lists,
+            sprites: &r.sprites,
+            bin_counts: &r.bin_counts,
+            bins: &r.bins,
+            args: &r.args,
+            tile_lists: &r.tile_lists,
         };
-        bin_order::record(&self.bin_order, rec, &order_bindings, (tiles[0] * tiles[1]) as u32)?;
+        bin_order::record(&self.bin_order, rec, &order_bindings, (tiles[0] * tiles[1]) as u32)
+    }
 
-        for (level, l) in (1..).zip(&levels) {
+    /// Each level's gather over the tiles listed for it.
+    fn record_level_gathers(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
+        for (level, l) in (1..).zip(&r.levels) {
             let to_level = 1.0 / (1u32 << level) as f32;
             let push = LevelGatherPush {
                 level_size: [l.color.width as i32, l.color.height as i32],
-                tiles,
+                tiles: r.tiles,
                 level: level as i32,
-                aperture: aperture.at_level(level),
-                layer_transition_px: layer_transition_px * to_level,
+                aperture: r.aperture.at_level(level),
+                layer_transition_px: r.layer_transition_px * to_level,
                 small_radius_px: p.small_radius_px * to_level,
             };
             let b = LevelGatherBindings {
@@ -404,75 +511,90 @@ impl Pass for TiledDof {
                 coc_level: &l.coc,
                 bg_level: &l.bg,
                 fg_level: &l.fg,
-                level_lists: &level_lists,
-                tile_radius: &tile_radius,
-                aperture_mask: &aperture_mask,
+                level_lists: &r.level_lists,
+                tile_radius: &r.tile_radius,
+                aperture_mask: &r.aperture_mask,
                 fg_big_level: &l.fg_big,
-                args: &args,
-                aperture_shape: &aperture_shape,
+                args: &r.args,
+                aperture_shape: &r.aperture_shape,
             };
-            level_gather::record(&self.level_gather, &specialization, rec, &b, &push)?;
+            level_gather::record(&self.level_gather, &r.specialization, rec, &b, &push)?;
         }
+        Ok(())
+    }
+
+    /// The levels' layers composited at full resolution.
+    fn record_composites(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
         // Per level two composites: the class list with the exact gather for nearly sharp pixels,
         // the blurred list (no such pixel) with a pipeline that has no exact gather in its code.
-        let composite_exact = composite::specialization(specialization, true);
-        let composite_blurred = composite::specialization(specialization, false);
-        for (level, l) in (1..).zip(&levels) {
+        let composite_exact = composite::specialization(r.specialization, true);
+        let composite_blurred = composite::specialization(r.specialization, false);
+        for (level, l) in (1..).zip(&r.levels) {
             let lists = [(CLASS_LEVEL1, &composite_exact), (LIST_BLURRED_LEVEL1, &composite_blurred)];
             for (first, constants) in lists {
                 let list = first + level as u32 - 1;
                 let push = CompositePush {
-                    size,
+                    size: r.size,
                     level_size: [l.color.width as i32, l.color.height as i32],
-                    tiles,
+                    tiles: r.tiles,
                     level,
                     small_radius_px: p.small_radius_px,
-                    aperture,
-                    layer_transition_px,
+                    aperture: r.aperture,
+                    layer_transition_px: r.layer_transition_px,
                     list: list as i32,
                 };
                 let b = CompositeBindings {
                     // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
-                    color: &color,
-                    coc: &coc,
+                    color: &r.color,
+                    coc: &r.coc,
                     bg_level: &l.bg,
                     fg_level: &l.fg,
-                    output: &output,
-                    tile_lists: &tile_lists,
-                    aperture_mask: &aperture_mask,
+                    output: &r.output,
+                    tile_lists: &r.tile_lists,
+                    aperture_mask: &r.aperture_mask,
                     coc_level: &l.coc,
                     fg_big_level: &l.fg_big,
-                    tile_radius: &tile_radius,
-                    aperture_shape: &aperture_shape,
+                    tile_radius: &r.tile_radius,
+                    aperture_shape: &r.aperture_shape,
                 };
-                composite::record(&self.composite, &constants[..], rec, &b, &args, &push)?;
+                composite::record(&self.composite, &constants[..], rec, &b, &r.args, &push)?;
             }
         }
+        Ok(())
+    }
+
+    /// The highlight sprites over the composites, and for a per-channel run the sprites' pixels
+    /// put back in the colour.
+    fn record_sprites(&self, rec: &mut Recorder, r: &Run, p: &TiledDofParams) -> GpuResult<()> {
         // The highlight sprites over the composites, on the tiles that have any.
         let sprites_bindings = SpritesBindings {
-            output: &output,
-            coc: &coc,
-            tile_lists: &tile_lists,
-            sprites: &sprites,
-            bin_counts: &bin_counts,
-            bins: &bins,
-            args: &args,
-            aperture_mask: &aperture_mask,
-            aperture_shape: &aperture_shape,
+            output: &r.output,
+            coc: &r.coc,
+            tile_lists: &r.tile_lists,
+            sprites: &r.sprites,
+            bin_counts: &r.bin_counts,
+            bins: &r.bins,
+            args: &r.args,
+            aperture_mask: &r.aperture_mask,
+            aperture_shape: &r.aperture_shape,
         };
-        let sprites_push = SpritesPush { size, tiles, aperture, sprite_capacity: p.sprite_capacity as i32 };
-        sprites::record(&self.sprites, &specialization, rec, &sprites_bindings, &sprites_push)?;
+        let sprites_push = SpritesPush {
+            size: r.size,
+            tiles: r.tiles,
+            aperture: r.aperture,
+            sprite_capacity: p.sprite_capacity as i32,
+        };
+        sprites::record(&self.sprites, &r.specialization, rec, &sprites_bindings, &sprites_push)?;
         if p.channel.is_some() {
             // Longitudinal colour: each channel's run reads the input colour, which stays the
             // frame's colour after this run (the next channel's run and the passes before
             // longitudinal_color read it): the sprites' pixels as they were.
-            let restore = SpriteExcessPush { restore: 1, ..excess };
-            sprite_excess::record(&self.sprite_excess, rec, &excess_bindings, &restore)?;
+            let restore = SpriteExcessPush { sprite_capacity: p.sprite_capacity as i32, restore: 1 };
+            sprite_excess::record(&self.sprite_excess, rec, &r.excess_bindings(), &restore)?;
             // Those readers take the colour as the upload left it, visible to compute reads with
             // no barrier of their own: this write made visible to them here.
-            rec.image_barriers(&[after_compute_write(&color)]);
+            rec.image_barriers(&[after_compute_write(&r.color)]);
         }
-        images.set_color(p.channel, output);
         Ok(())
     }
 }
