@@ -1,16 +1,19 @@
 //! Lens flare (Walch 2017 sec. 3.2): the ghosts of the lens's inner reflections, the starburst
 //! of its aperture's diffraction and the halo of its scattering, around the lights of the frame
 //! (pixels the exposure saturates by the chosen factor) and the lights given explicitly. One
-//! pass of four shaders, each a module:
-//!   1. `flare_tiles`: per 16x16 tile, the light pixels' energy, count and position;
-//!   2. `flare_lights`: the tiles gathered into a short list of lights, and each light's flare
-//!      elements as sprites with tight bounds (the ghosts of the matrix model,
+//! pass of four shaders, each a module (named here by its shader):
+//!   1. `flare_tiles` (`tiles`): per 16x16 tile, the light pixels' energy, count and position;
+//!   2. `flare_lights` (`lights`): the tiles gathered into a short list of lights, and each
+//!      light's flare elements as sprites with tight bounds (the ghosts of the matrix model,
 //!      src/optics/flare/ghosts.rs; the starburst's spikes and glow and the halo,
 //!      src/optics/flare/starburst.rs), none where an element would not show;
-//!   3. `flare_bins`: each sprite sorted against the tiles its bounds touch (away, covering,
-//!      crossing), once per frame, into per-tile bin words;
+//!   3. `flare_bins` (`bins`): each sprite sorted against the tiles its bounds touch (away,
+//!      covering, crossing), once per frame, into per-tile bin words;
 //!   4. `ghost_sprites`: the ghost-sprite kernel, each tile's binned sprites added, every output
 //!      pixel written once.
+//!
+//! The steps read the constants and the ghost table this pass writes from `types`, and one
+//! sprite's geometry from `sprite`; none imports this module or another step.
 //!
 //! The plan skips the pass when no light in the frame could make an element add a thousandth of
 //! the sensor's saturation, and says how bright a light would have to be.
