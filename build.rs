@@ -1,4 +1,6 @@
-//! Compiles every `glsl/*.comp` to SPIR-V with shaderc (linked against Debian's libshaderc-dev).
+//! Compiles every `glsl/**/*.comp` to SPIR-V with shaderc (linked against Debian's libshaderc-dev):
+//! the shaders sit in one folder per effect (`glsl/dof/`, `glsl/flare/`, ...), each named by its
+//! file stem, which must be unique across the folders (the build fails otherwise).
 //! `#include "x.glsl"` resolves against `glsl/include/`. A shader error fails the build and
 //! prints file:line.
 //!
@@ -12,15 +14,19 @@ fn main() {
     let glsl = Path::new("glsl");
     let include_dir = glsl.join("include");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    // Cargo scans a folder named here recursively: a shader added to any glsl/ folder rebuilds.
     println!("cargo:rerun-if-changed=glsl");
 
-    let mut names: Vec<String> = std::fs::read_dir(glsl)
-        .expect("glsl/ exists")
-        .filter_map(|e| e.ok())
-        .filter_map(|e| e.file_name().into_string().ok())
-        .filter(|n| n.ends_with(".comp"))
-        .collect();
+    // Every .comp under glsl/ (its path relative to glsl/), sorted.
+    let mut names: Vec<PathBuf> = Vec::new();
+    find_shaders(glsl, Path::new(""), &mut names);
     names.sort();
+    let mut stems: Vec<&str> = names.iter().map(|n| stem_of(n)).collect();
+    stems.sort_unstable();
+    if let Some(w) = stems.windows(2).find(|w| w[0] == w[1]) {
+        eprintln!("two shaders are named {}: shader names (file stems) must be unique under glsl/", w[0]);
+        std::process::exit(1);
+    }
     let mut includes: Vec<PathBuf> =
         std::fs::read_dir(&include_dir).into_iter().flatten().flatten().map(|e| e.path()).collect();
     includes.sort();
@@ -63,15 +69,15 @@ fn main() {
                 .map(|content| shaderc::ResolvedInclude { resolved_name: p.display().to_string(), content })
                 .map_err(|e| format!("{from}: cannot include {requested}: {e}"))
         });
-        let shown = format!("glsl/{name}");
+        let shown = format!("glsl/{}", name.display());
         match compiler.compile_into_spirv(&source, shaderc::ShaderKind::Compute, &shown, "main", Some(&options)) {
             Ok(artifact) => {
-                let stem = name.trim_end_matches(".comp");
+                let stem = stem_of(name);
                 let spv = out.join(format!("{stem}.spv"));
                 std::fs::write(&spv, artifact.as_binary_u8()).expect("write spv");
                 table += &format!("    (\"{stem}\", include_bytes!(\"{}\")),\n", spv.display());
             }
-            // shaderc's message already reads "glsl/name.comp:LINE: error: ..."
+            // shaderc's message already reads "glsl/effect/name.comp:LINE: error: ..."
             Err(e) => errors.push(e.to_string()),
         }
     }
@@ -87,4 +93,26 @@ fn main() {
     table += "];\n";
     table += &constants;
     std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
+}
+
+/// Collects the `.comp` files under `root/dir` (paths relative to `root`), `include/` left out.
+fn find_shaders(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) {
+    let full = root.join(dir);
+    let mut entries: Vec<_> = std::fs::read_dir(&full).expect("glsl/ exists").filter_map(|e| e.ok()).collect();
+    entries.sort_by_key(|e| e.file_name());
+    for entry in entries {
+        let rel = dir.join(entry.file_name());
+        if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            if rel != Path::new("include") {
+                find_shaders(root, &rel, out);
+            }
+        } else if rel.extension().is_some_and(|e| e == "comp") {
+            out.push(rel);
+        }
+    }
+}
+
+/// A shader's name: its file stem.
+fn stem_of(path: &Path) -> &str {
+    path.file_stem().and_then(|s| s.to_str()).expect("a shader file name is UTF-8")
 }

@@ -9,7 +9,7 @@ use realcam::gpu::{Gpu, Recorder};
 use realcam::optics::diffraction::{encircled_energy, WAVELENGTHS_RGB_NM};
 use realcam::optics::focus_processor::{build_tables, process_cpu, FocusGeometry, PsfTableSettings, PsfTables};
 use realcam::optics::ThinLens;
-use realcam::passes::diffraction::{Diffraction, DiffractionParams, DiffractionPush, NAME};
+use realcam::passes::dof::diffraction::{Diffraction, DiffractionParams, DiffractionPush, NAME};
 use realcam::passes::{FrameImages, Pass};
 use support::{assert_validation_clean, energy, gpu};
 

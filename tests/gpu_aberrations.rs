@@ -5,7 +5,7 @@ mod support;
 
 use realcam::model::frame::Frame;
 use realcam::optics::distortion::{DistortionTables, HeightTable};
-use realcam::passes::distortion::{distortion_cpu, Distortion};
+use realcam::passes::lens::distortion::{distortion_cpu, Distortion};
 use support::*;
 
 const W: u32 = 256;
@@ -311,7 +311,7 @@ fn coma_draws_a_comet_of_the_tabled_size_pointing_along_the_radius() {
 
 #[test]
 fn coma_pass_matches_its_cpu_twin() {
-    use realcam::passes::coma::{coma_cpu, table_data, Coma, ComaPush};
+    use realcam::passes::lens::coma::{coma_cpu, table_data, Coma, ComaPush};
     let (w, h) = (48u32, 32u32);
     let color: Vec<f32> = (0..w * h * 4).map(|i| ((i * 37 % 101) as f32 / 50.0).powi(2)).collect();
     let frame = Frame::new(w, h, color.clone(), vec![2.0; (w * h) as usize]);

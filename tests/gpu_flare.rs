@@ -14,9 +14,9 @@ use realcam::optics::flare::coating::reflectance;
 use realcam::optics::flare::ghosts::{path_matrix, Event, GhostPath, Moments};
 use realcam::optics::flare::traced::{chief_ray, display_px, optical_slope};
 use realcam::optics::flare::{channel_nm, BANDS_NM, BAND_WEIGHTS};
+use realcam::passes::flare::{bins, ghost_sprites, lights, tiles};
 use realcam::passes::flare::{Flare, FlareModel, FlareParams};
 use realcam::passes::PlanInput;
-use realcam::passes::{flare_bins, flare_lights, flare_tiles, ghost_sprites};
 use realcam::pipeline::planner::plan;
 use realcam::pipeline::render::Renderer;
 use std::path::Path;
@@ -478,7 +478,7 @@ fn sprites_past_one_list_are_shaded_in_batches_as_their_cpu_twin_does() {
     params.max_lights = 64;
     let slots = params.constants.slots_per_light as u32;
     assert!(spots.len() as u32 * slots > SPRITE_LIST && 46 * slots <= SPRITE_LIST + slots, "{slots} slots a light");
-    let kinds = ghost_sprites::specialization(&params.constants, flare_bins::words_per_tile(params.sprite_slots()));
+    let kinds = ghost_sprites::specialization(&params.constants, bins::words_per_tile(params.sprite_slots()));
     assert_eq!(kinds[4], 1, "the batched pipeline: {kinds:?}");
     let gpu = gpu();
     let mut p = plan(&frame, &camera);
@@ -488,7 +488,7 @@ fn sprites_past_one_list_are_shaded_in_batches_as_their_cpu_twin_does() {
     let rgba = rendered.rgba;
     assert_validation_clean(&gpu);
     // The flare's dispatches (the lens's other passes have their own twin cases).
-    let steps = [flare_tiles::NAME, flare_lights::NAME, flare_bins::NAME, ghost_sprites::NAME];
+    let steps = [tiles::NAME, lights::NAME, bins::NAME, ghost_sprites::NAME];
     let flare: Vec<_> = checks.iter().filter(|c| steps.contains(&c.shader)).collect();
     assert!(flare.iter().any(|c| c.shader == ghost_sprites::NAME), "ghost_sprites was not checked");
     let failures: Vec<String> = flare.iter().filter_map(|c| c.result.as_ref().err().map(|e| e.to_string())).collect();

@@ -6,9 +6,10 @@ mod support;
 use realcam::model::aperture::ApertureShape;
 use realcam::model::camera::{BokehMode, CocModel, FilmMode};
 use realcam::model::frame::Frame;
-use realcam::passes::bokeh_gather::{BokehGather, GatherPush};
-use realcam::passes::coc::{Coc, CocParams, CocPush};
-use realcam::passes::tiled_dof::{TiledDof, TiledDofParams};
+use realcam::passes::dof::bokeh_gather::{BokehGather, GatherPush};
+use realcam::passes::dof::coc::{Coc, CocParams};
+use realcam::passes::dof::coc_push::CocPush;
+use realcam::passes::dof::tiled::{TiledDof, TiledDofParams};
 use realcam::pipeline::planner;
 use support::*;
 

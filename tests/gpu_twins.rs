@@ -7,7 +7,9 @@ use realcam::model::camera::{BokehMode, Camera};
 use realcam::model::frame::Frame;
 use realcam::optics::distortion::{DistortionTables, HeightTable};
 use realcam::optics::film::FilmCurve;
-use realcam::passes::{bokeh_gather, coc, film, vignette, PASS_ORDER};
+use realcam::passes::dof::{bokeh_gather, coc};
+use realcam::passes::lens::vignette;
+use realcam::passes::{film, PASS_ORDER};
 use realcam::pipeline::planner;
 use realcam::pipeline::render::Renderer;
 use std::collections::BTreeSet;
@@ -193,7 +195,7 @@ fn flare_camera(file: &str, blades: u32) -> Camera {
 }
 
 /// Two of Walch's primitives on a 40x28 frame: a rounded one and a rolled diamond-like one.
-fn bezier_case() -> Vec<realcam::passes::bezier_ghosts::DrawnGhost> {
+fn bezier_case() -> Vec<realcam::tools::bezier_ghosts::DrawnGhost> {
     use realcam::optics::bezier_ghost::{BezierGhost, Transfer};
     let ghost = BezierGhost {
         centre_px: [14.3, 12.6],
@@ -213,13 +215,13 @@ fn bezier_case() -> Vec<realcam::passes::bezier_ghosts::DrawnGhost> {
     };
     let turned = BezierGhost { centre_px: [33.0, 20.0], left_control: 0.1, right_control: 0.3, ..ghost };
     vec![
-        realcam::passes::bezier_ghosts::DrawnGhost {
+        realcam::tools::bezier_ghosts::DrawnGhost {
             ghost,
             colour: [1.0, 0.5, 0.2],
             roll_rad: 0.0,
             pivot_px: [20.0, 14.0],
         },
-        realcam::passes::bezier_ghosts::DrawnGhost {
+        realcam::tools::bezier_ghosts::DrawnGhost {
             ghost: turned,
             colour: [0.1, 0.6, 1.0],
             roll_rad: 0.7,
@@ -253,7 +255,7 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     // turned by eq 8.2's roll, overlapping a tile edge and the frame's edge.
     let bezier = realcam::gpu::Kernel::new(&gpu).expect("bezier_ghosts pipeline");
     let (_, _, checks) =
-        realcam::passes::bezier_ghosts::draw(&bezier, "bezier twin", &gpu, 40, 28, &bezier_case(), true)
+        realcam::tools::bezier_ghosts::draw(&bezier, "bezier twin", &gpu, 40, 28, &bezier_case(), true)
             .expect("bezier ghosts");
     assert_validation_clean(&gpu);
     for c in checks {
@@ -451,7 +453,7 @@ fn each_channel_run_of_the_tiled_depth_of_field_reads_the_colour_as_it_was() {
     // puts those pixels back at its end: run in the reverse channel order, the output is the
     // same bits (a run that left its change behind would change the next runs' highlights and
     // gathers, and which runs see it depends on the order).
-    use realcam::passes::tiled_dof::{TiledDof, TiledDofParams};
+    use realcam::passes::dof::tiled::{TiledDof, TiledDofParams};
     let gpu = gpu();
     let frame = banded_frame(160, 48);
     let mut camera = dof_camera(50.0, 1.4, 2.0, 6);

@@ -4,7 +4,7 @@
 #define REALCAM_APERTURE_GLSL
 #include "common.glsl"
 
-// Part of every bokeh pass's push constants (src/passes/aperture.rs mirrors it: 4-byte fields).
+// Part of every bokeh pass's push constants (src/passes/dof/aperture.rs mirrors it: 4-byte fields).
 struct Aperture {
     int blades;            // < 3: circular
     float rotation;        // radians; 0 puts a corner straight up (y up), as Blender/Cycles does
@@ -20,7 +20,7 @@ struct Aperture {
     int shape_radius;      // the shape table covers offsets with |x|, |y| <= this; 0: no table
 };
 
-// Specialization constants (src/passes/aperture.rs `Specialization`): a pass whose lens needs
+// Specialization constants (src/passes/dof/aperture.rs `Specialization`): a pass whose lens needs
 // neither sets them false and its pipeline is compiled without those paths. Lavapipe runs both
 // sides of every branch, so a path switched off only at run time would still cost its time.
 // APERTURE_GENERAL: the user's aperture image, the cat's eye, or offsets beyond the shape
@@ -33,7 +33,7 @@ layout(constant_id = 1) const bool APERTURE_ABERRATION = true;
 // none. Each shader that includes this file defines APERTURE_MASK_BINDING.
 layout(binding = APERTURE_MASK_BINDING, std430) readonly buffer ApertureMask { float aperture_mask[]; };
 
-// The aperture's shape at integer offsets (src/passes/aperture.rs shape_table), so gathers and
+// The aperture's shape at integer offsets (src/passes/dof/aperture.rs shape_table), so gathers and
 // sprites need no atan per tap: g(o) = |o| mix(cos(phi), 1, curvature), phi the angle of o from
 // the nearest blade's edge normal; the signed distance to the edge of the image of
 // circumradius r is g(o) - r shape_b. Texel (o + shape_radius) holds g(o); each shader that
@@ -74,7 +74,7 @@ float sa_strength(float coc_px, Aperture ap) {
 // 1.1e-5 relative at worst, at s = -0.3, the same as eight steps), two where |s| <= 0.1 (3.7e-7;
 // the default lens's |s| is at most 0.09). Each step is a division per tap: eight steps cost
 // lavapipe a quarter of the tiled depth of field, and the two steps take another 6 ms off a
-// 1280x720 frame. sa_newton_steps_reach_the_f64_root (src/passes/aperture.rs) checks both counts.
+// 1280x720 frame. sa_newton_steps_reach_the_f64_root (src/passes/dof/aperture.rs) checks both counts.
 #define SA_NEWTON_STEPS 4
 #define SA_NEWTON_STEPS_WEAK 2
 float sa_intensity(float r_norm, float s) {

@@ -1,4 +1,4 @@
-// The CoC pass's shared parts (glsl/coc.comp, glsl/coc_edges.comp): the push constants, the
+// The CoC pass's shared parts (glsl/dof/coc.comp, glsl/dof/coc_edges.comp): the push constants, the
 // depth reads and eq 5.3. The integer defines are Rust constants too
 // (realcam::gpu::shaders::coc, made by build.rs). The including shader declares depth_m, the
 // `table` buffer and the FIELD_CURVATURE specialization constant first.
@@ -10,7 +10,7 @@
 #define COC_ARGS_DISPATCH 0
 #define COC_ARGS_COUNT 3
 #define COC_ARGS_WORDS 4
-// Invocations per workgroup of the edge resolve (glsl/coc_edges.comp).
+// Invocations per workgroup of the edge resolve (glsl/dof/coc_edges.comp).
 #define EDGE_GROUP_SIZE 64
 
 layout(push_constant) uniform Push {

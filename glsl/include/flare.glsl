@@ -1,4 +1,4 @@
-// Layout of the lens-flare buffers (src/passes/flare.rs and its steps). The integer defines are
+// Layout of the lens-flare buffers (src/passes/flare/mod.rs and its steps). The integer defines are
 // Rust constants too (realcam::gpu::shaders::flare, made by build.rs).
 #ifndef REALCAM_FLARE_GLSL
 #define REALCAM_FLARE_GLSL
@@ -76,7 +76,7 @@
 #define ARGS_SPRITE_GROUPS 8
 #define ARGS_WORDS 12
 
-// The frame's flare settings (src/passes/flare.rs FlareConstants, 4-byte fields).
+// The frame's flare settings (src/passes/flare/types.rs FlareConstants, 4-byte fields).
 struct FlareConstants {
     int width;
     int height;

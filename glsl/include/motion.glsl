@@ -1,5 +1,5 @@
 // Motion blur: the shutter in time and the path of a point over it (src/optics/shutter.rs,
-// src/passes/motion_path.rs is the CPU twin of every function here).
+// src/passes/motion/path.rs is the CPU twin of every function here).
 //
 // Times are in frames relative to the frame time the passes describe. A point seen at texel Y
 // at the frame time moves with `next` (px per frame toward the next frame) for t >= 0 and

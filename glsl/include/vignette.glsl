@@ -2,7 +2,7 @@
 // when it has one (natural and optical vignetting as measured), else the cos^4 law of
 // illumination (Kyaw 2013 eq 4.14, from eq 4.9) with the real field angle theta = atan(r / v), r
 // the image height on the film and v the image distance. Used by vignette.comp, and by film.comp
-// when the vignette runs in the film's dispatch. src/passes/vignette.rs VignettePush::falloff is
+// when the vignette runs in the film's dispatch. src/passes/lens/vignette.rs VignettePush::falloff is
 // the twin. Needs height_table.glsl (and so the including shader's `table` buffer).
 #ifndef REALCAM_VIGNETTE_GLSL
 #define REALCAM_VIGNETTE_GLSL

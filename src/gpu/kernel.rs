@@ -60,7 +60,7 @@ macro_rules! shader_bindings {
     (@bind buffer, $e:expr) => { $crate::gpu::Bind::Buffer($e) };
 }
 
-/// A compute shader `glsl/<NAME>.comp`: its bindings and its push constants.
+/// A compute shader `glsl/<effect>/<NAME>.comp`: its bindings and its push constants.
 pub trait Shader: 'static {
     const NAME: &'static str;
     /// What one dispatch binds (declared with [`shader_bindings!`](crate::shader_bindings)).
@@ -417,12 +417,12 @@ pub fn check_interface(
 mod tests {
     use super::*;
 
-    /// glsl/coc_edges.comp: images and buffers.
+    /// glsl/dof/coc_edges.comp: images and buffers.
     fn coc_edges_interface() -> ShaderInterface {
         interface(shaders::spirv("coc_edges").unwrap()).unwrap()
     }
 
-    /// The bindings of glsl/coc_edges.comp as its pass declares them.
+    /// The bindings of glsl/dof/coc_edges.comp as its pass declares them.
     fn coc_edges_declared() -> [Binding; 6] {
         [
             image("depth_m"),

@@ -310,7 +310,7 @@ mod tests {
 
     #[test]
     fn reads_the_bindings_and_push_constants_of_the_compiled_shaders() {
-        // glsl/coc_edges.comp: depth (image), coc_px (image), the field-curvature buffer, the
+        // glsl/dof/coc_edges.comp: depth (image), coc_px (image), the field-curvature buffer, the
         // colour, the edge list's args and pixels; push block (glsl/include/coc.glsl) of 15
         // four-byte fields.
         let coc = shader("coc_edges");
@@ -328,7 +328,7 @@ mod tests {
             ]
         );
         assert_eq!(coc.push_constant_bytes, 15 * 4);
-        // glsl/dof_composite.comp: a nested struct (Aperture, 12 fields) inside the push block,
+        // glsl/dof/dof_composite.comp: a nested struct (Aperture, 12 fields) inside the push block,
         // and binding numbers declared out of order through an include.
         let composite = shader("dof_composite");
         assert_eq!(composite.push_constant_bytes, (2 + 2 + 2 + 1 + 1 + 12 + 1 + 1) * 4);

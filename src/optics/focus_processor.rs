@@ -596,7 +596,7 @@ impl FocusAccumulator {
 
 /// The focus processor on an RGBA image with per-pixel depth (metres, planar): every pixel is
 /// a point sample at its centre (sub-pixel offset 0). Alpha passes through. The reference for
-/// the GPU pass [`crate::passes::diffraction`].
+/// the GPU pass [`crate::passes::dof::diffraction`].
 pub fn process_cpu(rgba: &[f32], depth_m: &[f32], width: u32, height: u32, tables: &PsfTables) -> Vec<f32> {
     let pixels = width as usize * height as usize;
     assert_eq!(rgba.len(), pixels * 4, "rgba must hold width x height x 4 values");

@@ -2,7 +2,7 @@
 //! (glsl/copy.comp). `realcam bench` times it in the same run as the other passes and gives
 //! every figure as a multiple of it, so the numbers carry over between devices. In a render it
 //! is the flare's output where the frame holds no light (an indirect dispatch of every tile or
-//! none, src/passes/ghost_sprites.rs).
+//! none, src/passes/flare/ghost_sprites.rs).
 
 use super::barriers::{after_compute_write, overwrite};
 use super::{groups_for, FrameImages, TILE_SIZE};

@@ -1,8 +1,12 @@
 //! The passes, and the one shape every pass has.
 //!
-//! A pass is a module (and its shader `glsl/<name>.comp`; several for the tiled depth of field)
-//! that implements [`Pass`]: it plans itself from the frame and the camera (run or skip, and the
-//! reason `--explain` prints), builds its own push constants and buffer data, creates its
+//! The passes sit in one folder per effect (`dof/`, `motion/`, `lens/`, `flare/`, `film/`, each
+//! with a README.md), their shaders in the same folders under `glsl/`; the helpers every effect
+//! shares (barriers, the scene facts, the filter shape, the bare copy) stay here.
+//!
+//! A pass is a module (and its shader `glsl/<effect>/<name>.comp`; several for the tiled depth of
+//! field) that implements [`Pass`]: it plans itself from the frame and the camera (run or skip,
+//! and the reason `--explain` prints), builds its own push constants and buffer data, creates its
 //! pipelines, and records its dispatches with hand-written barriers, each commented with why.
 //! Its shaders are declared once ([`Shader`](crate::gpu::Shader): bindings and push constants,
 //! checked against the SPIR-V when the pipeline is created) and each has a CPU twin
@@ -11,48 +15,15 @@
 //! [`PASS_ORDER`] lists every pass in the order the renderer records them: adding a pass is its
 //! module, its shader and one line there.
 
-pub mod aperture;
-pub mod astigmatism;
 pub mod barriers;
-pub mod bezier_ghosts;
-pub mod bokeh_gather;
-pub mod coc;
-pub mod coma;
 pub mod copy;
-pub mod diffraction;
-pub mod distortion;
-pub mod dof_bin;
-pub mod dof_bin_order;
-pub mod dof_classify;
-pub mod dof_composite;
-pub mod dof_downsample;
-pub mod dof_highlights;
-pub mod dof_level_gather;
-pub mod dof_level_lists;
-pub mod dof_pyramid;
-pub mod dof_sprite_excess;
-pub mod dof_sprites;
-pub mod dof_tile_gather;
-pub mod dof_tiles;
+pub mod dof;
 pub mod film;
 pub mod filter;
 pub mod flare;
-pub mod flare_bins;
-pub mod flare_lights;
-pub mod flare_tiles;
-pub mod ghost_sprites;
-pub mod longitudinal_color;
-pub mod mb_gather;
-pub mod mb_neighbor;
-pub mod mb_ref_resolve;
-pub mod mb_ref_splat;
-pub mod mb_tiles;
-pub mod motion_blur;
-pub mod motion_path;
-pub mod motion_reference;
+pub mod lens;
+pub mod motion;
 pub mod scene;
-pub mod tiled_dof;
-pub mod vignette;
 
 pub use scene::{Channel, PlanInput, SceneFacts};
 
@@ -76,18 +47,18 @@ use std::sync::Arc;
 /// over, wrong only where a defocused object moves over a surface at another depth. Kyaw 2013
 /// sec 7.3 orders its passes the same way.
 pub static PASS_ORDER: &[PassEntry] = &[
-    entry::<motion_blur::MotionBlur>(),
-    entry::<motion_reference::MotionReference>(),
-    entry::<coc::Coc>(),
-    entry::<bokeh_gather::BokehGather>(),
-    entry::<tiled_dof::TiledDof>(),
-    entry::<diffraction::Diffraction>(),
-    entry::<longitudinal_color::LongitudinalColor>(),
-    entry::<distortion::Distortion>(),
-    entry::<astigmatism::Astigmatism>(),
-    entry::<coma::Coma>(),
+    entry::<motion::blur::MotionBlur>(),
+    entry::<motion::reference::MotionReference>(),
+    entry::<dof::coc::Coc>(),
+    entry::<dof::bokeh_gather::BokehGather>(),
+    entry::<dof::tiled::TiledDof>(),
+    entry::<dof::diffraction::Diffraction>(),
+    entry::<lens::longitudinal_color::LongitudinalColor>(),
+    entry::<lens::distortion::Distortion>(),
+    entry::<lens::astigmatism::Astigmatism>(),
+    entry::<lens::coma::Coma>(),
     entry::<flare::Flare>(),
-    entry::<vignette::Vignette>(),
+    entry::<lens::vignette::Vignette>(),
     entry::<film::Film>(),
 ];
 

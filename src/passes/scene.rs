@@ -1,7 +1,7 @@
 //! What every pass plans from: the frame, the camera, and the facts several passes share,
 //! computed once (the pixel pitch, the depth range, the signed CoC range, longitudinal colour).
 
-use super::coc;
+use super::dof::coc_push;
 use crate::model::camera::{BokehMode, Camera};
 use crate::model::frame::Frame;
 
@@ -74,9 +74,12 @@ impl SceneFacts {
         // With field curvature the CoC also depends on the image height: evaluate every pixel
         // with the CoC pass's CPU twin, unclamped.
         if let Some(field_curvature) = &camera.field_curvature {
-            let push = coc::CocPush { max_coc_px: f32::INFINITY, ..coc::CocPush::for_frame(camera, pitch_mm, frame) };
-            let table = coc::table_data(Some(field_curvature));
-            coc_range_px = coc::coc_cpu(&frame.depth_m, &push, &table)
+            let push = coc_push::CocPush {
+                max_coc_px: f32::INFINITY,
+                ..coc_push::CocPush::for_frame(camera, pitch_mm, frame)
+            };
+            let table = coc_push::table_data(Some(field_curvature));
+            coc_range_px = coc_push::coc_cpu(&frame.depth_m, &push, &table)
                 .iter()
                 .fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c as f64), hi.max(c as f64)));
         }

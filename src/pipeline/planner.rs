@@ -9,7 +9,7 @@ use crate::passes::{Input, Pass, PlanInput, PlannedPass, SceneFacts, PASS_ORDER}
 pub use crate::passes::scene::{VISIBLE_COC_PX, VISIBLE_FALLOFF};
 
 /// The plan's name for the tiled depth-of-field path.
-pub const BOKEH_TILED: &str = crate::passes::tiled_dof::NAME;
+pub const BOKEH_TILED: &str = crate::passes::dof::tiled::NAME;
 
 /// The passes of [`PASS_ORDER`], each planned: run (with each run's parameters) or skip, and why.
 #[derive(Debug)]
@@ -211,7 +211,7 @@ mod tests {
         assert_eq!(facts.coc_range_px.0, -facts.max_coc_px);
         assert!((facts.coc_range_px.1 - at_infinity_px).abs() < 1e-9, "{:?} vs {at_infinity_px}", facts.coc_range_px);
         // The CoC pass's twin, per pixel, in f32.
-        let push = crate::passes::coc::CocPush::for_frame(&camera, pitch, &frame);
+        let push = crate::passes::dof::coc_push::CocPush::for_frame(&camera, pitch, &frame);
         let cocs: Vec<f32> = frame.depth_m.iter().map(|&d| push.coc_px(d)).collect();
         assert!(cocs.iter().all(|c| c.is_finite()), "{cocs:?}");
         assert_eq!(cocs[0], -facts.max_coc_px as f32);
@@ -238,7 +238,7 @@ mod tests {
         assert_eq!(plan.facts.coc_range_px, (-10.0, -10.0));
         let warning = plan.coc_clamp_warning.expect("a warning");
         assert!(warning.starts_with("the CoC is clamped to +-10.00 px (twice the frame's diagonal)"), "{warning}");
-        let push = crate::passes::coc::CocPush::for_frame(&camera, plan.facts.pixel_pitch_mm, &frame);
+        let push = crate::passes::dof::coc_push::CocPush::for_frame(&camera, plan.facts.pixel_pitch_mm, &frame);
         assert_eq!(push.coc_px(0.3), -10.0);
     }
 

@@ -42,7 +42,7 @@ fn methods() -> Vec<Method> {
             name: format!("tiled, exact up to {small_radius_px} px"),
             mode: BokehMode::Tiled,
             adjust: Box::new(move |p: &mut Plan| {
-                for t in p.params_mut::<crate::passes::tiled_dof::TiledDof>() {
+                for t in p.params_mut::<crate::passes::dof::tiled::TiledDof>() {
                     t.small_radius_px = small_radius_px;
                 }
             }),

@@ -8,8 +8,9 @@ use crate::gpu::{Gpu, GpuResult, Profile};
 use crate::io::lens_file::LensFile;
 use crate::model::camera::{Camera, CameraRequest};
 use crate::model::frame::Frame;
+use crate::passes::flare::{bins, ghost_sprites, lights, tiles};
 use crate::passes::flare::{Flare, FlareModel, FlareParams};
-use crate::passes::{flare_bins, flare_lights, flare_tiles, ghost_sprites, PlanInput};
+use crate::passes::PlanInput;
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
 use crate::tools::bench::{bare_pass_ms, median};
@@ -26,7 +27,7 @@ pub const LIGHT_VALUE: f32 = 1.0e5;
 pub const LIGHT_SIDE_PX: u32 = 3;
 
 /// The flare passes, in recording order.
-pub const FLARE_PASSES: [&str; 4] = [flare_tiles::NAME, flare_lights::NAME, flare_bins::NAME, ghost_sprites::NAME];
+pub const FLARE_PASSES: [&str; 4] = [tiles::NAME, lights::NAME, bins::NAME, ghost_sprites::NAME];
 
 /// One measured configuration.
 #[derive(Clone, Debug)]

@@ -170,7 +170,7 @@ mod tests {
         for blur in [8.0, 32.0, 128.0] {
             let frame = motion_frame(64, 36, blur);
             let p = plan(&frame, &camera);
-            let params = p.params::<crate::passes::motion_blur::MotionBlur>().expect("runs");
+            let params = p.params::<crate::passes::motion::blur::MotionBlur>().expect("runs");
             assert!((params.motion.max_blur_px - blur).abs() < 1e-3 * blur, "{blur}: {}", params.motion.max_blur_px);
         }
     }

@@ -8,6 +8,7 @@ pub mod bench;
 pub mod bench_flare;
 pub mod bench_motion;
 pub mod bench_sequence;
+pub mod bezier_ghosts;
 pub mod error_budget;
 pub mod flare_fit;
 pub mod flare_predict;

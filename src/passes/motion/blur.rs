@@ -1,0 +1,213 @@
+//! Motion blur from the velocity pass (`--motion-blur fast`, the default): tiles -> neighbourhood
+//! -> reconstruction gather, each a module with its shader and CPU twin (mb_tiles, mb_neighbor,
+//! mb_gather). This pass plans the path (and shares its plan with the reference,
+//! src/passes/motion/reference.rs), owns the buffers the steps share and the barriers between them.
+//!
+//! Kyaw 2013 sec 5.2 and 7.3: a point that moves while the shutter is open leaves a streak as
+//! long as its motion over the open time; the passes turn the renderer's per-frame velocity into
+//! that with the frame rate and the shutter (src/optics/shutter.rs).
+
+use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
+use super::neighbor::{MbNeighborPush, MbNeighborShader};
+use super::path::{clamped_velocity, ShutterPush};
+use super::tiles::{MbTilesPush, MbTilesShader};
+use super::{gather, neighbor, tiles};
+use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
+use crate::model::camera::MotionBlurMode;
+use crate::optics::shutter::ShutterCurve;
+use crate::passes::barriers::{after_compute_write, buffer_after_compute_write, overwrite};
+use crate::passes::scene::PlanInput;
+use crate::passes::{groups_for, Decision, FrameImages, Input, Pass, TILE_SIZE};
+use ash::vk;
+
+pub const NAME: &str = "motion_blur";
+
+/// Blur shorter than this (px) while the shutter is open is invisible.
+pub const VISIBLE_BLUR_PX: f64 = 0.5;
+
+/// What both motion-blur methods plan from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionPlan {
+    pub width: u32,
+    pub height: u32,
+    pub shutter: ShutterPush,
+    /// Velocities are clamped to this (px per frame): the user's largest blur over the open time.
+    pub max_speed_px: f32,
+    /// The longest path (px) any pixel travels while its shutter is open.
+    pub max_blur_px: f64,
+    /// The fastest velocity in the frame after the clamp (px per frame).
+    pub speed_px: f64,
+    /// The farthest (px) a pixel's path reaches from it on either side of the frame time.
+    pub max_reach_px: f64,
+}
+
+impl MotionPlan {
+    pub fn tiles(&self) -> [i32; 2] {
+        [self.width.div_ceil(TILE_SIZE) as i32, self.height.div_ceil(TILE_SIZE) as i32]
+    }
+}
+
+/// The plan of the motion blur for `mode`, or why it is skipped.
+pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(MotionPlan, String), Decision<P>> {
+    let (frame, motion) = (input.frame, &input.camera.motion);
+    if motion.mode != mode {
+        return Err(if motion.mode == MotionBlurMode::Off && mode == MotionBlurMode::Fast {
+            Decision::skip("--motion-blur off")
+        } else {
+            Decision::not_chosen()
+        });
+    }
+    let Some(rgba) = frame.velocity_rgba() else {
+        return Err(Decision::skip("no velocity pass"));
+    };
+    let timing = &motion.timing;
+    let open = timing.open_length_frames();
+    let max_speed_px = (motion.max_blur_px / open.max(1e-9)) as f32;
+    let (earliest, latest) = timing.extent_frames();
+    let (t_fwd, t_back) = (latest.max(0.0), (-earliest).max(0.0));
+    let (mut speed_px, mut reach_px, mut blur_px) = (0.0f64, 0.0f64, 0.0f64);
+    for v in rgba.chunks_exact(4) {
+        let v = clamped_velocity(v, max_speed_px);
+        let (next, prev) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
+        speed_px = speed_px.max(next).max(prev);
+        reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
+        // The longest path over one line's open time (both halves when it straddles the frame time).
+        let (o, c) = (timing.open_frames, timing.close_frames);
+        blur_px = blur_px.max(next * c.max(0.0) - next * o.max(0.0) + prev * (-o).max(0.0) - prev * (-c).max(0.0));
+    }
+    let rolling = if timing.readout_frames > 0.0 {
+        reach_px = reach_px.max(speed_px * timing.readout_frames);
+        format!(
+            ", rolling shutter reading out {} in {:.4} s ({:.3} frames)",
+            timing.direction.name(),
+            timing.readout_frames / motion.fps,
+            timing.readout_frames
+        )
+    } else {
+        String::new()
+    };
+    let format = frame.velocity_format.map_or("given".to_string(), |f| f.name().to_string());
+    let fps =
+        if motion.fps_given { format!("{} fps", motion.fps) } else { format!("{} fps (assumed; --fps)", motion.fps) };
+    let position = match timing.open_frames {
+        o if o < 0.0 && timing.close_frames > 0.0 => "centred",
+        o if o >= 0.0 => "opening at the frame time",
+        _ => "closing at the frame time",
+    };
+    let curve = match timing.curve {
+        ShutterCurve::Box => "box".to_string(),
+        ShutterCurve::Trapezoid { ramp } => format!("trapezoid (ramps {ramp})"),
+    };
+    let why = format!(
+        "velocity up to {speed_px:.1} px/frame ({format}) at {fps}, shutter {:.4} s = {:.0} deg {position}, {curve}{rolling}: blur up to {blur_px:.1} px",
+        open / motion.fps,
+        open * 360.0
+    );
+    if blur_px.max(reach_px) < VISIBLE_BLUR_PX {
+        return Err(Decision::skip(format!(
+            "{why}: nothing moves more than {VISIBLE_BLUR_PX} px while the shutter is open"
+        )));
+    }
+    let (w, h) = input.size();
+    let plan = MotionPlan {
+        width: w,
+        height: h,
+        shutter: ShutterPush::new(timing, w, h),
+        max_speed_px,
+        max_blur_px: blur_px,
+        speed_px,
+        max_reach_px: reach_px,
+    };
+    Ok((plan, why))
+}
+
+/// Why motion blur runs before the depth of field, in `--explain`.
+pub const ORDER_NOTE: &str = "before the depth of field: both act while the shutter is open, and for one point they commute (its aperture disk swept along its path); the velocities and depths describe the sharp pinhole pixels, so the motion is resolved on those";
+
+/// One run of the fast path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionBlurParams {
+    pub motion: MotionPlan,
+    pub samples_per_line: i32,
+    pub search_tiles: i32,
+}
+
+/// The pipelines of the fast path, one per step.
+pub struct MotionBlur {
+    tiles: Kernel<MbTilesShader>,
+    neighbor: Kernel<MbNeighborShader>,
+    gather: Kernel<MbGatherShader>,
+}
+
+impl Pass for MotionBlur {
+    const NAME: &'static str = NAME;
+    const INPUTS: &'static [Input] = &[Input::Depth, Input::Velocity];
+    type Params = MotionBlurParams;
+
+    fn plan(input: &PlanInput<'_>) -> Decision<MotionBlurParams> {
+        let (motion, why) = match plan_motion(input, MotionBlurMode::Fast) {
+            Ok(p) => p,
+            Err(skip) => return skip,
+        };
+        let search_tiles = (motion.max_reach_px / TILE_SIZE as f64).ceil() as i32;
+        let params = MotionBlurParams { motion, samples_per_line: 8, search_tiles };
+        let [tx, ty] = motion.tiles();
+        let why = format!(
+            "{why}; {tx}x{ty} tiles of {TILE_SIZE} px, neighbours within {search_tiles} tiles, 4 lines x {} samples per pixel; tiles with nothing moving near them copied; {ORDER_NOTE}",
+            params.samples_per_line
+        );
+        Decision::run(params, why)
+    }
+
+    fn new(gpu: &Gpu) -> GpuResult<Self> {
+        Ok(MotionBlur { tiles: Kernel::new(gpu)?, neighbor: Kernel::new(gpu)?, gather: Kernel::new(gpu)? })
+    }
+
+    /// The colour, depth and velocity in; a new colour written for every pixel.
+    fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionBlurParams) -> GpuResult<()> {
+        let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
+        let m = &p.motion;
+        let tiles = m.tiles();
+        let tile_count = (tiles[0] * tiles[1]) as u64;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let tile_motion = rec.create_buffer("motion blur tile max", tile_count * 16, storage)?;
+        let neighbor_motion = rec.create_buffer("motion blur neighbour max", tile_count * 16, storage)?;
+        let size = [m.width as i32, m.height as i32];
+        rec.begin_pass(tiles::NAME);
+        tiles::record(
+            &self.tiles,
+            rec,
+            &velocity,
+            &tile_motion,
+            &MbTilesPush { size, tiles, max_speed_px: m.max_speed_px },
+        )?;
+        rec.begin_pass(neighbor::NAME);
+        let neighbor = MbNeighborPush { tiles, search_tiles: p.search_tiles };
+        neighbor::record(&self.neighbor, rec, &tile_motion, &neighbor_motion, &neighbor)?;
+        rec.begin_pass(gather::NAME);
+        let output = rec.create_image("color (motion blur)", m.width, m.height, vk::Format::R32G32B32A32_SFLOAT)?;
+        // neighbor_motion: written by mb_neighbor (read-after-write). color: written by the upload
+        //   (its own barrier) or an earlier compute pass; the gather reads it anywhere around a
+        //   pixel, so all of it must be written and visible. output: written from scratch.
+        rec.buffer_barriers(&[buffer_after_compute_write(&neighbor_motion)]);
+        rec.image_barriers(&[after_compute_write(&color), overwrite(&output)]);
+        let bindings = MbGatherBindings {
+            color_in: &color,
+            depth_m: &depth,
+            velocity: &velocity,
+            color_out: &output,
+            neighbor_motion: &neighbor_motion,
+        };
+        let push = MbGatherPush {
+            size,
+            tiles,
+            shutter: m.shutter,
+            max_speed_px: m.max_speed_px,
+            samples_per_line: p.samples_per_line,
+        };
+        self.gather.dispatch(rec, &bindings, &push, groups_for(m.width, m.height))?;
+        rec.end_pass();
+        images.set_color(None, output);
+        Ok(())
+    }
+}
