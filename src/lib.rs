@@ -1,6 +1,6 @@
 //! realcam: a realistic camera for rendered images.
 //!
-//! Layers, each using only those above it (README.md, "How it works"):
+//! Layers, each using only those above it (docs/architecture.md):
 //! - [`optics`]: plain f64 camera math on the CPU (no Vulkan), tested against the source documents.
 //! - [`io`]: files: OpenEXR passes, PNG previews, lens files, film files, the lensfun database.
 //! - [`model`]: the camera and the frame a render uses.

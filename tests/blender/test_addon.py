@@ -118,7 +118,7 @@ def main():
     total, centre, var_x, var_y = apply_and_measure(scene)
 
     # Eq 5.3 as Cycles' thin lens at the pinhole draws it (realcam --lens ideal: the renderer's
-    # CoC model, README "Which thin lens"): C = A f |u - S| / (u S), A = f / N, over the pixel
+    # CoC model, docs/design.md, "Which thin lens"): C = A f |u - S| / (u S), A = f / N, over the pixel
     # pitch; S: the focus object's depth, u: the sphere's.
     coc_mm = (FOCAL_MM / F_NUMBER) * FOCAL_MM * abs(1.0 / (FOCUS_M * 1000) - 1.0 / (SPHERE_M * 1000))
     expected_px = coc_mm / PITCH_MM
@@ -145,7 +145,7 @@ def main():
     # variance grows by L^2 / 12. A wrong sign, axis or unit of the Vector pass (y up, X,Y vs
     # Z,W, px per shutter) moves the centroid left or up, or doubles or halves L. Tolerances:
     # where the sphere was in the pinhole image the background is hidden, and realcam fills it
-    # from the sphere's own texels (README, motion blur against Cycles), which adds light at the
+    # from the sphere's own texels (docs/measurements.md, motion blur against Cycles), which adds light at the
     # streak's start: measured L 6.88 px, shift 2.46 px.
     move_px = 12.0
     focus.location = (0.0, 0.0, -SPHERE_M)
