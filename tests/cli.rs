@@ -1981,6 +1981,83 @@ fn a_long_exposure_of_identical_frames_on_film_is_the_single_frame_on_that_film(
 }
 
 #[test]
+fn each_frame_of_a_sequence_gets_its_own_grain_and_the_same_frame_the_same_grain() {
+    // Issue 31: grain seeded by the seed and the frame number. Three identical frames: the
+    // noise (the grainy frame less the same frame without grain) of neighbouring frames is
+    // uncorrelated, and a frame rendered again in another run has the same bytes.
+    let dir = TestDir::new("grain_per_frame");
+    let mut args = sequence_args(&dir);
+    for frame in [1002, 1003] {
+        std::fs::copy(dir.join("c.1001.exr"), dir.join(&format!("c.{frame}.exr"))).unwrap();
+        std::fs::copy(dir.join("d.1001.exr"), dir.join(&format!("d.{frame}.exr"))).unwrap();
+    }
+    let film = ["--film", "linear", "--film-in-exr", "--iso", "800", "--seed", "7"];
+    let mut plain = args.clone();
+    args.extend(s(&["--frames", "1001-1003", "--grain", "0.05"]));
+    args.extend(s(&film));
+    render(&dir, &args).success();
+    for arg in plain.iter_mut() {
+        *arg = arg.replace("####", "1001").replace("%04d", "1001").replace("o.1001", "plain");
+    }
+    plain.extend(s(&film));
+    render(&dir, &plain).success();
+    let pixels = |name: &str| read_exr_rgba(&dir.join(name)).unwrap().data;
+    let clean = pixels("plain.exr");
+    let noise = |name: &str| -> Vec<f64> {
+        let grainy = pixels(name);
+        grainy.iter().zip(&clean).enumerate().filter(|(i, _)| i % 4 != 3).map(|(_, (g, c))| f64::from(g - c)).collect()
+    };
+    let correlation = |a: &[f64], b: &[f64]| {
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let (ma, mb) = (mean(a), mean(b));
+        let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+        let var = |v: &[f64], m: f64| v.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+        cov / (var(a, ma) * var(b, mb)).sqrt()
+    };
+    let (n1, n2, n3) = (noise("o.1001.exr"), noise("o.1002.exr"), noise("o.1003.exr"));
+    assert!(n1.iter().any(|&v| v.abs() > 1e-4), "no grain in frame 1001");
+    for (pair, r) in [("1001/1002", correlation(&n1, &n2)), ("1002/1003", correlation(&n2, &n3))] {
+        assert!(r.abs() < 0.1, "frames {pair}: their grain correlates {r:.3}");
+    }
+    // Frame 1002 again, alone, in another run: the same bytes.
+    let first = std::fs::read(dir.join("o.1002.exr")).unwrap();
+    let again: Vec<String> = args
+        .iter()
+        .map(|a| if a == "1001-1003" { "1002".to_string() } else { a.replace("o.####", "again.####") })
+        .collect();
+    render(&dir, &again).success();
+    assert!(std::fs::read(dir.join("again.1002.exr")).unwrap() == first, "frame 1002 rendered again differs");
+}
+
+#[test]
+fn a_closed_stderr_does_not_stop_a_sequence() {
+    // Issue 34 (5): `render ... --frames 1001-1003 2>&1 | head -2` panicked ("failed printing to
+    // stderr: Broken pipe") after frame 1002. The reader of stderr goes away after its first
+    // line; every frame is still written and the run succeeds.
+    use std::io::BufRead;
+    let dir = TestDir::new("closed_stderr");
+    let mut args = vec!["render".to_string(), "--validate".to_string()];
+    args.extend(sequence_args(&dir));
+    args.extend(s(&["--frames", "1001-1003", "--explain"]));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_realcam"))
+        .args(&args)
+        .env_remove("OCIO")
+        .current_dir(&dir.path)
+        .env("REALCAM_CACHE_DIR", &dir.cache)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("running the realcam binary");
+    let mut first = String::new();
+    std::io::BufReader::new(child.stderr.take().unwrap()).read_line(&mut first).unwrap();
+    // The reader (and the pipe's only read end) is dropped here.
+    let status = child.wait().unwrap();
+    assert!(status.success(), "exit status {status:?} after stderr closed (first line {first:?})");
+    for frame in 1001..=1003 {
+        assert!(dir.join(&format!("o.{frame}.exr")).is_file(), "frame {frame} was not written");
+    }
+}
+
+#[test]
 fn a_stopped_long_exposure_resumes_to_the_uninterrupted_one() {
     let dir = TestDir::new("long_exposure_state");
     let mut args = sequence_args(&dir);

@@ -191,7 +191,8 @@ pub struct RenderArgs {
     /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO)); 0: none.
     #[arg(long, default_value_t = CameraRequest::default().grain)]
     grain: f64,
-    /// Seed of the sensor noise (the same seed gives the same noise).
+    /// Seed of the sensor noise: the same seed and frame give the same noise; each frame of a
+    /// sequence mixes its frame number in, so neighbouring frames' grain is independent.
     #[arg(long, default_value_t = CameraRequest::default().seed)]
     seed: u32,
     /// Do not apply the exposure gain (ISO, shutter, f-number): sensor value = scene value.

@@ -62,7 +62,8 @@ pub fn render_sequence(
                 Some(loaded) => {
                     let rendered = loaded.and_then(|loaded| {
                         let outputs = one.outputs()?;
-                        Ok((outputs, render_loaded(&one, camera, loaded, &mut session)?))
+                        let camera = camera.at_frame(frame);
+                        Ok((outputs, render_loaded(&one, &camera, loaded, &mut session)?))
                     });
                     if let Some(gpu) = session.gpu() {
                         priority.device_opened(gpu.info().on_cpu());
@@ -138,7 +139,8 @@ pub(super) fn read_ahead<'scope>(
             if stop.load(Ordering::Relaxed) {
                 break;
             }
-            let loaded = (!skip).then(|| load_frame(&settings, camera));
+            // The frame's own grain: seeded by the seed and the frame number.
+            let loaded = (!skip).then(|| load_frame(&settings, &camera.at_frame(frame)));
             if send.send(ReadFrame { frame, settings, loaded }).is_err() {
                 break;
             }

@@ -215,6 +215,19 @@ pub struct Motion {
     pub max_blur_px: f64,
 }
 
+/// The grain's seed of frame `frame` for the seed `seed`: the seed plus a bijective integer
+/// mix of the frame number (two xorshift-multiply rounds, MurmurHash3's 64-bit finaliser),
+/// which maps 0 to 0 and neighbouring frames to unrelated values.
+pub fn frame_seed(seed: u32, frame: i64) -> u32 {
+    let mut x = frame as u64;
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+    x ^= x >> 33;
+    seed.wrapping_add((x ^ (x >> 32)) as u32)
+}
+
 impl Camera {
     /// The signed CoC diameter (mm on the film) of a point at `object_distance_mm`, by the
     /// camera's CoC model.
@@ -228,6 +241,13 @@ impl Camera {
     /// Pixel pitch on the film for an image of this size.
     pub fn pixel_pitch_mm(&self, width_px: u32, height_px: u32) -> f64 {
         self.sensor.pixel_pitch_mm(width_px, height_px, self.sensor_fit)
+    }
+
+    /// This camera for frame `frame` of a sequence: its grain seeded by the seed and the frame
+    /// number ([`frame_seed`]), so that neighbouring frames' noise is independent and a frame
+    /// rendered again gets the same noise. Frame 0 keeps the seed (a single frame's render).
+    pub fn at_frame(&self, frame: i64) -> Camera {
+        Camera { seed: frame_seed(self.seed, frame), ..self.clone() }
     }
 
     /// Standard deviation of the sensor noise at sensor value 1 for this ISO speed.
