@@ -186,7 +186,7 @@ fn flare_camera(file: &str, blades: u32) -> Camera {
         sensor: Some("10.8x6".into()),
         blades: Some(blades),
         blade_rotation_deg: Some(10.0),
-        flare: true,
+        flare: Some(true),
         flare_lights: vec![realcam::model::flare::FlareLight::white(-6.0, 20.0, 5.0e4)],
         force: true,
         ..realcam::model::camera::CameraRequest::blur_only().with_lens(100.0, 4.0, 50.0)
