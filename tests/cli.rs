@@ -406,7 +406,9 @@ fn the_ideal_lens_takes_any_focal_length_and_does_not_vignette() {
     assert!(!err.contains(off), "{err}");
     let mut args = small_scene(&dir);
     args.extend(s(&["--lens", "ideal", "--flare", "--no-flare"]));
-    assert_contains(&render(&dir, &args).failure(), "--no-flare");
+    let run = render(&dir, &args);
+    assert_eq!(run.code, Some(2), "{}", run.describe());
+    assert_contains(&run.stderr, "the argument '--flare' cannot be used with '--no-flare'");
     // The other lenses keep their flare by default; --no-flare still turns it off.
     let mut args = small_scene(&dir);
     args.extend(s(&["--explain"]));
