@@ -119,7 +119,8 @@ pub fn render_loaded(
         report.say(&format!("warning: {warning}"));
     }
     if let Some(warning) = &plan.coc_clamp_warning {
-        let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc (none: no clamp)" };
+        let hint =
+            if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc (none: no clamp)" };
         report.say(&format!("warning: {warning}{hint}"));
     }
 

@@ -6,9 +6,9 @@ use super::types::{constants_of, ghost_from_table, FlareConstants};
 use crate::gpu::shaders::flare::{
     ARGS_BIN_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY, EXPLICIT_WORDS,
     EXPLICIT_X, EXPLICIT_Y, GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST, KIND_GLOW, KIND_NONE,
-    KIND_SPIKE, LIGHT_AREA, LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0, LIGHT_SPIKE_REACH, LIGHT_SPIKE_SHARE,
-    LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIGHT, SPRITE_SOFTNESS,
-    SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
+    KIND_SPIKE, LIGHT_AREA, LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0, LIGHT_SPIKE_REACH,
+    LIGHT_SPIKE_SHARE, LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND,
+    SPRITE_LIGHT, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::buffer_after_compute_write;
@@ -178,9 +178,8 @@ fn spike_sprite(fc: &FlareConstants, sprite: &mut [f32], light: &[f32], l: usize
     let r0 = light[LIGHT_R0 as usize] as f64;
     let r1 = light[LIGHT_SPIKE_REACH as usize] as f64;
     let share = light[LIGHT_SPIKE_SHARE as usize] as f64;
-    let coef: [f64; 3] = std::array::from_fn(|c| {
-        share * edges * fc.spike_coef_px[c] as f64 * light[LIGHT_ENERGY as usize + c] as f64
-    });
+    let coef: [f64; 3] =
+        std::array::from_fn(|c| share * edges * fc.spike_coef_px[c] as f64 * light[LIGHT_ENERGY as usize + c] as f64);
     let o = [light[LIGHT_X as usize] as f64, light[LIGHT_Y as usize] as f64];
     if !(coef.iter().fold(0.0, |m: f64, &v| m.max(v)) / (r0 * r0) >= fc.visible as f64 && r1 > r0) {
         none(sprite);
