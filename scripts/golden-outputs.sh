@@ -48,8 +48,8 @@ run demo-grain-film "${demo[@]}" --fstop 2 --focus 3 --grain 0.02 --seed 3 --fil
 run demo-blades "${demo[@]}" --fstop 2 --focus 1.5 --blades 6 --blade-rotation 10 --cats-eye 0.4 --spherical-aberration -0.5
 run demo-tessar "${demo[@]}" --lens lenses/tessar-walch-lens.toml --fstop 2.8 --focus 2
 run demo-tessar-ref "${demo[@]}" --lens lenses/tessar-walch-lens.toml --fstop 4 --focus 2 --bokeh reference
-# A clamp in pixels on the 5 mm sensor: the default 1.2 mm on the film is 154 px there, and the
-# reference gather's cost grows with the square of the clamp.
+# A clamp in pixels on the 5 mm sensor: there is no clamp by default, and the reference
+# gather's cost grows with the square of the largest CoC.
 run demo-tessar-lca "${demo[@]}" --lens lenses/tessar-walch-lens.toml --fstop 2.8 --focus 2 --sensor 5x3 --max-coc 64
 run demo-tessar-lca-ref "${demo[@]}" --lens lenses/tessar-walch-lens.toml --fstop 5.6 --focus 2 --sensor 5x3 --bokeh reference --max-coc 64
 run demo-distagon "${demo[@]}" --lens lenses/zeiss-distagon-21-f2.8.toml --focal-length 21 --fstop 2.8 --focus 1

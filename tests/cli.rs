@@ -395,6 +395,27 @@ fn the_ideal_lens_takes_any_focal_length_and_does_not_vignette() {
     assert_contains(&err, "the lens has no natural vignetting (the ideal lens, or natural_vignetting = false)");
     assert!(!err.contains("--no-vignetting"), "{err}");
     assert_eq!(exr_header(&dir.join("out.exr")).own_attributes.aperture, Some(0.9));
+    // The renderer's camera draws no lens flare unless --flare asks for it (issue 29).
+    let off = "off: --lens ideal is the renderer's camera, which draws none; --flare draws it";
+    assert_contains(&err, &format!("lens flare: {off}"));
+    assert_contains(&err, &format!("[skip] flare         {off}"));
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--lens", "ideal", "--flare", "--explain"]));
+    let err = render(&dir, &args).success().stderr;
+    assert_contains(&err, "lens flare: on");
+    assert!(!err.contains(off), "{err}");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--lens", "ideal", "--flare", "--no-flare"]));
+    let run = render(&dir, &args);
+    assert_eq!(run.code, Some(2), "{}", run.describe());
+    assert_contains(&run.stderr, "the argument '--flare' cannot be used with '--no-flare'");
+    // The other lenses keep their flare by default; --no-flare still turns it off.
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--explain"]));
+    assert_contains(&render(&dir, &args).success().stderr, "lens flare: on");
+    let mut args = small_scene(&dir);
+    args.extend(s(&["--no-flare", "--explain"]));
+    assert_contains(&render(&dir, &args).success().stderr, "lens flare: turned off (--no-flare)");
     // The default lens with --no-vignetting names the flag instead.
     let mut args = small_scene(&dir);
     args.extend(s(&["--no-vignetting", "--explain"]));
@@ -1428,7 +1449,7 @@ fn view_layers_are_chosen_whole_and_said() {
     assert_contains(&render(&dir, &args).failure(), "passes of two layers are never mixed");
 }
 
-/// --max-coc takes a diameter on the film (the default 1.2 mm) or in pixels; a clamp that
+/// --max-coc takes none (the default), a diameter on the film or in pixels; a clamp that
 /// changes the picture is said, in --explain and as a warning.
 #[test]
 fn a_clamp_that_changes_the_picture_is_said() {
@@ -1442,18 +1463,22 @@ fn a_clamp_that_changes_the_picture_is_said() {
     };
     // Full frame on 64 px: 0.5625 mm pixels, so 1.2 mm is 2.13 px; the plane at 0.6 m is 4.6 px
     // out of focus (f/1.4, 50 mm, focused at 5 m).
+    // No clamp by default: the plane's 4.6 px are drawn (issue 29).
     let err = run(&[]).success().stderr;
+    assert!(!err.contains("clamp"), "{err}");
+    assert_contains(&err, "[run ] coc           CoC from -4.");
+    let err = run(&["--max-coc", "1.2mm"]).success().stderr;
     assert_contains(&err, "warning: the CoC is clamped to +-2.13 px (1.2 mm on the film): the lens gives -4.");
     assert_contains(&err, "so the clamp changes the picture; raise the clamp with --max-coc");
     assert_contains(&err, "[run ] coc           CoC from -2.13 px");
-    for wide in ["3mm", "8", "8px"] {
+    for wide in ["3mm", "8", "8px", "none"] {
         let err = run(&["--max-coc", wide]).success().stderr;
         assert!(!err.contains("clamp"), "--max-coc {wide}:\n{err}");
     }
     let err = run(&["--max-coc", "1.2cm"]).failure();
     assert_contains(
         &err,
-        "error: --max-coc \"1.2cm\": \"1.2cm\" is not a diameter in px (64, 64px) or on the film in mm (1.2mm)",
+        "error: --max-coc \"1.2cm\": \"1.2cm\" is not `none`, a diameter in px (64, 64px) or on the film in mm (1.2mm)",
     );
     let err = run(&["--max-coc=-1mm"]).failure();
     assert_contains(

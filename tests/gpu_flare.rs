@@ -30,7 +30,7 @@ fn lens(name: &str) -> LensFile {
 fn flare_camera(lens_file: &LensFile, f_number: f64, sensor: &str, lights: Vec<FlareLight>) -> Camera {
     let request = CameraRequest {
         sensor: Some(sensor.into()),
-        flare: true,
+        flare: Some(true),
         flare_lights: lights,
         force: true,
         ..CameraRequest::blur_only().with_lens(lens_file.focal_length_mm, f_number, 1.0e4)
@@ -530,4 +530,70 @@ fn a_light_the_depth_of_field_spreads_below_the_threshold_draws_nothing_and_the_
         let same = rendered.rgba.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits());
         assert_eq!(same, !lit, "value {value}: the frame with flare equals the one without");
     }
+}
+
+#[test]
+fn a_defocused_lights_starburst_is_spread_by_its_disc_and_an_in_focus_light_keeps_its_star() {
+    // Issue 29: the star is the image of a point in focus; a point out of focus images as the
+    // star convolved with its CoC disc, so along each spike the pixels on its centre line hold
+    // spike_share(A) of the light a one-pixel light puts there, A the disc's area
+    // (src/optics/flare/starburst.rs). A light of 1e7 in the middle of 161 x 161 px, 6 straight
+    // blades, no halo (spikes only); the focus at 10 km. In focus (the frame at 10 km) the light
+    // is one pixel and keeps its whole star; the frame at 0.5 m defocuses it to a disc of about
+    // 22 px (eq 5.3), and the flare's spikes beyond the disc carry spike_share(A) of the in-focus
+    // light's there, A the pixels of the disc over the flare threshold (counted on the depth of
+    // field's output): about 6%.
+    let default = LensFile::default_lens();
+    let mut camera = flare_camera(&default, 4.0, "9x9", Vec::new());
+    camera.aperture.blades = 6;
+    camera.aperture.curvature = 0.0;
+    camera.aperture.rotation_deg = 0.0;
+    camera.flare.halo.fraction = 0.0;
+    let (w, h) = (161u32, 161u32);
+    let gpu = gpu();
+    let frame_at = |depth_m: f32| {
+        let mut frame = Frame::new(w, h, vec![0.0; (w * h * 4) as usize], vec![depth_m; (w * h) as usize]);
+        frame.color[((80 * w + 80) * 4) as usize..][..3].copy_from_slice(&[1.0e7; 3]);
+        frame
+    };
+    let pitch = camera.pixel_pitch_mm(w, h);
+    let disc_px = camera.lens.coc_mm(500.0).abs() / pitch;
+    assert!((15.0..30.0).contains(&disc_px), "{disc_px} px");
+    let r_out = 0.5 * disc_px + 3.0;
+    // The flare alone (the render with it less the render without it), outside r_out.
+    let mut flare_outside = Vec::new();
+    let mut lit_area = Vec::new();
+    for depth_m in [1.0e4f32, 0.5] {
+        let frame = frame_at(depth_m);
+        let p = plan(&frame, &camera);
+        assert!(p.runs("flare"), "{}", p.explain());
+        assert_eq!(p.runs("bokeh_tiled"), depth_m < 1.0, "{}", p.explain());
+        let (with, _) = render_plan(&gpu, &frame, &p);
+        let mut without_plan = plan(&frame, &camera);
+        without_plan.skip::<Flare>();
+        let (without, _) = render_plan(&gpu, &frame, &without_plan);
+        let threshold = camera.flare.threshold / camera.exposure_gain();
+        lit_area.push(without.chunks_exact(4).filter(|p| p[..3].iter().any(|&v| v as f64 >= threshold)).count());
+        let outside: f64 = (0..(w * h) as usize)
+            .filter(|i| ((i % w as usize) as f64 - 80.0).hypot((i / w as usize) as f64 - 80.0) > r_out)
+            .map(|i| (0..3).map(|c| (with[4 * i + c] - without[4 * i + c]) as f64).sum::<f64>())
+            .sum();
+        flare_outside.push(outside);
+    }
+    use realcam::optics::flare::starburst::spike_share;
+    let disc_area = std::f64::consts::PI * disc_px * disc_px / 4.0;
+    let expected = spike_share(lit_area[1] as f64);
+    let measured = flare_outside[1] / flare_outside[0];
+    println!(
+        "disc {disc_px:.2} px: lit {} px (pi D^2/4 = {disc_area:.0}); spikes outside {r_out:.1} px: {:.4e} in focus, \
+         {:.4e} defocused, ratio {measured:.4}, spike_share {expected:.4}",
+        lit_area[1], flare_outside[0], flare_outside[1]
+    );
+    assert_eq!(lit_area[0], 1, "in focus the light is one pixel");
+    assert!(flare_outside[0] > 0.0);
+    assert!((lit_area[1] as f64 / disc_area - 1.0).abs() < 0.2, "lit {} px, disc {disc_area:.0} px", lit_area[1]);
+    assert!((measured / expected - 1.0).abs() < 0.03, "ratio {measured} vs spike_share {expected}");
+    assert!((measured / spike_share(disc_area) - 1.0).abs() < 0.1, "ratio {measured} vs the disc's share");
+    // The in-focus light keeps its whole star: share 1, the spikes as drawn before.
+    assert_eq!(spike_share(lit_area[0] as f64), 1.0);
 }

@@ -247,6 +247,41 @@ fn a_small_bright_foreground_sphere_over_a_sharp_texture_spreads_all_its_light()
 }
 
 #[test]
+fn default_flags_draw_an_ordinary_lenss_disc_unclamped() {
+    // Issue 29: 50 mm f/1.4 focused at 1 m, a point on a plane at 10 m, 512 px wide on full
+    // frame (0.0703 mm pixels): eq 5.3 gives a 24.1 px disc. The default flags draw it so (no
+    // clamp); the old default clamp, 1.2 mm on the film (17.07 px), cut it to 17.5 px.
+    use realcam::io::lens_file::LensFile;
+    use realcam::model::camera::{Camera, CameraRequest, CocLimit};
+    let gpu = gpu();
+    let (w, h) = (512u32, 64u32);
+    let mut color = vec![PLANE; (w * h * 4) as usize];
+    color.chunks_exact_mut(4).for_each(|p| p[3] = 1.0);
+    let centre = ((h / 2 * w + w / 2) * 4) as usize;
+    color[centre..centre + 3].copy_from_slice(&[HIGHLIGHT; 3]);
+    let frame = Frame::new(w, h, color, vec![10.0; (w * h) as usize]);
+    let request = CameraRequest::blur_only().with_lens(50.0, 1.4, 1.0);
+    let camera = Camera::new(&LensFile::default_lens(), &request).expect("the default lens at f/1.4");
+    assert_eq!(camera.max_coc, CocLimit::None, "the default clamp");
+    let pitch_mm = camera.pixel_pitch_mm(w, h);
+    let expected_px = camera.lens.coc_mm(10_000.0).abs() / pitch_mm;
+    assert!((expected_px - 24.1).abs() < 0.1, "eq 5.3: {expected_px:.2} px");
+    for mode in [BokehMode::Tiled, BokehMode::Reference] {
+        let camera = Camera { bokeh: mode, ..camera.clone() };
+        let (rgba, plan, _) = render(&gpu, &frame, &camera);
+        assert_eq!(plan.coc_clamp_warning, None);
+        let measured = disk_diameter_px(&rgba, w, h);
+        let clamped = Camera { max_coc: CocLimit::FilmMm(1.2), ..camera.clone() };
+        let (rgba, plan, _) = render(&gpu, &frame, &clamped);
+        assert!(plan.coc_clamp_warning.is_some());
+        let cut = disk_diameter_px(&rgba, w, h);
+        println!("{mode:?}: default flags {measured:.2} px, --max-coc 1.2mm {cut:.2} px, eq 5.3 {expected_px:.2} px");
+        assert!((measured - expected_px).abs() <= 1.5, "{mode:?}: {measured:.2} px, eq 5.3 {expected_px:.2} px");
+        assert!((cut - 1.2 / pitch_mm).abs() <= 1.0, "{mode:?}: 1.2 mm clamp drew {cut:.2} px");
+    }
+}
+
+#[test]
 fn disk_diameter_follows_the_f_number() {
     // Halving the aperture diameter (f/2 -> f/4) halves the CoC (eq 5.3 through N').
     let gpu = gpu();

@@ -104,10 +104,14 @@ class RealcamSettings(bpy.types.PropertyGroup):
     iso: bpy.props.FloatProperty(name="ISO", default=100.0, min=1.0)
     max_coc: bpy.props.StringProperty(
         name="Max CoC",
-        description="Clamp on the CoC diameter: on the film (1.2mm) or in pixels (64px); empty: realcam's default",
+        description="Clamp on the CoC diameter: on the film (1.2mm) or in pixels (64px); empty: realcam's default, none",
         default="",
     )
-    flare: bpy.props.BoolProperty(name="Lens flare", description="Ghosts, starburst and halo around lights", default=True)
+    flare: bpy.props.BoolProperty(
+        name="Lens flare",
+        description="Ghosts, starburst and halo around lights (off: the renderer's camera, the ideal lens, draws none)",
+        default=False,
+    )
     source: bpy.props.StringProperty(
         name="Source EXR",
         description="A multilayer EXR with Combined, Depth and Vector passes; empty: the last render",
@@ -172,8 +176,7 @@ def camera_flags(scene, settings):
         flags.append(f"--max-coc={settings.max_coc}")
     if not settings.exposure:
         flags.append("--no-exposure")
-    if not settings.flare:
-        flags.append("--no-flare")
+    flags.append("--flare" if settings.flare else "--no-flare")
     return flags
 
 

@@ -133,7 +133,8 @@ void spike_sprite(uint s, uint l, uint k) {
     float r0 = s_light[l][LIGHT_R0];
     float r1 = s_light[l][LIGHT_SPIKE_REACH];
     vec3 coef = vec3(0.0);
-    for (uint c = 0; c < 3; ++c) coef[c] = edges * fc.spike_coef_px[c] * s_light[l][LIGHT_ENERGY + c];
+    float share = s_light[l][LIGHT_SPIKE_SHARE];
+    for (uint c = 0; c < 3; ++c) coef[c] = share * edges * fc.spike_coef_px[c] * s_light[l][LIGHT_ENERGY + c];
     vec2 o = vec2(s_light[l][LIGHT_X], s_light[l][LIGHT_Y]);
     bool shown = max(coef.r, max(coef.g, coef.b)) / (r0 * r0) >= fc.visible && r1 > r0;
     if (!shown) {
@@ -269,10 +270,12 @@ void main() {
         float area = max(s_acc[l][6], 1.0);
         float r0 = max(1.0, sqrt(area / PI));
         float e_max = max(e.r, max(e.g, e.b));
-        // Spikes: visible while one edge's spike adds `visible` to a pixel: coef E / r^2.
+        // Spikes: visible while one edge's spike adds `visible` to a pixel: share coef E / r^2,
+        // the share on the centre line falling as the light's image (its CoC disc) spreads them.
+        float share = spike_share(area);
         float spike_reach = 0.0;
         float spike_peak = 0.0;
-        for (uint c = 0; c < 3; ++c) spike_peak = max(spike_peak, fc.spike_coef_px[c] * e[c]);
+        for (uint c = 0; c < 3; ++c) spike_peak = max(spike_peak, share * fc.spike_coef_px[c] * e[c]);
         if (fc.spike_count > 0 && spike_peak / (r0 * r0) >= fc.visible) {
             spike_reach = min(sqrt(spike_peak / fc.visible), fc.max_radius_px);
         }
@@ -289,7 +292,7 @@ void main() {
         // The share of each channel the drawn elements take from the light's own pixels.
         vec3 moved = vec3(0.0);
         for (uint c = 0; c < 3; ++c) {
-            if (spike_reach > r0) moved[c] += 2.0 * float(fc.blades) * fc.spike_coef_px[c] * (1.0 / r0 - 1.0 / spike_reach);
+            if (spike_reach > r0) moved[c] += 2.0 * float(fc.blades) * share * fc.spike_coef_px[c] * (1.0 / r0 - 1.0 / spike_reach);
             if (glow_reach > r0) {
                 moved[c] += 2.0 * PI * fc.glow_coef_px[c] * (1.0 / r0 - 1.0 / glow_reach);
                 if (rho > 0.0) {
@@ -307,7 +310,8 @@ void main() {
         for (uint c = 0; c < 3; ++c) s_light[l][LIGHT_MOVED + c] = min(moved[c], 0.5);
         s_light[l][LIGHT_SPIKE_REACH] = spike_reach;
         s_light[l][LIGHT_GLOW_REACH] = glow_reach;
-        for (uint k = LIGHT_GLOW_REACH + 1; k < LIGHT_WORDS; ++k) s_light[l][k] = 0.0;
+        s_light[l][LIGHT_SPIKE_SHARE] = share;
+        for (uint k = LIGHT_SPIKE_SHARE + 1; k < LIGHT_WORDS; ++k) s_light[l][k] = 0.0;
         for (uint k = 0; k < LIGHT_WORDS; ++k) light_data[l * LIGHT_WORDS + k] = s_light[l][k];
     }
     barrier();

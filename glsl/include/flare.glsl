@@ -24,6 +24,8 @@
 #define LIGHT_MOVED 12     // 3 words: share of each channel moved into the starburst and halo
 #define LIGHT_SPIKE_REACH 15 // outer radius of the spikes, px (0: none drawn)
 #define LIGHT_GLOW_REACH 16  // outer radius of the glow (round diffraction and halo), px
+#define LIGHT_SPIKE_SHARE 17 // share of the spikes' light on their centre line: 1 for a light of one
+                             // pixel, less as its image (its CoC disc) spreads them (spike_share)
 #define LIGHT_WORDS 20
 
 // An explicit light (--flare-light, --flare-lights).
@@ -75,6 +77,23 @@
 #define ARGS_BIN_GROUPS 4
 #define ARGS_SPRITE_GROUPS 8
 #define ARGS_WORDS 12
+
+// The share of a spike's light on its centre line for a light of `area` px, relative to one
+// pixel's: the disc of the light's image convolved with the line, sampled by a 1 px strip
+// (src/optics/flare/starburst.rs spike_share).
+float strip_share(float d) {
+    float h = min(1.0, 1.0 / d);
+    float c = sqrt(max(1.0 - h * h, 0.0));
+    // asin, refined by a Newton step on sin y = h (CPU drivers' asin is good to about 1e-4;
+    // h <= 0.89 here, so cos y >= 0.46).
+    float y = asin(h);
+    if (c > 0.1) y -= (sin(y) - h) / cos(y);
+    return (2.0 / PI) * (y + h * c);
+}
+float spike_share(float area) {
+    float d = 2.0 * sqrt(max(area, 1.0) / PI);
+    return min(1.0, strip_share(d) / strip_share(2.0 / sqrt(PI)));
+}
 
 // The frame's flare settings (src/passes/flare/types.rs FlareConstants, 4-byte fields).
 struct FlareConstants {

@@ -105,7 +105,8 @@ impl From<DepthKindArg> for DepthKind {
 #[derive(Args, Clone)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass.
+    /// Color pass (RGB/RGBA EXR), or a multilayer EXR with every pass. Alpha is premultiplied,
+    /// as OpenEXR stores it (RGB already multiplied by A), in the input and in the output.
     #[arg(long)]
     pub color: PathBuf,
     /// Depth pass EXR (a Z channel); default: look in the color file.
@@ -201,9 +202,12 @@ pub struct RenderArgs {
     /// Do not apply natural (cos^4) vignetting.
     #[arg(long = "no-vignetting")]
     no_vignetting: bool,
-    /// Clamp on the CoC diameter: on the film in mm (1.2mm, the same look at every resolution)
-    /// or in pixels (64, 64px). A clamp that changes the picture is said.
-    #[arg(long = "max-coc", default_value = "1.2mm")]
+    /// Clamp on the CoC diameter: `none` (the default: every disc as large as the lens draws
+    /// it), on the film in mm (1.2mm, the same look at every resolution) or in pixels (64,
+    /// 64px). Whatever the clamp, a disc is at most twice the frame's diagonal across (one
+    /// centred on any pixel covers the whole frame). A clamp that changes the picture is said,
+    /// in --explain and as a warning.
+    #[arg(long = "max-coc", default_value = "none")]
     max_coc: String,
     #[command(flatten)]
     flare: FlareArgs,
@@ -266,6 +270,10 @@ pub struct FlareArgs {
     /// Record no lens flare (ghosts, starburst, halo) around bright lights.
     #[arg(long = "no-flare")]
     no_flare: bool,
+    /// Record lens flare with `--lens ideal` too, which draws none by default (the renderer's
+    /// camera has no ghosts, starburst or halo); the other lenses draw it unless --no-flare.
+    #[arg(long, conflicts_with = "no_flare")]
+    flare: bool,
     /// A pixel with a channel at this many times the sensor's saturation (after the exposure)
     /// belongs to a light.
     #[arg(long = "flare-threshold", default_value_t = CameraRequest::default().flare_threshold)]
@@ -324,7 +332,12 @@ impl RenderArgs {
             bokeh: self.bokeh.into(),
             grain: self.grain,
             seed: self.seed,
-            flare: !self.flare.no_flare,
+            flare: match (self.flare.flare, self.flare.no_flare) {
+                (_, true) => Some(false),
+                (true, false) => Some(true),
+                // The lens's default: off for the ideal lens, on for the others.
+                (false, false) => None,
+            },
             flare_threshold: self.flare.flare_threshold,
             flare_lights: self.flare.lights()?,
             ..CameraRequest::default()

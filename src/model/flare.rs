@@ -14,6 +14,9 @@ pub use crate::optics::flare::FlareLight;
 pub struct FlareSettings {
     /// Record lens flare where it would be visible.
     pub enabled: bool,
+    /// Why it is off, when it is: the user's `--no-flare`, or the lens's own default (the ideal
+    /// lens, the renderer's camera, draws no flare unless asked for with `--flare`).
+    pub off_by: FlareOff,
     /// A pixel with a channel at this many times the sensor's saturation (after the exposure)
     /// belongs to a light.
     pub threshold: f64,
@@ -28,6 +31,27 @@ pub struct FlareSettings {
     pub halo: Halo,
 }
 
+/// Who turned the flare off.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlareOff {
+    /// The user (`--no-flare`; a camera built with `flare: Some(false)`).
+    #[default]
+    Asked,
+    /// The lens: `--lens ideal` is the renderer's camera, which draws no ghosts, starburst or
+    /// halo; `--flare` turns them on.
+    IdealLens,
+}
+
+impl FlareOff {
+    /// Why the flare is off, in the words of `--explain`.
+    pub fn reason(self) -> &'static str {
+        match self {
+            FlareOff::Asked => "turned off (--no-flare)",
+            FlareOff::IdealLens => "off: --lens ideal is the renderer's camera, which draws none; --flare draws it",
+        }
+    }
+}
+
 impl FlareSettings {
     /// The default threshold: one stop over the sensor's saturation.
     pub const DEFAULT_THRESHOLD: f64 = 2.0;
@@ -36,6 +60,7 @@ impl FlareSettings {
     pub fn off() -> FlareSettings {
         FlareSettings {
             enabled: false,
+            off_by: FlareOff::Asked,
             threshold: Self::DEFAULT_THRESHOLD,
             lights: Vec::new(),
             prescription: None,

@@ -17,15 +17,18 @@ pub enum SettingError {
     NotASize { text: String },
     #[error("{text:?} is not X,Y,ENERGY[,AREA] (pixels; the energy a sum of scene values over pixels, at least 0)")]
     NotAFlareLight { text: String },
-    #[error("{text:?} is not a diameter in px (64, 64px) or on the film in mm (1.2mm)")]
+    #[error("{text:?} is not `none`, a diameter in px (64, 64px) or on the film in mm (1.2mm)")]
     NotACocLimit { text: String },
 }
 
-/// A clamp on the CoC diameter: pixels (`64`, `64px`) or mm on the film (`1.2mm`). The range
-/// is checked where the camera is built.
+/// A clamp on the CoC diameter: `none`, pixels (`64`, `64px`) or mm on the film (`1.2mm`).
+/// The range is checked where the camera is built.
 pub fn parse_coc_limit(text: &str) -> Result<crate::model::camera::CocLimit, SettingError> {
     use crate::model::camera::CocLimit;
     let t = text.trim();
+    if t.eq_ignore_ascii_case("none") {
+        return Ok(CocLimit::None);
+    }
     let (number, make): (&str, fn(f64) -> CocLimit) = match t.strip_suffix("mm") {
         Some(n) => (n, CocLimit::FilmMm),
         None => (t.strip_suffix("px").unwrap_or(t), CocLimit::Px),
@@ -134,6 +137,7 @@ mod tests {
     fn coc_limits_in_pixels_or_on_the_film() {
         use crate::model::camera::CocLimit;
         assert_eq!(parse_coc_limit("64"), Ok(CocLimit::Px(64.0)));
+        assert_eq!(parse_coc_limit("none"), Ok(CocLimit::None));
         assert_eq!(parse_coc_limit(" 64px"), Ok(CocLimit::Px(64.0)));
         assert_eq!(parse_coc_limit("1.2mm"), Ok(CocLimit::FilmMm(1.2)));
         assert_eq!(parse_coc_limit("1.2 mm"), Ok(CocLimit::FilmMm(1.2)));

@@ -19,9 +19,10 @@ pub enum Channel {
 }
 
 /// The clamp on |CoC| (px) for `camera` on `frame` of pixel pitch `pixel_pitch_mm`: the
-/// camera's (`--max-coc`), and at most twice the frame's diagonal, where a disk centred on any
-/// pixel covers the whole frame; larger disks would only size tables and images (the aperture
-/// shape, the diffraction kernels) beyond any offset the frame has.
+/// camera's (`--max-coc`, none by default), and at most twice the frame's diagonal, where a
+/// disk centred on any pixel covers the whole frame; larger disks would only size tables and
+/// images (the aperture shape, the diffraction kernels) beyond any offset the frame has. That
+/// safety limit is the only clamp by default; where it binds the plan says so, with a warning.
 pub fn coc_clamp_px(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> f64 {
     camera.max_coc.px(pixel_pitch_mm).min(frame_cover_px(frame))
 }
@@ -110,7 +111,7 @@ impl SceneFacts {
             return None;
         }
         let clamp = if self.clamp_is_frame_cover {
-            "twice the frame's diagonal".to_string()
+            "twice the frame's diagonal, the safety limit: a disc centred on any pixel covers the frame".to_string()
         } else {
             camera.max_coc.to_string()
         };

@@ -155,10 +155,29 @@ mod tests {
     }
 
     #[test]
-    fn the_default_clamp_is_the_same_part_of_the_frame_at_every_resolution() {
+    fn no_clamp_by_default_but_the_frame_cover() {
+        // 50 mm f/1.4 focused at 0.5 m on full frame: at 1280 px the plane at 0.3 m has a CoC
+        // of -89 px, drawn as it is; only the safety limit (twice the frame's diagonal) holds.
+        let request = CameraRequest { force: true, ..CameraRequest::default().with_lens(50.0, 1.4, 0.5) };
+        let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
+        assert_eq!(camera.max_coc, CocLimit::None);
+        let plan = super::plan(&near_and_sky(1280), &camera);
+        assert_eq!(plan.facts.coc_range_px, plan.facts.unclamped_coc_range_px);
+        assert!(plan.facts.coc_range_px.0 < -88.0, "{:?}", plan.facts.coc_range_px);
+        assert!(plan.facts.clamp_is_frame_cover);
+        assert_eq!(plan.facts.max_coc_px, 2.0 * 1280f64.hypot(1.0));
+        assert_eq!(plan.coc_clamp_warning, None);
+    }
+
+    #[test]
+    fn a_clamp_on_the_film_is_the_same_part_of_the_frame_at_every_resolution() {
         // 50 mm f/1.4 focused at 0.5 m on full frame: at 1280 px the plane at 0.3 m has a CoC
         // of -89 px; 1.2 mm on the film is 42.67 px there and 128 px at 3840.
-        let request = CameraRequest { force: true, ..CameraRequest::default().with_lens(50.0, 1.4, 0.5) };
+        let request = CameraRequest {
+            force: true,
+            max_coc: CocLimit::FilmMm(1.2),
+            ..CameraRequest::default().with_lens(50.0, 1.4, 0.5)
+        };
         let camera = Camera::new(&LensFile::default_lens(), &request).unwrap();
         let (low, high) = (super::plan(&near_and_sky(1280), &camera), super::plan(&near_and_sky(3840), &camera));
         let relative = |p: &super::Plan, width: f64| {
@@ -237,7 +256,10 @@ mod tests {
         assert!(plan.facts.clamp_is_frame_cover);
         assert_eq!(plan.facts.coc_range_px, (-10.0, -10.0));
         let warning = plan.coc_clamp_warning.expect("a warning");
-        assert!(warning.starts_with("the CoC is clamped to +-10.00 px (twice the frame's diagonal)"), "{warning}");
+        assert!(
+            warning.starts_with("the CoC is clamped to +-10.00 px (twice the frame's diagonal, the safety limit"),
+            "{warning}"
+        );
         let push = crate::passes::dof::coc_push::CocPush::for_frame(&camera, plan.facts.pixel_pitch_mm, &frame);
         assert_eq!(push.coc_px(0.3), -10.0);
     }

@@ -100,6 +100,12 @@ pub fn render_loaded(
             }
         };
         report.say(&format!("  film curve: {film}"));
+        let flare = if camera.flare.enabled {
+            "on around the lights bright enough (--no-flare turns it off)"
+        } else {
+            camera.flare.off_by.reason()
+        };
+        report.say(&format!("  lens flare: {flare}"));
         report.say(&format!("  {space_line}"));
         if let Some(dv) = &display_view {
             report.say(&format!(
@@ -113,7 +119,8 @@ pub fn render_loaded(
         report.say(&format!("warning: {warning}"));
     }
     if let Some(warning) = &plan.coc_clamp_warning {
-        let hint = if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc" };
+        let hint =
+            if plan.facts.clamp_is_frame_cover { "" } else { "; raise the clamp with --max-coc (none: no clamp)" };
         report.say(&format!("warning: {warning}{hint}"));
     }
 

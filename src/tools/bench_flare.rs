@@ -67,7 +67,7 @@ pub fn flare_camera(width: u32, height: u32) -> Camera {
         LensFile::parse(TESSAR_LENS_TOML, Path::new("lenses/tessar-walch-lens.toml")).unwrap_or_else(|e| panic!("{e}"));
     let request = CameraRequest {
         sensor: Some(format!("36x{}", 36.0 * height as f64 / width as f64)),
-        flare: true,
+        flare: Some(true),
         force: true,
         ..CameraRequest::blur_only().with_lens(lens.focal_length_mm, 2.8, 1.0e4)
     };

@@ -114,7 +114,7 @@ def main():
     settings.film = "linear"  # values proportional to the light
     settings.exposure = False
     settings.flare = False  # the starburst and halo would widen the disc
-    settings.max_coc = "64px"  # the default 1.2 mm on the film would clamp this f/1.4 disc
+    settings.max_coc = "64px"  # wider than this f/1.4 disc (realcam clamps nothing by default)
     total, centre, var_x, var_y = apply_and_measure(scene)
 
     # Eq 5.3 as Cycles' thin lens at the pinhole draws it (realcam --lens ideal: the renderer's

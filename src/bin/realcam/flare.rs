@@ -45,7 +45,7 @@ pub fn run(args: &FlareArgs) -> Result<()> {
     if args.rays < 2 {
         anyhow::bail!("--rays must be at least 2, not {}", args.rays);
     }
-    let request = args.lens.request(CameraRequest { flare: true, ..CameraRequest::blur_only() });
+    let request = args.lens.request(CameraRequest { flare: Some(true), ..CameraRequest::blur_only() });
     let camera = Camera::new(&lens_file, &request).name_flags()?;
     if let Some(g) = lens_file.fitted_ghosts.iter().find(|g| g.frame_px != [width, height]) {
         anyhow::bail!(

@@ -72,7 +72,7 @@ pub fn run(args: &FlareFitArgs) -> Result<()> {
         anyhow::bail!("--angles: {} angles cannot fit polynomials of --order {}", args.angles_deg.len(), args.order);
     }
     let ghosts = args.ghosts.iter().map(|g| ghost_label(g)).collect::<Result<Vec<_>>>()?;
-    let request = args.lens.request(CameraRequest { flare: true, ..CameraRequest::blur_only() });
+    let request = args.lens.request(CameraRequest { flare: Some(true), ..CameraRequest::blur_only() });
     let camera = Camera::new(&lens_file, &request).name_flags()?;
     let options = TracedFitOptions {
         width,

@@ -22,30 +22,36 @@ pub use request::{CameraRequest, DEFAULT_FPS};
 /// Defined with the thin lens (a lens file names it too); kept here, where a camera is set up.
 pub use crate::optics::lens::CocModel;
 
-/// The clamp on the CoC diameter: on the film in mm, so that one camera looks the same at every
-/// resolution, or in pixels.
+/// The clamp on the CoC diameter: none, on the film in mm, so that one camera looks the same
+/// at every resolution, or in pixels. Whatever the clamp, the planner keeps a disc within twice
+/// the frame's diagonal ([`crate::passes::scene::coc_clamp_px`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CocLimit {
+    /// No clamp: every disc as large as the lens draws it.
+    None,
     FilmMm(f64),
     Px(f64),
 }
 
 impl CocLimit {
-    /// 1.2 mm on the film: 64 px of a 1920 px wide full-frame (36 mm) image, the clamp realcam
-    /// had in pixels; a twentieth to a thirtieth of the frame's width on the usual sensors.
-    pub const DEFAULT: CocLimit = CocLimit::FilmMm(1.2);
+    /// No clamp: a clamp changes the picture of an ordinary lens (50 mm f/1.4 focused at 1 m
+    /// draws a point at 10 m as a disc of 1.7 mm on the film), and the tiled path's pyramid
+    /// makes large discs cheap. (realcam clamped at 1.2 mm on the film before.)
+    pub const DEFAULT: CocLimit = CocLimit::None;
 
-    /// The clamp in pixels of `pixel_pitch_mm`.
+    /// The clamp in pixels of `pixel_pitch_mm` (infinite for none).
     pub fn px(self, pixel_pitch_mm: f64) -> f64 {
         match self {
+            CocLimit::None => f64::INFINITY,
             CocLimit::FilmMm(mm) => mm / pixel_pitch_mm,
             CocLimit::Px(px) => px,
         }
     }
 
-    /// The number as given, in its unit.
+    /// The number as given, in its unit (none: infinite).
     pub fn value(self) -> f64 {
         match self {
+            CocLimit::None => f64::INFINITY,
             CocLimit::FilmMm(v) | CocLimit::Px(v) => v,
         }
     }
@@ -54,6 +60,7 @@ impl CocLimit {
 impl std::fmt::Display for CocLimit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            CocLimit::None => write!(f, "no clamp"),
             CocLimit::FilmMm(mm) => write!(f, "{} mm on the film", Num(*mm)),
             CocLimit::Px(px) => write!(f, "{} px", Num(*px)),
         }
@@ -302,9 +309,19 @@ mod tests {
         let c = camera(&CameraRequest::default()).unwrap();
         assert_eq!((c.lens.focal_length_mm, c.lens.f_number, c.lens.focus_distance_mm), (50.0, 2.8, 2000.0));
         assert_eq!((c.sensor.width_mm, c.sensor.height_mm, c.sensor_fit), (36.0, 24.0, SensorFit::Horizontal));
-        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc), (0.02, 100.0, 160.0, CocLimit::FilmMm(1.2)));
-        // 64 px of a 1920 px wide full-frame image.
-        assert!((c.max_coc.px(36.0 / 1920.0) - 64.0).abs() < 1e-12);
+        assert_eq!((c.shutter_s, c.iso, c.nits_per_unit, c.max_coc), (0.02, 100.0, 160.0, CocLimit::None));
+        // No clamp; 1.2 mm on the film is 64 px of a 1920 px wide full-frame image.
+        assert_eq!(c.max_coc.px(36.0 / 1920.0), f64::INFINITY);
+        assert!((CocLimit::FilmMm(1.2).px(36.0 / 1920.0) - 64.0).abs() < 1e-12);
+        // Flare on for a real lens, off for the ideal one unless asked for.
+        assert!(c.flare.enabled);
+        let ideal = LensFile::built_in("ideal").unwrap();
+        let off = Camera::new(&ideal, &CameraRequest::default()).unwrap();
+        assert_eq!((off.flare.enabled, off.flare.off_by), (false, crate::model::flare::FlareOff::IdealLens));
+        let on = Camera::new(&ideal, &CameraRequest { flare: Some(true), ..CameraRequest::default() }).unwrap();
+        assert!(on.flare.enabled);
+        let asked = camera(&CameraRequest { flare: Some(false), ..CameraRequest::default() }).unwrap();
+        assert_eq!((asked.flare.enabled, asked.flare.off_by), (false, crate::model::flare::FlareOff::Asked));
         assert!(c.exposure && c.vignetting);
         assert_eq!(c.film, FilmMode::Curve(FilmCurve::default_filmic()));
         assert_eq!((c.bokeh, c.grain, c.seed), (BokehMode::Tiled, 0.0, 0));

@@ -1,7 +1,7 @@
 //! [`Camera::new`]: a request checked against the lens file and made a camera.
 
 use super::*;
-use crate::model::flare::FlareSettings;
+use crate::model::flare::{FlareOff, FlareSettings};
 use crate::optics::distortion::HeightTable;
 use crate::optics::shutter::{ShutterCurve, ShutterTiming};
 
@@ -89,8 +89,10 @@ fn check_shutter(req: &CameraRequest) -> Result<(f64, f64, ShutterTiming), Camer
 fn check_image_settings(lens_file: &LensFile, req: &CameraRequest) -> Result<u32, CameraError> {
     require(CameraField::Iso, req.iso, req.iso > 0.0, "a positive number")?;
     require(CameraField::NitsPerUnit, req.nits_per_unit, req.nits_per_unit > 0.0, "a positive number")?;
-    let max_coc = req.max_coc.value();
-    require(CameraField::MaxCoc, max_coc, max_coc >= 0.0, "a diameter >= 0 (px, or mm on the film)")?;
+    if req.max_coc != CocLimit::None {
+        let max_coc = req.max_coc.value();
+        require(CameraField::MaxCoc, max_coc, max_coc >= 0.0, "a diameter >= 0 (px, or mm on the film)")?;
+    }
     if let Some(c) = req.cats_eye {
         require(CameraField::CatsEye, c, (0.0..=1.0).contains(&c), "in [0, 1]")?;
     }
@@ -149,8 +151,11 @@ fn astigmatism(lens_file: &LensFile, f_number: f64) -> Option<(HeightTable, Heig
 
 /// The flare settings: the request's, with the lens file's prescription, coatings and halo.
 fn flare_settings(lens_file: &LensFile, req: &CameraRequest) -> FlareSettings {
+    // The ideal lens is the renderer's camera: no flare unless asked for.
+    let enabled = req.flare.unwrap_or(!lens_file.ideal);
     FlareSettings {
-        enabled: req.flare,
+        enabled,
+        off_by: if req.flare.is_none() && lens_file.ideal { FlareOff::IdealLens } else { FlareOff::Asked },
         threshold: req.flare_threshold,
         lights: req.flare_lights.clone(),
         // The file was checked when it was read: its surfaces make a prescription.

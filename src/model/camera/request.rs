@@ -58,8 +58,9 @@ pub struct CameraRequest {
     pub grain: f64,
     /// Seed of the noise.
     pub seed: u32,
-    /// Record lens flare where it would be visible.
-    pub flare: bool,
+    /// Record lens flare where it would be visible; None: the lens's default, on for every lens
+    /// but the ideal one (the renderer's camera draws no flare).
+    pub flare: Option<bool>,
     /// A pixel belongs to a light from this many times the sensor's saturation.
     pub flare_threshold: f64,
     /// Lights given explicitly.
@@ -82,9 +83,9 @@ pub struct CameraRequest {
 impl Default for CameraRequest {
     /// The lens file's focal length, aperture and aberrations, focused at 2 m, on a full-frame
     /// sensor; 1/50 s at ISO 100 with a scene value of 1 at 160 cd/m^2 (a scene value of 0.18
-    /// is middle grey at f/2); exposure and vignetting on, the filmic curve, the CoC clamped at
-    /// 1.2 mm on the film ([`CocLimit::DEFAULT`]), tiled bokeh, no grain, lens flare from one stop
-    /// over saturation.
+    /// is middle grey at f/2); exposure and vignetting on, the filmic curve, no clamp on the CoC
+    /// ([`CocLimit::DEFAULT`]), tiled bokeh, no grain, lens flare from one stop
+    /// over saturation (none for the ideal lens).
     fn default() -> Self {
         CameraRequest {
             focal_length_mm: None,
@@ -119,7 +120,7 @@ impl Default for CameraRequest {
             rolling_direction: Default::default(),
             motion_blur: MotionBlurMode::Fast,
             max_blur_px: 512.0,
-            flare: true,
+            flare: None,
             flare_threshold: crate::model::flare::FlareSettings::DEFAULT_THRESHOLD,
             flare_lights: Vec::new(),
         }
@@ -136,7 +137,7 @@ impl CameraRequest {
             cats_eye: Some(0.0),
             exposure: false,
             vignetting: false,
-            flare: false,
+            flare: Some(false),
             film: Some(FilmMode::Linear),
             ..CameraRequest::default()
         }

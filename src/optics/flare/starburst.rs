@@ -27,6 +27,40 @@
 
 use super::AperturePolygon;
 
+/// The share of a spike's light on its centre line for a light whose image covers `area_px`
+/// pixels, relative to a light of one pixel (the star as drawn): 1 for one pixel, about
+/// 1.33 / D for a large image of diameter D = 2 sqrt(area / pi) px.
+///
+/// The starburst is the image of a point in focus (the Fraunhofer pattern of the aperture,
+/// Walch 2017 sec. 3.2). A point out of focus images as its circle of confusion, the disc of
+/// eq 5.3 (Kyaw 2013) that Potmesil & Chakravarty 1981 fill with the diffraction pattern of a
+/// defocused aperture (their eq 13-19: the light spreads over the geometric CoC, its edges
+/// ringing); in the geometric limit its image is the star convolved with that disc. So is an
+/// extended source's image: the star convolved with the source's image. A spike is a line of
+/// light density s(r) falling as 1/r^2 along it; convolved with a uniform disc of diameter D it
+/// becomes a band whose profile across it is the disc's chord, so that far from the light
+/// (r >> D, where s barely changes over D) the band still holds s(r) per unit of length, but
+/// the row of pixels on its centre line (1 px wide) holds only the share of the disc's area
+/// within |y| <= 1/2:
+///     S(D) = (2 / pi) (asin h + h sqrt(1 - h^2)),  h = min(1, 1/D),
+/// 1 for D <= 1 and 4 / (pi D) for D >> 1. The star's contrast falls as the light's disc grows.
+/// A light of one pixel (D1 = 2 / sqrt(pi)) is what the drawn star stands for, so the drawn
+/// spike carries S(D) / S(D1) of its light along its centre line; the rest stays in the
+/// light's own pixels (the energy is kept). The round diffraction glow and the halo are smooth
+/// in two dimensions: the disc changes them only within a few D of the light, where they are
+/// not drawn (they start at the light's own radius), so they are kept as they are.
+///
+/// The light's area is its pixels over the flare threshold after the depth of field: for a
+/// point defocused to a plateau over the threshold, its CoC disc.
+pub fn spike_share(area_px: f64) -> f64 {
+    let strip = |d: f64| {
+        let h = (1.0 / d).min(1.0);
+        2.0 / std::f64::consts::PI * (h.asin() + h * (1.0 - h * h).max(0.0).sqrt())
+    };
+    let diameter = |a: f64| 2.0 * (a.max(1.0) / std::f64::consts::PI).sqrt();
+    (strip(diameter(area_px)) / strip(diameter(1.0))).min(1.0)
+}
+
 /// The diffraction of a lens's aperture at a working f-number.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Starburst {
@@ -173,6 +207,41 @@ pub fn polygon_transform(vertices: &[[f64; 2]], k: [f64; 2]) -> (f64, f64) {
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn a_spikes_share_on_its_centre_line_falls_with_the_lights_disc() {
+        // The share of a uniform disc of diameter D within a strip 1 px wide through its centre,
+        // counted on a fine grid, against the closed form (relative to one pixel's disc).
+        let strip_counted = |d: f64| {
+            let (n, r) = (2000, 0.5 * d);
+            let step = d / n as f64;
+            let (mut inside, mut strip) = (0usize, 0usize);
+            for i in 0..n {
+                for j in 0..n {
+                    let (x, y) = (-r + (i as f64 + 0.5) * step, -r + (j as f64 + 0.5) * step);
+                    if x * x + y * y <= r * r {
+                        inside += 1;
+                        strip += (y.abs() <= 0.5) as usize;
+                    }
+                }
+            }
+            strip as f64 / inside as f64
+        };
+        let d1 = 2.0 / PI.sqrt();
+        for d in [2.0, 5.0, 24.1] {
+            let area = PI * d * d / 4.0;
+            let counted = strip_counted(d) / strip_counted(d1);
+            assert!((spike_share(area) - counted).abs() < 2e-3, "D {d}: {} vs {counted}", spike_share(area));
+        }
+        // One pixel keeps its star; a large disc, 4 / (pi D) of one pixel's strip share.
+        assert_eq!(spike_share(1.0), 1.0);
+        assert_eq!(spike_share(0.25), 1.0);
+        let d = 100.0;
+        let expected = 4.0 / (PI * d) / (2.0 / PI * ((1.0 / d1).asin() + (1.0 - 1.0 / (d1 * d1)).sqrt() / d1));
+        assert!((spike_share(PI * d * d / 4.0) / expected - 1.0).abs() < 1e-4);
+        let shares: Vec<f64> = (1..200).map(|a| spike_share(a as f64)).collect();
+        assert!(shares.windows(2).all(|w| w[1] < w[0]), "falls with the area");
+    }
 
     fn polygon(n: u32) -> Vec<[f64; 2]> {
         (0..n).map(|k| 0.5 * PI + 2.0 * PI * k as f64 / n as f64).map(|a| [a.cos(), a.sin()]).collect()

@@ -7,8 +7,8 @@ use crate::gpu::shaders::flare::{
     ARGS_BIN_GROUPS, ARGS_LIGHTS, ARGS_LIT_TILES, ARGS_SPRITE_GROUPS, EXPLICIT_AREA, EXPLICIT_ENERGY, EXPLICIT_WORDS,
     EXPLICIT_X, EXPLICIT_Y, GHOST_POSITION, GHOST_SPRITE_CHANNEL_WORDS, GHOST_WORDS, KIND_GHOST, KIND_GLOW, KIND_NONE,
     KIND_SPIKE, LIGHT_AREA, LIGHT_BOX, LIGHT_ENERGY, LIGHT_GLOW_REACH, LIGHT_MOVED, LIGHT_R0, LIGHT_SPIKE_REACH,
-    LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIGHT, SPRITE_SOFTNESS,
-    SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
+    LIGHT_SPIKE_SHARE, LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND,
+    SPRITE_LIGHT, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::buffer_after_compute_write;
@@ -54,13 +54,17 @@ pub struct LightReach {
     pub glow_reach: f64,
     /// Share of each channel of the light they take, at most a half.
     pub moved: [f64; 3],
+    /// Share of the spikes' light on their centre line
+    /// ([`spike_share`](crate::optics::flare::starburst::spike_share) of the light's area).
+    pub spike_share: f64,
 }
 
 /// The starburst and halo of a light of `energy` per channel and `area_px` pixels.
 pub fn light_reach(fc: &FlareConstants, energy: [f64; 3], area_px: f64) -> LightReach {
     let visible = fc.visible as f64;
     let r0 = (area_px.max(1.0) / PI).sqrt().max(1.0);
-    let spike_peak = (0..3).map(|c| fc.spike_coef_px[c] as f64 * energy[c]).fold(0.0, f64::max);
+    let share = crate::optics::flare::starburst::spike_share(area_px);
+    let spike_peak = (0..3).map(|c| share * fc.spike_coef_px[c] as f64 * energy[c]).fold(0.0, f64::max);
     let spike_reach = if fc.spike_count > 0 && spike_peak / (r0 * r0) >= visible {
         (spike_peak / visible).sqrt().min(fc.max_radius_px as f64)
     } else {
@@ -83,7 +87,7 @@ pub fn light_reach(fc: &FlareConstants, energy: [f64; 3], area_px: f64) -> Light
     let moved = std::array::from_fn(|c| {
         let mut m = 0.0;
         if spike_reach > r0 {
-            m += 2.0 * fc.blades as f64 * fc.spike_coef_px[c] as f64 * (1.0 / r0 - 1.0 / spike_reach);
+            m += 2.0 * fc.blades as f64 * share * fc.spike_coef_px[c] as f64 * (1.0 / r0 - 1.0 / spike_reach);
         }
         if glow_reach > r0 {
             m += 2.0 * PI * fc.glow_coef_px[c] as f64 * (1.0 / r0 - 1.0 / glow_reach);
@@ -94,7 +98,7 @@ pub fn light_reach(fc: &FlareConstants, energy: [f64; 3], area_px: f64) -> Light
         }
         m.min(0.5)
     });
-    LightReach { r0, spike_reach, glow_reach, moved }
+    LightReach { r0, spike_reach, glow_reach, moved, spike_share: share }
 }
 
 /// The sprite's words with its bounds clamped to the frame, or none.
@@ -173,8 +177,9 @@ fn spike_sprite(fc: &FlareConstants, sprite: &mut [f32], light: &[f32], l: usize
     let (dir, edges) = spike_direction(fc.blades, fc.rotation as f64, k);
     let r0 = light[LIGHT_R0 as usize] as f64;
     let r1 = light[LIGHT_SPIKE_REACH as usize] as f64;
+    let share = light[LIGHT_SPIKE_SHARE as usize] as f64;
     let coef: [f64; 3] =
-        std::array::from_fn(|c| edges * fc.spike_coef_px[c] as f64 * light[LIGHT_ENERGY as usize + c] as f64);
+        std::array::from_fn(|c| share * edges * fc.spike_coef_px[c] as f64 * light[LIGHT_ENERGY as usize + c] as f64);
     let o = [light[LIGHT_X as usize] as f64, light[LIGHT_Y as usize] as f64];
     if !(coef.iter().fold(0.0, |m: f64, &v| m.max(v)) / (r0 * r0) >= fc.visible as f64 && r1 > r0) {
         none(sprite);
@@ -307,6 +312,7 @@ impl Twin for FlareLightsShader {
             }
             light[LIGHT_SPIKE_REACH as usize] = reach.spike_reach as f32;
             light[LIGHT_GLOW_REACH as usize] = reach.glow_reach as f32;
+            light[LIGHT_SPIKE_SHARE as usize] = reach.spike_share as f32;
             lights.push(light);
         }
         for (l, light) in lights.iter().enumerate() {

@@ -281,7 +281,7 @@ impl Pass for Flare {
         let (camera, frame) = (input.camera, input.frame);
         let flare = &camera.flare;
         if !flare.enabled {
-            return Decision::skip("turned off (--no-flare)");
+            return Decision::skip(flare.off_by.reason());
         }
         let gain = camera.exposure_gain();
         let threshold = flare.threshold / gain;
