@@ -5,7 +5,7 @@
 //! reflections, Fresnel with the coatings at every ray's own angle, clipped at every
 //! semi-diameter and by the aperture); the matrix ghosts (src/optics/flare/ghosts.rs) are what
 //! the flare pass draws, and are also timed on the GPU; Walch's fitted primitives (a lens file's
-//! `[[fitted_ghost]]`, ch. 6-8) are drawn as glsl/bezier_ghosts.comp draws them, and timed there.
+//! `[[fitted_ghost]]`, ch. 6-8) are drawn as glsl/tools/bezier_ghosts.comp draws them, and timed there.
 
 use crate::gpu::shaders::bezier_ghost::BEZIER_BOUNDS;
 use crate::gpu::{Gpu, GpuResult, Kernel, Profile};
@@ -246,7 +246,7 @@ impl Matrix<'_> {
 /// Walch's measured-ghost primitives as a lens file's `[[fitted_ghost]]` carries them (ch. 6-8):
 /// each ghost's polynomials at the light's angle off the axis (eq 8.1's angle; only within the
 /// fitted range, the polynomials do not extrapolate), turned by the light's roll (eq 8.2) about
-/// the frame's centre, drawn as the GPU draws them (the f32 twin of glsl/bezier_ghosts.comp).
+/// the frame's centre, drawn as the GPU draws them (the f32 twin of glsl/tools/bezier_ghosts.comp).
 /// The specs must be of the report's frame.
 pub struct Fitted<'a> {
     pub specs: &'a [FittedGhostSpec],
@@ -330,7 +330,7 @@ impl GhostModel for Fitted<'_> {
     }
 }
 
-/// GPU ms of glsl/bezier_ghosts.comp drawing every fitted ghost (all channels) of a light of
+/// GPU ms of glsl/tools/bezier_ghosts.comp drawing every fitted ghost (all channels) of a light of
 /// display slope `u` on a black frame (timestamp queries, median of `runs` after a warm-up);
 /// None when no ghost is within its fitted range.
 fn fitted_gpu_ms(
@@ -633,7 +633,7 @@ pub fn markdown(device: &str, command: &str, lens: &str, options: &FlareAccuracy
         out += &format!(
             "Fitted primitives: the lens file's {} [[fitted_ghost]] entries (Walch ch. 6-8; `realcam flare-fit`), each \
              ghost's polynomials at the light's angle, turned to its direction (eq 8.2), compared at angles within \
-             their fitted range only; their centre is the primitive's M; GPU ms: glsl/bezier_ghosts.comp drawing \
+             their fitted range only; their centre is the primitive's M; GPU ms: glsl/tools/bezier_ghosts.comp drawing \
              them all on the frame (median of {} runs).\n\n",
             options.fitted.len(),
             options.runs

@@ -1,4 +1,4 @@
-//! `realcam bench --flare`: GPU time of the lens-flare passes (src/passes/flare.rs: lights per
+//! `realcam bench --flare`: GPU time of the lens-flare passes (src/passes/flare/mod.rs: lights per
 //! tile, the light list and its sprites, the ghost-sprite kernel) for 1, 4 and 16 lights found in
 //! the frame, with every ghost of the Tessar in lenses/ (21 two-reflection paths), its starburst
 //! and halo. Every time is also a multiple of the bare pass measured in the same run, and the

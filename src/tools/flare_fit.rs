@@ -8,7 +8,7 @@
 //! in order, each started from the least-squares polynomial of the samples fitted before it
 //! (sec. 7.3), and the parameters then become polynomials of the angle (ch. 8).
 //!
-//! The primitive is drawn as the GPU draws it (the f32 twin of glsl/bezier_ghosts.comp).
+//! The primitive is drawn as the GPU draws it (the f32 twin of glsl/tools/bezier_ghosts.comp).
 
 use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::bezier_ghost::{

@@ -2,7 +2,7 @@
 //! (its `[[fitted_ghost]]` section) for one camera and light. The light's view-space position
 //! gives the constellation angle (eq 8.1) and the roll (eq 8.2); each ghost's polynomials give
 //! its primitive at that angle (ch. 8), drawn as the GPU draws it (the f32 twin of
-//! glsl/bezier_ghosts.comp) turned by the roll about the frame's centre and scaled by eq 8.3's
+//! glsl/tools/bezier_ghosts.comp) turned by the roll about the frame's centre and scaled by eq 8.3's
 //! brightness. The flare image's intensity is the mean of its three channels at each pixel;
 //! its min, max, sum, average and log-average (sec. 9.1) are reported, and the contrast the
 //! flare leaves a scene of the given I_max and I_min (eq 9.3), with the flare's average as

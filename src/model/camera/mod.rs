@@ -71,7 +71,7 @@ impl std::fmt::Display for CocLimit {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BokehMode {
     /// Tiled gather-scatter: exact full-resolution gather for small CoC, fixed-cost
-    /// half-resolution gather and highlight sprites for large CoC (src/passes/tiled_dof.rs).
+    /// half-resolution gather and highlight sprites for large CoC (src/passes/dof/tiled.rs).
     #[default]
     Tiled,
     /// Every pixel's exact aperture sprite evaluated at every pixel it covers (written as a
@@ -199,11 +199,11 @@ pub struct Camera {
 /// Which motion-blur method renders the velocity pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum MotionBlurMode {
-    /// The tiled reconstruction gather (src/passes/motion_blur.rs): a fixed sample count.
+    /// The tiled reconstruction gather (src/passes/motion/blur.rs): a fixed sample count.
     #[default]
     Fast,
     /// Every source pixel scattered along its path at many sub-frame times with depth ordering
-    /// (src/passes/motion_reference.rs): the accuracy reference, cost grows with the blur length.
+    /// (src/passes/motion/reference.rs): the accuracy reference, cost grows with the blur length.
     Reference,
     /// No motion blur.
     Off,
@@ -281,7 +281,7 @@ impl Camera {
 
     /// Longitudinal colour as an offset of the signed CoC of the red and blue channels (px) at
     /// the channel wavelengths `nm`, for a lens focused at `focus`. A channel whose image surface lies delta behind green's
-    /// sees, in the form of src/passes/coc.rs (Kyaw 2013 eq 5.3 with a film offset),
+    /// sees, in the form of src/passes/dof/coc.rs (Kyaw 2013 eq 5.3 with a film offset),
     /// C_c = D' (v w / (1 + delta w) - 1) with w = 1/f - 1/u, i.e. C_c - C_g = -D' delta w / (1 + delta w);
     /// w is taken at the focus distance (w = 1/v), which is exact at the focus plane and off by
     /// at most the magnification's fraction elsewhere.

@@ -284,7 +284,7 @@ pub struct DerivedTables {
 
 /// Fraction of a unit circle's area that a second unit circle, shifted by `k` radii, overlaps:
 /// (2 acos(k/2) - k sqrt(1 - k^2/4)) / pi. The cat's-eye model of the bokeh passes
-/// (glsl/include/aperture.glsl, src/passes/aperture.rs) clips the aperture this way.
+/// (glsl/include/aperture.glsl, src/passes/dof/aperture.rs) clips the aperture this way.
 pub fn circle_overlap_fraction(k: f64) -> f64 {
     let h = (0.5 * k).clamp(0.0, 1.0);
     (2.0 * h.acos() - 2.0 * h * (1.0 - h * h).sqrt()) / std::f64::consts::PI
