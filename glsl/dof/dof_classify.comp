@@ -1,6 +1,12 @@
 #version 450
-// Tiled depth of field, step 2: how far the gather of each tile must reach (the largest CoC
-// radius of any tile near enough to cover part of it: dilation), and the tile's class: a copy,
+// Tiled depth of field, step 2: how far the gather of each tile must reach, and the tile's
+// class. A sample behind a pixel reaches it no farther than the pixel's own CoC (the gathers'
+// occlusion rule), so only foreground samples (in front of the focus plane) reach farther: the
+// radius is the larger of the tile's own largest CoC radius and the largest foreground radius
+// of any tile near enough to cover part of it (dilation). A far background next to a sharp
+// subject or a nearer wall no longer sets their tiles' level (scene A: the sky's and the wall's
+// CoC put the subject's chin on level 3, the wall's texture next to the sky blurred at 1/8
+// resolution). The class: a copy,
 // the exact full-resolution gather, or the gather at the pyramid level where that radius is
 // at most LEVEL_RADIUS texels. Each tile is appended to its class's list, whose indirect
 // dispatch counts its tiles; a level tile none of whose pixels is nearly sharp (its own smallest
@@ -47,20 +53,20 @@ void main() {
     }
     if (t >= tile_count) return;
     ivec2 tc = ivec2(t % pc.tiles.x, t / pc.tiles.x);
-    float radius = 0.0, fg_radius = 0.0;
+    float fg_radius = 0.0;
     for (int dy = -pc.search_tiles; dy <= pc.search_tiles; ++dy) {
         for (int dx = -pc.search_tiles; dx <= pc.search_tiles; ++dx) {
             ivec2 n = tc + ivec2(dx, dy);
             if (outside(n, pc.tiles)) continue;
             vec2 range = tile_coc[n.y * pc.tiles.x + n.x];
-            float r_n = 0.5 * max(abs(range.x), abs(range.y));
             // Gap in pixels between the two tiles' rectangles.
             vec2 gap = vec2(max(abs(dx) - 1, 0), max(abs(dy) - 1, 0)) * float(TILE_SIZE);
-            if (r_n + 1.0 > length(gap)) radius = max(radius, r_n);
             float fg_n = range.x < 0.0 ? -0.5 * range.x : 0.0;
             if (fg_n + 1.0 > length(gap)) fg_radius = max(fg_radius, fg_n);
         }
     }
+    vec2 own = tile_coc[t];
+    float radius = max(0.5 * max(abs(own.x), abs(own.y)), fg_radius);
     int cls = CLASS_COPY;
     if (radius > 0.5) cls = CLASS_SMALL;
     if (radius > pc.small_radius_px) {
@@ -72,7 +78,6 @@ void main() {
     tile_radius_px[tile_count + t] = fg_radius;
     tile_radius_px[2 * tile_count + t] = float(cls);
     // The tile's own pixels: the smallest |CoC| of its signed range (0 if the range holds 0).
-    vec2 own = tile_coc[t];
     float own_min_radius = 0.5 * (own.x > 0.0 ? own.x : (own.y < 0.0 ? -own.y : 0.0));
     bool blurred = cls >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px;
     int list = blurred ? LIST_BLURRED_LEVEL1 + cls - CLASS_LEVEL1 : cls;

@@ -28,6 +28,7 @@ layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
 layout(binding = 7, rg32f) uniform readonly image2D coc_level;
 layout(binding = 8, rgba32f) uniform readonly image2D fg_big_level;
 layout(binding = 9, std430) readonly buffer TileRadius { float tile_radius_px[]; };
+layout(binding = 11, rg32f) uniform readonly image2D coverage_level;  // (foreground, large-CoC foreground)
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -44,7 +45,8 @@ layout(push_constant) uniform Push {
 
 vec4 load_level(int which, ivec2 q) {
     q = clamp(q, ivec2(0), pc.level_size - 1);
-    return which == 0 ? imageLoad(bg_level, q) : (which == 1 ? imageLoad(fg_level, q) : imageLoad(fg_big_level, q));
+    return which == 0 ? imageLoad(bg_level, q)
+        : (which == 1 ? imageLoad(fg_level, q) : (which == 2 ? imageLoad(fg_big_level, q) : imageLoad(coverage_level, q)));
 }
 
 vec4 bilinear_level(int which, ivec2 h0, vec2 f) {
@@ -85,12 +87,17 @@ void main() {
     }
     bg = bg_weight > 0.0 ? bg / bg_weight : load_level(0, h0);
     vec4 fg = bilinear_level(1, h0, f);
+    // The foregrounds' coverages (x: all foreground samples, y: the large-CoC ones).
+    vec2 coverage = bilinear_level(3, h0, f).xy;
     float radius_p = 0.5 * abs(coc_here);
     // Pixels whose own CoC is small are gathered exactly, as in the small-CoC tiles (so nothing
     // changes across a tile border), with only the large-CoC foreground composited over them;
-    // blurred pixels take the level's layers. A blend over the last 1.5 px below the small-CoC
-    // radius joins the two, so a pixel at or above it costs only the upsampling.
-    float blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
+    // blurred pixels take the level's layers. A blend over the last half pixel below the
+    // small-CoC radius joins the two (every pixel there weighs fully in the pyramid: radius
+    // at least 1.5), so a pixel at or above it costs only the upsampling. A nearly sharp pixel
+    // (radius below 1.5) takes nothing of the level's background: the pyramid holds little or
+    // none of it (its weight clamp(radius - 0.5, 0, 1)), and the level would blur it by 2^L px.
+    float blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
     vec4 base = bg;
     Aperture ap = pc.ap;
     if (EXACT_GATHER) {
@@ -105,11 +112,14 @@ void main() {
             float disc_px = tap_disc_px(min(pc.small_radius_px + 1.0, max(radius_p, fg_radius)));
             vec4 exact = gather_exact(p, pc.size, disc_px, ap, pc.layer_transition_px);
             vec4 fg_big = bilinear_level(2, h0, f);
-            exact = vec4(mix(exact.rgb, fg_big.rgb, fg_big.a), exact.a);
+            exact = exact * (1.0 - coverage.y) + fg_big;
             base = mix(exact, bg, blurred);
-            fg = vec4(fg.rgb, fg.a * blurred);
+            coverage.x *= blurred;
+            fg *= blurred;
         }
     }
-    vec3 color = mix(base.rgb, fg.rgb, fg.a);
-    if (inside) imageStore(color_out, p, vec4(color, base.a));
+    // The foregrounds come premultiplied by their coverage. Alpha is a channel of the picture
+    // (premultiplied, OpenEXR's convention): composited as the colour.
+    vec4 color = base * (1.0 - coverage.x) + fg;
+    if (inside) imageStore(color_out, p, color);
 }

@@ -4,8 +4,11 @@
 // dof_level_lists.comp). Every texel of such a tile gathers the level's
 // texels within the tile's radius in level units (at most LEVEL_RADIUS, 4 at the top level): the
 // exact gather's rules (include/gather.glsl) on the pyramid, so its cost per tile falls as 1/4^L
-// while the radius doubles. Writes the background, the foreground with its coverage (alpha), and
-// the foreground of large-CoC samples only (for nearly sharp pixels, see dof_composite.comp).
+// while the radius doubles. Writes the background, the foreground, and the foreground of large-CoC
+// samples only (for nearly sharp pixels, see dof_composite.comp): the background the weighted
+// mean of its samples' premultiplied RGBA (alpha is a channel of the picture like the colour), each
+// foreground that mean times its coverage (so the composite's bilinear upsampling, across a
+// foreground's edge, weighs each texel by its coverage), and the two coverages (coverage_level).
 //
 // The composite of a level-L tile upsamples bilinearly (texels h0 and h0 + 1 of pixel centre
 // (p + 0.5) / 2^L - 0.5), so it reads the tile's own texels and a ring of one texel around it,
@@ -30,6 +33,7 @@ layout(binding = 4, std430) readonly buffer LevelLists { uint level_list[]; };
 layout(binding = 5, std430) readonly buffer TileRadius { float tile_radius_px[]; };
 layout(binding = 7, rgba32f) uniform writeonly image2D fg_big_level;
 layout(binding = 8, std430) readonly buffer Args { uint args[]; };
+layout(binding = 10, rg32f) uniform writeonly image2D coverage_level;  // (foreground, large-CoC foreground)
 
 layout(push_constant) uniform Push {
     ivec2 level_size;
@@ -136,9 +140,11 @@ void main() {
     vec4 background = bg_w > 0.0 ? bg / bg_w : vec4(0.0);
     vec4 foreground = fg_w > 0.0 ? fg / fg_w : vec4(0.0);
     imageStore(bg_level, p, background);
-    imageStore(fg_level, p, vec4(foreground.rgb, clamp(fg_w, 0.0, 1.0)));
+    float coverage = clamp(fg_w, 0.0, 1.0), big_coverage = clamp(fg_big_w, 0.0, 1.0);
+    imageStore(fg_level, p, foreground * coverage);
     // The foreground of large-CoC samples only: what nearly sharp pixels, whose exact gather
     // already holds the small ones, composite over themselves.
     vec4 big = fg_big_w > 0.0 ? fg_big / fg_big_w : vec4(0.0);
-    imageStore(fg_big_level, p, vec4(big.rgb, clamp(fg_big_w, 0.0, 1.0)));
+    imageStore(fg_big_level, p, big * big_coverage);
+    imageStore(coverage_level, p, vec4(coverage, big_coverage, 0.0, 0.0));
 }

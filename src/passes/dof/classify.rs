@@ -50,7 +50,7 @@ impl Twin for ClassifyShader {
         let (mut radii, mut lists) = (vec![0.0f32; 3 * tile_count], vec![Vec::new(); LIST_COUNT as usize]);
         for t in 0..tile_count {
             let (tx, ty) = ((t as i32) % pc.tiles[0], (t as i32) / pc.tiles[0]);
-            let (mut radius, mut fg_radius) = (0.0f32, 0.0f32);
+            let mut fg_radius = 0.0f32;
             for dy in -pc.search_tiles..=pc.search_tiles {
                 for dx in -pc.search_tiles..=pc.search_tiles {
                     let (nx, ny) = (tx + dx, ty + dy);
@@ -59,21 +59,21 @@ impl Twin for ClassifyShader {
                     }
                     let n = (ny * pc.tiles[0] + nx) as usize;
                     let range = [tile_coc[2 * n], tile_coc[2 * n + 1]];
-                    let r_n = 0.5 * range[0].abs().max(range[1].abs());
                     let gap = [
                         ((dx.abs() - 1).max(0) * TILE_SIZE as i32) as f32,
                         ((dy.abs() - 1).max(0) * TILE_SIZE as i32) as f32,
                     ];
                     let gap_len = (gap[0] * gap[0] + gap[1] * gap[1]).sqrt();
-                    if r_n + 1.0 > gap_len {
-                        radius = radius.max(r_n);
-                    }
                     let fg_n = if range[0] < 0.0 { -0.5 * range[0] } else { 0.0 };
                     if fg_n + 1.0 > gap_len {
                         fg_radius = fg_radius.max(fg_n);
                     }
                 }
             }
+            // A sample behind a pixel reaches no farther than the pixel's own CoC: only the
+            // foreground's radius is dilated.
+            let own = [tile_coc[2 * t], tile_coc[2 * t + 1]];
+            let radius = (0.5 * own[0].abs().max(own[1].abs())).max(fg_radius);
             let mut class = if radius <= 0.5 { CLASS_COPY } else { CLASS_SMALL };
             if radius > pc.small_radius_px {
                 let mut level = 1;
@@ -85,7 +85,6 @@ impl Twin for ClassifyShader {
             radii[t] = radius;
             radii[tile_count + t] = fg_radius;
             radii[2 * tile_count + t] = class as f32;
-            let own = [tile_coc[2 * t], tile_coc[2 * t + 1]];
             let own_min_radius = 0.5 * if own[0] > 0.0 { own[0] } else { (-own[1]).max(0.0) };
             let list = if class >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px {
                 LIST_BLURRED_LEVEL1 + class - CLASS_LEVEL1

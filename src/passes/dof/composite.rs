@@ -42,6 +42,7 @@ crate::shader_bindings! {
         fg_big_level: image(fg_big_level),
         tile_radius: buffer(TileRadius),
         aperture_shape: image(aperture_shape),
+        coverage_level: image(coverage_level),
     }
 }
 
@@ -59,8 +60,10 @@ fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// Of texels of up to four channels (the coverage layer has two; the others read as 0).
 fn mix4(a: &[f32], b: &[f32], t: f32) -> [f32; 4] {
-    std::array::from_fn(|k| a[k] * (1.0 - t) + b[k] * t)
+    let at = |v: &[f32], k: usize| v.get(k).copied().unwrap_or(0.0);
+    std::array::from_fn(|k| at(a, k) * (1.0 - t) + at(b, k) * t)
 }
 
 /// Bilinear between the four level texels from `h0` (edge texels continue).
@@ -78,6 +81,7 @@ impl Twin for CompositeShader {
         let (lists, radii) = (b[5].words().to_vec(), floats(b[9].words()));
         let data = ApertureData::from_bindings(&b[6], &b[10], pc.aperture.shape_radius);
         let (coc_level, fg_big_level) = (b[7].image().clone(), b[8].image().clone());
+        let coverage_level = b[11].image().clone();
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let scale = (1 << pc.level) as f32;
         let out = b[4].image_mut();
@@ -110,8 +114,10 @@ impl Twin for CompositeShader {
                     bg.copy_from_slice(bg_level.clamped(h0[0], h0[1]));
                 }
                 let mut fg = bilinear(&fg_level, h0, f);
+                let coverage = bilinear(&coverage_level, h0, f);
+                let mut fg_coverage = coverage[0];
                 let radius_p = 0.5 * coc_here.abs();
-                let blurred = smoothstep(pc.small_radius_px - 2.0, pc.small_radius_px - 0.5, radius_p);
+                let blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
                 let mut base = bg;
                 if blurred < 1.0 {
                     let fg_radius = radii[tile_count + t];
@@ -119,14 +125,14 @@ impl Twin for CompositeShader {
                     let (a, l) = (&pc.aperture, pc.layer_transition_px);
                     let mut exact = gather_exact(&color.texels, &coc.texels, pc.size, p, disc_px, a, l, &data);
                     let big = bilinear(&fg_big_level, h0, f);
-                    for k in 0..3 {
-                        exact[k] = exact[k] * (1.0 - big[3]) + big[k] * big[3];
-                    }
+                    exact = std::array::from_fn(|k| exact[k] * (1.0 - coverage[1]) + big[k]);
                     base = mix4(&exact, &bg, blurred);
-                    fg[3] *= blurred;
+                    fg_coverage *= blurred;
+                    fg = fg.map(|v| v * blurred);
                 }
-                let rgb: [f32; 3] = std::array::from_fn(|k| base[k] * (1.0 - fg[3]) + fg[k] * fg[3]);
-                out.texel_mut(x, y).copy_from_slice(&[rgb[0], rgb[1], rgb[2], base[3]]);
+                // The foregrounds premultiplied by their coverage; alpha composited as the colour.
+                let rgba: [f32; 4] = std::array::from_fn(|k| base[k] * (1.0 - fg_coverage) + fg[k]);
+                out.texel_mut(x, y).copy_from_slice(&rgba);
             }
         }
     }
@@ -164,6 +170,7 @@ pub fn record(
         after_compute_write(b.bg_level),
         after_compute_write(b.fg_level),
         after_compute_write(b.fg_big_level),
+        after_compute_write(b.coverage_level),
         write_after_write(b.output),
     ]);
     rec.buffer_barriers(&[buffer_after_compute_write(b.tile_lists), args_for_indirect(args)]);

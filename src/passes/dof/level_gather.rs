@@ -37,6 +37,7 @@ crate::shader_bindings! {
         fg_big_level: image(fg_big_level),
         args: buffer(Args),
         aperture_shape: image(aperture_shape),
+        coverage_level: image(coverage_level),
     }
 }
 
@@ -89,6 +90,7 @@ impl Twin for LevelGatherShader {
         let per_group = tiles_per_group(pc.level as u32) as usize;
         let to_level = 1.0 / (1 << pc.level) as f32;
         let (mut bg_out, mut fg_out, mut big_out) = (b[2].image().clone(), b[3].image().clone(), b[7].image().clone());
+        let mut coverage_out = b[10].image().clone();
         let slots = (groups[0] as usize * per_group).min(count);
         for slot in 0..slots {
             let t = lists[(pc.level as usize - 1) * tile_count + slot] as usize;
@@ -103,7 +105,7 @@ impl Twin for LevelGatherShader {
                 }
                 // A texel no composite reads (of a neighbour tile, away from the level's tiles): zero.
                 if !texel_read(xy, side, near) {
-                    for out in [&mut bg_out, &mut fg_out, &mut big_out] {
+                    for out in [&mut bg_out, &mut fg_out, &mut big_out, &mut coverage_out] {
                         out.texel_mut(p[0] as u32, p[1] as u32).fill(0.0);
                     }
                     continue;
@@ -143,19 +145,24 @@ impl Twin for LevelGatherShader {
                         }
                     }
                 }
-                let layer = |sum: [f32; 4], weight: f32| -> [f32; 4] {
-                    let rgb: [f32; 3] = std::array::from_fn(|k| if weight > 0.0 { sum[k] / weight } else { 0.0 });
-                    [rgb[0], rgb[1], rgb[2], weight.clamp(0.0, 1.0)]
-                };
-                let background = bg.map(|v| if bg_w > 0.0 { v / bg_w } else { 0.0 });
-                bg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&background);
-                fg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&layer(fg, fg_w));
-                big_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&layer(big, big_w));
+                // Each layer the weighted mean of its samples' premultiplied RGBA (alpha as colour).
+                let layer = |sum: [f32; 4], weight: f32| sum.map(|v| if weight > 0.0 { v / weight } else { 0.0 });
+                bg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&layer(bg, bg_w));
+                // The foregrounds premultiplied by their coverage.
+                let (coverage, big_coverage) = (fg_w.clamp(0.0, 1.0), big_w.clamp(0.0, 1.0));
+                let fg = layer(fg, fg_w).map(|v| v * coverage);
+                fg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&fg);
+                let big = layer(big, big_w).map(|v| v * big_coverage);
+                big_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&big);
+                let out = coverage_out.texel_mut(p[0] as u32, p[1] as u32);
+                out[0] = coverage;
+                out[1] = big_coverage;
             }
         }
         b[2] = HostData::Image(bg_out);
         b[3] = HostData::Image(fg_out);
         b[7] = HostData::Image(big_out);
+        b[10] = HostData::Image(coverage_out);
     }
 }
 
@@ -177,6 +184,7 @@ pub fn record(
         overwrite(b.bg_level),
         overwrite(b.fg_level),
         overwrite(b.fg_big_level),
+        overwrite(b.coverage_level),
     ]);
     let offset = super::classify::level_gather_args_words(push.level as u32) as u64 * 4;
     kernel.dispatch_indirect(rec, specialization, b, push, b.args, offset)?;

@@ -133,6 +133,8 @@ struct Level {
     bg: Arc<GpuImage>,
     fg: Arc<GpuImage>,
     fg_big: Arc<GpuImage>,
+    /// The foregrounds' coverages: (all foreground samples, the large-CoC ones).
+    coverage: Arc<GpuImage>,
 }
 
 impl Pass for TiledDof {
@@ -326,6 +328,7 @@ impl Run {
                 bg: image(rec, "background", rgba)?,
                 fg: image(rec, "foreground", rgba)?,
                 fg_big: image(rec, "large-CoC foreground", rgba)?,
+                coverage: image(rec, "foreground coverage", vk::Format::R32G32_SFLOAT)?,
             });
         }
         let (aperture_mask, aperture_shape) = p.aperture_data.upload(rec)?;
@@ -517,6 +520,7 @@ impl TiledDof {
                 fg_big_level: &l.fg_big,
                 args: &r.args,
                 aperture_shape: &r.aperture_shape,
+                coverage_level: &l.coverage,
             };
             level_gather::record(&self.level_gather, &r.specialization, rec, &b, &push)?;
         }
@@ -556,6 +560,7 @@ impl TiledDof {
                     fg_big_level: &l.fg_big,
                     tile_radius: &r.tile_radius,
                     aperture_shape: &r.aperture_shape,
+                    coverage_level: &l.coverage,
                 };
                 composite::record(&self.composite, &constants[..], rec, &b, &r.args, &push)?;
             }
