@@ -56,26 +56,7 @@ fn dof_ms(profile: &Profile) -> f64 {
     profile.passes.iter().filter(|p| !skip.contains(&p.name.as_str())).map(|p| p.gpu_ms).sum()
 }
 
-/// sRGB 8-bit of linear RGBA, for FLIP (its LDR form).
-fn srgb8(rgba: &[f32]) -> Vec<u8> {
-    rgba.chunks_exact(4)
-        .flat_map(|p| {
-            [p[0], p[1], p[2]].map(|v| {
-                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-                let s = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-                (s * 255.0 + 0.5) as u8
-            })
-        })
-        .collect()
-}
-
-/// Mean FLIP of `test` against `reference` (both linear RGBA of width x height).
-pub fn flip_mean(test: &[f32], reference: &[f32], width: u32, height: u32) -> f64 {
-    let r = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(reference));
-    let t = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(test));
-    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    nv_flip::FlipPool::from_image(&map).mean() as f64
-}
+pub use crate::tools::metrics::flip_mean;
 
 /// Run every method on `frame` with `camera` (its bokeh mode is replaced per method; exposure,
 /// vignetting and film stay as set, so use a linear, unexposed camera to compare the blur alone).
