@@ -73,17 +73,17 @@ impl LayeredCamera {
         f * f / self.f_number * (1.0 / (self.focus_m * 1000.0) - 1.0 / (u_m * 1000.0)) / self.pixel_pitch_mm()
     }
 
-    /// The `realcam` flags of this camera.
+    /// The `realcam` flags of this camera (`--blade-rotation` only when not 0, the ideal lens's).
     pub fn flags(&self) -> String {
+        let rotation = if self.rotation_deg != 0.0 { format!(" --blade-rotation {}", self.rotation_deg) } else { String::new() };
         format!(
-            "--lens ideal --focal-length {} --fstop {} --focus {} --sensor {}x{} --blades {} --blade-rotation {}",
+            "--lens ideal --focal-length {} --fstop {} --focus {} --sensor {}x{} --blades {}{rotation}",
             self.focal_length_mm,
             self.f_number,
             self.focus_m,
             self.sensor_width_mm,
             self.sensor_height_mm(),
-            self.blades,
-            self.rotation_deg
+            self.blades
         )
     }
 
@@ -362,7 +362,7 @@ impl LayeredScene {
             });
         }
         layers.sort_by(|a, b| a.depth_m.total_cmp(&b.depth_m));
-        LayeredScene { seed, camera, layers, sky, color_spp: 64, truth_spp: 256 }
+        LayeredScene { seed, camera, layers, sky, color_spp: 16, truth_spp: 128 }
     }
 
     /// The radiance and depth along the ray from aperture point (lx, ly) (metres) through the
