@@ -22,15 +22,16 @@ const WIDTH: u32 = 160;
 const HEIGHT: u32 = 96;
 const SEEDS: u64 = 20;
 
-/// What holds today for `--bokeh reference` against the exact image: the share of tiles off by
-/// more than 5%, the mean over the seeds and the worst seed (a f/1.4 scene whose masked cards
-/// the background shows through at the aperture: layered occlusion a gather of one depth per
-/// pixel cannot draw exactly).
-const REFERENCE_MEAN_BOUND: f64 = 0.04;
-const REFERENCE_MAX_BOUND: f64 = 0.16;
-/// What holds today for the default tiled path (issue 29's goal: 0.03 on every seed).
-const TILED_MEAN_BOUND: f64 = 0.15;
-const TILED_MAX_BOUND: f64 = 0.40;
+/// What holds today for `--bokeh reference` against the exact image (lavapipe, 2026-11-27,
+/// docs/measurements.md): 0.8% of the tiles off by more than 5% on average over the 20 seeds,
+/// 3.3% (2 of 60 tiles) on the worst; the bounds leave one tile of room.
+const REFERENCE_MEAN_BOUND: f64 = 0.02;
+const REFERENCE_MAX_BOUND: f64 = 0.05;
+/// What holds today for the default tiled path: 9.2% on average, 40% on the worst seed (17:
+/// f/1.4, a masked card over a background 29 px out of focus). Issue 29's goal is 3% on every
+/// seed: set both to 0.03 when the seam-free tiled path lands.
+const TILED_MEAN_BOUND: f64 = 0.12;
+const TILED_MAX_BOUND: f64 = 0.45;
 
 /// realcam's camera for a generated scene: `--lens ideal` with the scene's lens, blades and
 /// sensor; the depth of field alone (no exposure, vignetting, film curve or flare); no CoC clamp
