@@ -82,7 +82,7 @@ impl LayeredCamera {
             self.f_number,
             self.focus_m,
             self.sensor_width_mm,
-            self.sensor_height_mm(),
+            (self.sensor_height_mm() * 1e6).round() / 1e6,
             self.blades
         )
     }

@@ -90,7 +90,7 @@ enum Command {
         #[arg(long, value_name = "SEED")]
         layered: Option<u64>,
         /// Size of the layered scene.
-        #[arg(long, default_value = "192x112", requires = "layered")]
+        #[arg(long, default_value = "160x96", requires = "layered")]
         size: String,
     },
 }
