@@ -96,7 +96,8 @@ struct Row {
 }
 
 fn cell(f: &LocalFidelity) -> String {
-    let worst = f.tiles.worst.map_or(String::new(), |w| format!("{:+.3} @({},{})", w.relative_error, w.tile.0, w.tile.1));
+    let worst =
+        f.tiles.worst.map_or(String::new(), |w| format!("{:+.3} @({},{})", w.relative_error, w.tile.0, w.tile.1));
     format!("{:5.1}% {:>16} FLIP {:.4}", 100.0 * f.tiles.share_off(), worst, f.flip_mean)
 }
 
@@ -125,7 +126,14 @@ fn generated_scenes_tiled_and_reference_against_the_exact_image() {
         let max_coc = cocs.iter().fold(c.coc_px(1e10).abs(), |a, b| a.max(b.abs()));
         rows.push(Row {
             seed,
-            scene: format!("f/{} S {:.2} m, {} blades, {} layers, max CoC {:.0} px", c.f_number, c.focus_m, c.blades, scene.layers.len(), max_coc),
+            scene: format!(
+                "f/{} S {:.2} m, {} blades, {} layers, max CoC {:.0} px",
+                c.f_number,
+                c.focus_m,
+                c.blades,
+                scene.layers.len(),
+                max_coc
+            ),
             input: judge(&frame.color),
             reference: judge(&reference),
             tiled: judge(&tiled),

@@ -12,7 +12,9 @@ use crate::model::frame::Frame;
 use crate::pipeline::planner::{plan, Plan};
 use crate::pipeline::render::Renderer;
 use crate::tools::error_budget::{budget, classify, RegionError};
-use crate::tools::metrics::{compare_rgba, local_fidelity, local_fidelity_legend, ImageError, LocalFidelity, MATCHED_CLAMP};
+use crate::tools::metrics::{
+    compare_rgba, local_fidelity, local_fidelity_legend, ImageError, LocalFidelity, MATCHED_CLAMP,
+};
 
 /// One method's result.
 #[derive(Clone, Debug)]
@@ -186,7 +188,8 @@ pub fn ground_truth_markdown(device: &str, command: &str, results: &[GroundTruth
     }
     out += "\nLocal fidelity against the ground truth (tiled also against `--bokeh reference`). ";
     out += &local_fidelity_legend();
-    out += "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
+    out +=
+        "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
     out += "| --- | --- | --- | --- | --- | --- | --- |\n";
     for r in results {
         out += &local_row(&r.method, "ground truth", &r.local);
@@ -253,7 +256,8 @@ pub fn markdown(device: &str, command: &str, results: &[MethodResult]) -> String
     }
     out += "\nLocal fidelity against `--bokeh reference` (the geometric full gather): what a compositor sees first. ";
     out += &local_fidelity_legend();
-    out += "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
+    out +=
+        "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
     out += "| --- | --- | --- | --- | --- | --- | --- |\n";
     for r in results {
         out += &local_row(&r.method, "--bokeh reference", &r.local);

@@ -230,7 +230,10 @@ pub fn markdown(device: &str, command: &str, rows: &[BenchRow]) -> String {
     out += "| --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         if let Some(l) = &r.local {
-            let worst = l.tiles.worst.map_or("-".into(), |w| format!("{:+.1}% at px ({}, {})", 100.0 * w.relative_error, w.x, w.y));
+            let worst = l
+                .tiles
+                .worst
+                .map_or("-".into(), |w| format!("{:+.1}% at px ({}, {})", 100.0 * w.relative_error, w.x, w.y));
             out += &format!(
                 "| {}x{} | {} | {:.1}% ({}/{}) | {worst} | {:.4} | {:.4} | {} |\n",
                 r.width,

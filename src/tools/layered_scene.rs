@@ -75,7 +75,8 @@ impl LayeredCamera {
 
     /// The `realcam` flags of this camera (`--blade-rotation` only when not 0, the ideal lens's).
     pub fn flags(&self) -> String {
-        let rotation = if self.rotation_deg != 0.0 { format!(" --blade-rotation {}", self.rotation_deg) } else { String::new() };
+        let rotation =
+            if self.rotation_deg != 0.0 { format!(" --blade-rotation {}", self.rotation_deg) } else { String::new() };
         format!(
             "--lens ideal --focal-length {} --fstop {} --focus {} --sensor {}x{} --blades {}{rotation}",
             self.focal_length_mm,
@@ -117,8 +118,17 @@ impl LayeredCamera {
 pub enum Shape {
     /// The whole plane (the back wall).
     Everywhere,
-    Rect { x0: f64, y0: f64, x1: f64, y1: f64 },
-    Disc { cx: f64, cy: f64, r: f64 },
+    Rect {
+        x0: f64,
+        y0: f64,
+        x1: f64,
+        y1: f64,
+    },
+    Disc {
+        cx: f64,
+        cy: f64,
+        r: f64,
+    },
 }
 
 /// An exact binary alpha mask on a layer: where it is 0 rays pass through.
@@ -126,20 +136,38 @@ pub enum Shape {
 pub enum Mask {
     Opaque,
     /// Round holes of radius `r` on a square grid of pitch `pitch` (metres).
-    Holes { pitch: f64, r: f64 },
+    Holes {
+        pitch: f64,
+        r: f64,
+    },
     /// Vertical slats `pitch` apart, each `width` wide (a fence).
-    Slats { pitch: f64, width: f64 },
+    Slats {
+        pitch: f64,
+        width: f64,
+    },
 }
 
 /// The radiance on a layer (linear RGB), in its plane's metres.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
     Flat([f32; 3]),
-    Checker { cell: f64, a: [f32; 3], b: [f32; 3] },
+    Checker {
+        cell: f64,
+        a: [f32; 3],
+        b: [f32; 3],
+    },
     /// Stripes at 45 degrees, `period` apart, half a and half b.
-    Stripes { period: f64, a: [f32; 3], b: [f32; 3] },
+    Stripes {
+        period: f64,
+        a: [f32; 3],
+        b: [f32; 3],
+    },
     /// A smooth ramp from a (left) to b (right) over `width`, with rings of period `period`.
-    Rings { period: f64, a: [f32; 3], b: [f32; 3] },
+    Rings {
+        period: f64,
+        a: [f32; 3],
+        b: [f32; 3],
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -403,8 +431,10 @@ impl LayeredScene {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 16);
         let rows_per = h.div_ceil(threads).max(1);
         std::thread::scope(|scope| {
-            let chunks =
-                color.chunks_mut(rows_per * w * 4).zip(truth.chunks_mut(rows_per * w * 4)).zip(depth_m.chunks_mut(rows_per * w));
+            let chunks = color
+                .chunks_mut(rows_per * w * 4)
+                .zip(truth.chunks_mut(rows_per * w * 4))
+                .zip(depth_m.chunks_mut(rows_per * w));
             for (k, ((c, t), d)) in chunks.enumerate() {
                 scope.spawn(move || self.render_rows(k * rows_per, c, t, d));
             }
@@ -416,7 +446,8 @@ impl LayeredScene {
         let w = self.camera.width as usize;
         for (i, d) in depth.iter_mut().enumerate() {
             let (x, y) = (i % w, y0 + i / w);
-            let key = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((y * w + x) as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93);
+            let key = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ ((y * w + x) as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93);
             let rot = [0u64, 1, 2, 3].map(|k| hash_unit(key.wrapping_add(k.wrapping_mul(0x632B_E59B_D9B4_E019))));
             let wrap = |v: f64| v - v.floor();
             // Depth: the pixel centre's pinhole ray.
@@ -433,7 +464,12 @@ impl LayeredScene {
                 }
             }
             let n = self.color_spp.max(1) as f64;
-            color[i * 4..i * 4 + 4].copy_from_slice(&[(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, 1.0]);
+            color[i * 4..i * 4 + 4].copy_from_slice(&[
+                (sum[0] / n) as f32,
+                (sum[1] / n) as f32,
+                (sum[2] / n) as f32,
+                1.0,
+            ]);
             // Truth: the pixel's area x the aperture.
             let mut sum = [0.0f64; 3];
             for s in 0..self.truth_spp {
@@ -447,7 +483,12 @@ impl LayeredScene {
                 }
             }
             let n = self.truth_spp.max(1) as f64;
-            truth[i * 4..i * 4 + 4].copy_from_slice(&[(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, 1.0]);
+            truth[i * 4..i * 4 + 4].copy_from_slice(&[
+                (sum[0] / n) as f32,
+                (sum[1] / n) as f32,
+                (sum[2] / n) as f32,
+                1.0,
+            ]);
         }
     }
 }
@@ -551,7 +592,12 @@ mod tests {
                     mask: Mask::Opaque,
                     texture: Texture::Flat([100.0; 3]),
                 },
-                Layer { depth_m: 6.0 + 1e-9, shape: Shape::Everywhere, mask: Mask::Opaque, texture: Texture::Flat([0.0; 3]) },
+                Layer {
+                    depth_m: 6.0 + 1e-9,
+                    shape: Shape::Everywhere,
+                    mask: Mask::Opaque,
+                    texture: Texture::Flat([0.0; 3]),
+                },
             ],
             sky: [[0.0; 3]; 2],
             color_spp: 64,
@@ -566,7 +612,11 @@ mod tests {
         // Variances add under convolution: the truth's horizontal variance is the colour pass's
         // (the source disc and the pixel box) plus the CoC disc's, D^2 / 16.
         let variance = |v: &[f32], e: f64| {
-            v.chunks_exact(4).enumerate().map(|(i, q)| q[1] as f64 * ((i % 64) as f64 + 0.5 - 32.0).powi(2)).sum::<f64>() / e
+            v.chunks_exact(4)
+                .enumerate()
+                .map(|(i, q)| q[1] as f64 * ((i % 64) as f64 + 0.5 - 32.0).powi(2))
+                .sum::<f64>()
+                / e
         };
         let diameter = 4.0 * (variance(&p.truth, e_truth) - variance(&p.color, e_color)).sqrt();
         let expected = camera.coc_px(6.0);

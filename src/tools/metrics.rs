@@ -67,7 +67,6 @@ pub fn compare_rgba(test: &[f32], reference: &[f32]) -> ImageError {
     }
 }
 
-
 /// Side of the tiles of [`tile_luminance`], px (the tiled depth of field's tile).
 pub const TILE_PX: u32 = 16;
 /// A tile is "off" when its mean luminance differs from the reference's by more than this share.
@@ -318,7 +317,8 @@ mod tests {
         // brighter: its mean rises by 2/32 = 6.25% > 5%.
         let (w, h) = (40, 20);
         let reference = grey(w, h, 0.25);
-        let mut test: Vec<f32> = reference.iter().enumerate().map(|(i, v)| if i % 4 == 3 { *v } else { v * 1.04 }).collect();
+        let mut test: Vec<f32> =
+            reference.iter().enumerate().map(|(i, v)| if i % 4 == 3 { *v } else { v * 1.04 }).collect();
         assert_eq!(tile_luminance(&test, &reference, w, h).tiles_off, 0);
         test = reference.clone();
         let i = ((19 * w + 39) * 4) as usize;
