@@ -27,7 +27,7 @@ fn accuracy_report_on_a_tiny_scene() {
     camera.bokeh = BokehMode::Reference;
     let results = realcam::tools::accuracy::run(&gpu, &frame, &camera, |_| ()).expect("accuracy run");
     assert_validation_clean(&gpu);
-    assert_eq!(results.len(), 7);
+    assert_eq!(results.len(), 8);
     let reference = &results[0];
     assert!(reference.method.starts_with("diffraction"));
     assert_eq!(reference.error.rmse, 0.0);
@@ -42,6 +42,16 @@ fn accuracy_report_on_a_tiny_scene() {
     // The other methods differ from the diffraction reference, but not wildly: same blur sizes.
     for r in &results[1..] {
         assert!(r.error.rmse > 0.0 && r.error.rmse_display < 0.1, "{}: {:?}", r.method, r.error);
+    }
+    // The local fidelity is against `--bokeh reference`: none of its own tiles off, FLIP 0,
+    // alpha 1 everywhere (the input's is); every method's numbers in range.
+    assert_eq!(geometric_local(&results).tiles.tiles_off, 0);
+    assert_eq!(geometric_local(&results).flip_mean, 0.0);
+    assert_eq!(geometric_local(&results).tiles.tiles, 6);
+    for r in &results {
+        let l = &r.local;
+        assert!(l.tiles.tiles_off <= l.tiles.tiles && (0.0..=1.0).contains(&l.flip_mean), "{}: {l:?}", r.method);
+        assert_eq!(l.alpha.opaque_in, (w * h) as usize);
     }
     // The fast path with its exact gather up to a radius of 8 px is the geometric gather (every
     // CoC radius is below 8 px here).
@@ -59,6 +69,11 @@ fn accuracy_report_on_a_tiny_scene() {
     for r in &results {
         assert!(md.contains(&r.method) && csv.contains(&r.method) && svg.contains(&r.method));
     }
-    assert_eq!(csv.lines().count(), 8);
+    assert_eq!(csv.lines().count(), 9);
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(md.contains("tiles off > 5%"));
+}
+
+fn geometric_local(results: &[realcam::tools::accuracy::MethodResult]) -> realcam::tools::metrics::LocalFidelity {
+    results.iter().find(|r| r.method == realcam::tools::accuracy::GEOMETRIC).expect("the geometric gather").local
 }

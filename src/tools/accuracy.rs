@@ -1,7 +1,10 @@
 //! `realcam accuracy`: every depth-of-field method on the user's own frame, against the
 //! diffraction reference (Potmesil & Chakravarty's focus processor): GPU time per pass, RMSE,
 //! PSNR, energy error and the perceptual FLIP difference, as Markdown, CSV and an SVG plot of
-//! error against time. "Show what accuracy costs in time."
+//! error against time. "Show what accuracy costs in time." Then the local fidelity, what a
+//! compositor sees first, against `--bokeh reference` (the geometric full gather): the share of
+//! 16-px tiles whose mean luminance is off by more than 5%, the worst tile, FLIP and the alpha
+//! (src/tools/metrics.rs [`local_fidelity`]); with a ground truth, the same against it.
 
 use crate::gpu::{Gpu, GpuResult, Profile};
 use crate::model::camera::{BokehMode, Camera};
@@ -9,7 +12,9 @@ use crate::model::frame::Frame;
 use crate::pipeline::planner::{plan, Plan};
 use crate::pipeline::render::Renderer;
 use crate::tools::error_budget::{budget, classify, RegionError};
-use crate::tools::metrics::{compare_rgba, ImageError, MATCHED_CLAMP};
+use crate::tools::metrics::{
+    compare_rgba, local_fidelity, local_fidelity_legend, ImageError, LocalFidelity, MATCHED_CLAMP,
+};
 
 /// One method's result.
 #[derive(Clone, Debug)]
@@ -21,7 +26,13 @@ pub struct MethodResult {
     pub error: ImageError,
     /// Mean FLIP error (0 identical .. 1) of the sRGB previews (values clamped to [0, 1]).
     pub flip_mean: f64,
+    /// Tiles off, worst tile and FLIP against `--bokeh reference` (the geometric full gather,
+    /// [`GEOMETRIC`]); the alpha against the input's.
+    pub local: LocalFidelity,
 }
+
+/// The method the local fidelity is judged against: realcam's `--bokeh reference`.
+pub const GEOMETRIC: &str = "geometric full gather (--bokeh reference)";
 
 /// A method to run: a name, the bokeh mode and how to adjust the plan (quality settings).
 struct Method {
@@ -33,7 +44,8 @@ struct Method {
 fn methods() -> Vec<Method> {
     let mut list = vec![
         Method { name: "diffraction (reference)".into(), mode: BokehMode::Diffraction, adjust: Box::new(|_| ()) },
-        Method { name: "geometric full gather".into(), mode: BokehMode::Reference, adjust: Box::new(|_| ()) },
+        Method { name: GEOMETRIC.into(), mode: BokehMode::Reference, adjust: Box::new(|_| ()) },
+        Method { name: "tiled (default settings)".into(), mode: BokehMode::Tiled, adjust: Box::new(|_| ()) },
     ];
     // The tiled path's quality setting: the CoC radius up to which it gathers exactly at full
     // resolution (beyond it, on the pyramid).
@@ -56,26 +68,7 @@ fn dof_ms(profile: &Profile) -> f64 {
     profile.passes.iter().filter(|p| !skip.contains(&p.name.as_str())).map(|p| p.gpu_ms).sum()
 }
 
-/// sRGB 8-bit of linear RGBA, for FLIP (its LDR form).
-fn srgb8(rgba: &[f32]) -> Vec<u8> {
-    rgba.chunks_exact(4)
-        .flat_map(|p| {
-            [p[0], p[1], p[2]].map(|v| {
-                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-                let s = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-                (s * 255.0 + 0.5) as u8
-            })
-        })
-        .collect()
-}
-
-/// Mean FLIP of `test` against `reference` (both linear RGBA of width x height).
-pub fn flip_mean(test: &[f32], reference: &[f32], width: u32, height: u32) -> f64 {
-    let r = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(reference));
-    let t = nv_flip::FlipImageRgb8::with_data(width, height, &srgb8(test));
-    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    nv_flip::FlipPool::from_image(&map).mean() as f64
-}
+pub use crate::tools::metrics::flip_mean;
 
 /// Run every method on `frame` with `camera` (its bokeh mode is replaced per method; exposure,
 /// vignetting and film stay as set, so use a linear, unexposed camera to compare the blur alone).
@@ -94,6 +87,7 @@ pub fn run(gpu: &Gpu, frame: &Frame, camera: &Camera, mut progress: impl FnMut(&
         outputs.push((m.name, out));
     }
     let reference = outputs[0].1.rgba.clone();
+    let geometric = outputs[1].1.rgba.clone();
     Ok(outputs
         .into_iter()
         .map(|(method, out)| MethodResult {
@@ -101,6 +95,7 @@ pub fn run(gpu: &Gpu, frame: &Frame, camera: &Camera, mut progress: impl FnMut(&
             dof_ms: dof_ms(&out.profile),
             error: compare_rgba(&out.rgba, &reference),
             flip_mean: flip_mean(&out.rgba, &reference, frame.width, frame.height),
+            local: local_fidelity(&out.rgba, &geometric, &frame.color, frame.width, frame.height),
             profile: out.profile,
         })
         .collect())
@@ -114,6 +109,10 @@ pub struct GroundTruthResult {
     pub dof_ms: f64,
     pub error: ImageError,
     pub budget: Vec<RegionError>,
+    /// Tiles off, worst tile and FLIP against the ground truth; the alpha against the input's.
+    pub local: LocalFidelity,
+    /// The same against `--bokeh reference` (None for the reference itself and the input).
+    pub local_vs_reference: Option<LocalFidelity>,
 }
 
 /// The pinhole input and the tiled and reference depth of field of `camera` on `frame`, each
@@ -141,13 +140,17 @@ pub fn against_ground_truth(
     }
     let coc_px = coc_px.unwrap_or_else(|| vec![0.0; frame.depth_m.len()]);
     let regions = classify(frame.width, frame.height, &frame.color, &frame.depth_m, &coc_px);
+    let reference = outputs[2].1.clone();
+    let (w, h) = (frame.width, frame.height);
     Ok(outputs
         .into_iter()
         .map(|(method, rgba, dof_ms)| GroundTruthResult {
-            method,
             dof_ms,
             error: compare_rgba(&rgba, ground_truth),
             budget: budget(&rgba, ground_truth, &regions),
+            local: local_fidelity(&rgba, ground_truth, &frame.color, w, h),
+            local_vs_reference: (method == "tiled").then(|| local_fidelity(&rgba, &reference, &frame.color, w, h)),
+            method,
         })
         .collect())
 }
@@ -183,7 +186,44 @@ pub fn ground_truth_markdown(device: &str, command: &str, results: &[GroundTruth
             100.0 * r.error.relative_energy_error
         );
     }
+    out += "\nLocal fidelity against the ground truth (tiled also against `--bokeh reference`). ";
+    out += &local_fidelity_legend();
+    out +=
+        "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- |\n";
+    for r in results {
+        out += &local_row(&r.method, "ground truth", &r.local);
+        if let Some(l) = &r.local_vs_reference {
+            out += &local_row(&r.method, "--bokeh reference", l);
+        }
+    }
     out
+}
+
+/// A row of the local-fidelity tables: method, what it is against, then the measures.
+fn local_row(method: &str, against: &str, l: &LocalFidelity) -> String {
+    let worst = l.tiles.worst.map_or("-".into(), |w| {
+        format!(
+            "{:+.1}% at tile ({}, {}) = px ({}, {}): {:.4} vs {:.4}",
+            100.0 * w.relative_error,
+            w.tile.0,
+            w.tile.1,
+            w.x,
+            w.y,
+            w.test_mean,
+            w.reference_mean
+        )
+    });
+    format!(
+        "| {method} | {against} | {:.1}% ({}/{}) | {worst} | {:.4} | {:.4} | {} of {} |\n",
+        100.0 * l.tiles.share_off(),
+        l.tiles.tiles_off,
+        l.tiles.tiles,
+        l.flip_mean,
+        l.alpha.min,
+        l.alpha.holes,
+        l.alpha.opaque_in
+    )
 }
 
 pub fn markdown(device: &str, command: &str, results: &[MethodResult]) -> String {
@@ -214,21 +254,39 @@ pub fn markdown(device: &str, command: &str, results: &[MethodResult]) -> String
             .collect();
         out += &format!("- {}: {}\n", r.method, passes.join(", "));
     }
+    out += "\nLocal fidelity against `--bokeh reference` (the geometric full gather): what a compositor sees first. ";
+    out += &local_fidelity_legend();
+    out +=
+        "\n\n| method | against | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 where input is 1 |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- |\n";
+    for r in results {
+        out += &local_row(&r.method, "--bokeh reference", &r.local);
+    }
     out
 }
 
 pub fn csv(results: &[MethodResult]) -> String {
-    let mut out = String::from("method,gpu_ms,rmse,display_rmse,psnr_db,energy_error,flip_mean\n");
+    let mut out = String::from(
+        "method,gpu_ms,rmse,display_rmse,psnr_db,energy_error,flip_mean,tiles_off_share,tiles_off,tiles,worst_tile_x,worst_tile_y,worst_tile_error,flip_vs_geometric,alpha_min,alpha_holes\n",
+    );
     for r in results {
+        let l = &r.local;
+        let (wx, wy, we) = l.tiles.worst.map_or((0, 0, 0.0), |w| (w.x, w.y, w.relative_error));
         out += &format!(
-            "\"{}\",{:.4},{:.6},{:.6},{:.3},{:.6},{:.6}\n",
+            "\"{}\",{:.4},{:.6},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{wx},{wy},{we:.6},{:.6},{:.6},{}\n",
             r.method.replace('"', "'"),
             r.dof_ms,
             r.error.rmse,
             r.error.rmse_display,
             r.error.psnr_db,
             r.error.relative_energy_error,
-            r.flip_mean
+            r.flip_mean,
+            l.tiles.share_off(),
+            l.tiles.tiles_off,
+            l.tiles.tiles,
+            l.flip_mean,
+            l.alpha.min,
+            l.alpha.holes
         );
     }
     out

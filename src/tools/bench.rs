@@ -10,7 +10,7 @@ use crate::passes::copy::{self, CopyShader};
 use crate::passes::FrameImages;
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
-use crate::tools::metrics::{compare_rgba, ImageError};
+use crate::tools::metrics::{compare_rgba, local_fidelity, local_fidelity_legend, ImageError, LocalFidelity};
 use ash::vk;
 
 const PIXEL_PITCH_MM: f64 = 0.01;
@@ -26,6 +26,9 @@ pub struct BenchRow {
     pub tiled_ms: f64,
     pub reference_ms: Option<f64>,
     pub error: Option<ImageError>,
+    /// Tiles off, worst tile, FLIP (against the reference) and alpha of the tiled path, where
+    /// the reference ran.
+    pub local: Option<LocalFidelity>,
     /// The bare pass (read the frame, write it) at this resolution, in the same run.
     pub bare_ms: f64,
 }
@@ -159,7 +162,7 @@ pub fn run(gpu: &Gpu, options: &BenchOptions, mut progress: impl FnMut(&str)) ->
                 .min_by(|a, b| (dof_ms(a) - tiled_ms).abs().total_cmp(&(dof_ms(b) - tiled_ms).abs()))
                 .cloned()
                 .unwrap_or_default();
-            let (mut reference_ms, mut error) = (None, None);
+            let (mut reference_ms, mut error, mut local) = (None, None, None);
             if radius <= options.reference_max_radius_px {
                 progress(&format!("{width}x{height}, CoC radius {radius} px: reference"));
                 let camera = bench_camera(width, height, BokehMode::Reference);
@@ -167,8 +170,19 @@ pub fn run(gpu: &Gpu, options: &BenchOptions, mut progress: impl FnMut(&str)) ->
                 let reference = Renderer::new(gpu, &reference_plan)?.render(&frame, &reference_plan, false)?;
                 reference_ms = Some(dof_ms(&reference.profile));
                 error = Some(compare_rgba(&out.rgba, &reference.rgba));
+                local = Some(local_fidelity(&out.rgba, &reference.rgba, &frame.color, width, height));
             }
-            rows.push(BenchRow { width, height, coc_radius_px: radius, tiled, tiled_ms, reference_ms, error, bare_ms });
+            rows.push(BenchRow {
+                width,
+                height,
+                coc_radius_px: radius,
+                tiled,
+                tiled_ms,
+                reference_ms,
+                error,
+                local,
+                bare_ms,
+            });
         }
     }
     Ok(rows)
@@ -209,6 +223,30 @@ pub fn markdown(device: &str, command: &str, rows: &[BenchRow]) -> String {
             r.tiled_ms,
             r.tiled_ms / r.bare_ms
         );
+    }
+    out += "\nLocal fidelity of the tiled path against the reference. ";
+    out += &local_fidelity_legend();
+    out += "\n\n| resolution | CoC radius px | tiles off > 5% | worst tile | FLIP | alpha min | alpha < 0.999 |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- |\n";
+    for r in rows {
+        if let Some(l) = &r.local {
+            let worst = l
+                .tiles
+                .worst
+                .map_or("-".into(), |w| format!("{:+.1}% at px ({}, {})", 100.0 * w.relative_error, w.x, w.y));
+            out += &format!(
+                "| {}x{} | {} | {:.1}% ({}/{}) | {worst} | {:.4} | {:.4} | {} |\n",
+                r.width,
+                r.height,
+                r.coc_radius_px,
+                100.0 * l.tiles.share_off(),
+                l.tiles.tiles_off,
+                l.tiles.tiles,
+                l.flip_mean,
+                l.alpha.min,
+                l.alpha.holes
+            );
+        }
     }
     out += "\nTiled path, GPU ms per pass:\n\n| resolution | CoC radius px |";
     let names: Vec<String> = rows

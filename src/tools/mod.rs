@@ -14,5 +14,6 @@ pub mod flare_fit;
 pub mod flare_predict;
 pub mod fuzz;
 pub mod highlight_discs;
+pub mod layered_scene;
 pub mod metrics;
 pub mod synth;

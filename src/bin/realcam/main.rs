@@ -77,11 +77,21 @@ enum Command {
         #[arg(long, requires = "highlights")]
         fstop: Option<f64>,
     },
-    /// Write the deterministic synthetic test scenes (testdata/ is made with this).
+    /// Write the deterministic synthetic test scenes (testdata/ is made with this), or with
+    /// --layered one generated layered scene with its exact defocused image.
     Synth {
         /// Output directory.
         #[arg(long, default_value = "testdata")]
         out: PathBuf,
+        /// Instead: the random layered scene of this seed (src/tools/layered_scene.rs, as
+        /// tests/generated_scenes.rs renders it): layered_SEED_color.exr (RGBA), _depth.exr (Z)
+        /// and _truth.exr (the exact depth of field of `--lens ideal`), and the realcam flags of
+        /// its camera.
+        #[arg(long, value_name = "SEED")]
+        layered: Option<u64>,
+        /// Size of the layered scene.
+        #[arg(long, default_value = "160x96", requires = "layered")]
+        size: String,
     },
 }
 
@@ -109,7 +119,7 @@ fn main() {
         Command::Compare { test, reference, highlights, fstop } => {
             compare::run(&test, &reference, highlights.as_deref().zip(fstop))
         }
-        Command::Synth { out } => synth::run(&out),
+        Command::Synth { out, layered, size } => synth::run(&out, layered, &size),
     };
     if let Err(e) = result {
         realcam::session::report::say_on_stderr(&format!("error: {}", error_text(&e)));

@@ -1,11 +1,28 @@
-//! `realcam synth`: the deterministic synthetic test scenes.
+//! `realcam synth`: the deterministic synthetic test scenes, or one generated layered scene.
 
 use anyhow::{Context, Result};
+use realcam::tools::layered_scene::LayeredScene;
 use realcam::tools::synth::{testdata_scenes, write_scene};
 use std::path::Path;
 
-pub fn run(out: &Path) -> Result<()> {
+pub fn run(out: &Path, layered: Option<u64>, size: &str) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    if let Some(seed) = layered {
+        let (width, height) = realcam::model::settings::parse_size_px(size).context("--size")?;
+        let scene = LayeredScene::random(seed, width, height);
+        let paths = scene.render().write(out, &format!("layered_{seed}"))?;
+        for p in &paths {
+            println!("wrote {}", p.display());
+        }
+        let [color, depth, truth] = paths.map(|p| p.display().to_string());
+        println!(
+            "camera: {}\ne.g. realcam accuracy --color {color} --depth {depth} --truth {truth} {} --max-coc {}",
+            scene.camera.flags(),
+            scene.camera.flags(),
+            2 * width
+        );
+        return Ok(());
+    }
     for (name, scene) in testdata_scenes() {
         write_scene(out, name, &scene)?;
         println!("wrote {0}/{name}_color.exr and {0}/{name}_depth.exr", out.display());

@@ -1,0 +1,187 @@
+//! The depth of field on scenes nobody tuned for: 20 random layered scenes
+//! (src/tools/layered_scene.rs: cards, discs, masked cards and highlights at random depths,
+//! ray-traced through the renderers' thin lens), their colour and depth passes through
+//! `--bokeh reference` and the default tiled path of `--lens ideal`, each against the scene's
+//! exact defocused image: the share of 16-px tiles whose mean luminance is off by more than 5%
+//! (src/tools/metrics.rs tile_luminance), the worst tile, FLIP, and the alpha.
+//!
+//! `cargo test --test generated_scenes -- --nocapture` prints the per-seed table; the images of
+//! every seed (input | truth | tiled | reference, sRGB) are written to
+//! `target/tmp/generated_scenes/seed_NN.png`.
+
+mod support;
+
+use realcam::io::lens_file::LensFile;
+use realcam::model::camera::{BokehMode, Camera, CameraRequest, CocLimit};
+use realcam::model::frame::Frame;
+use realcam::tools::layered_scene::{LayeredPasses, LayeredScene};
+use realcam::tools::metrics::{local_fidelity, LocalFidelity};
+use support::*;
+
+const WIDTH: u32 = 160;
+const HEIGHT: u32 = 96;
+const SEEDS: u64 = 20;
+
+/// What holds today for `--bokeh reference` against the exact image (lavapipe, 2026-11-27,
+/// docs/measurements.md): 0.8% of the tiles off by more than 5% on average over the 20 seeds,
+/// 3.3% (2 of 60 tiles) on the worst; the bounds leave one tile of room.
+const REFERENCE_MEAN_BOUND: f64 = 0.02;
+const REFERENCE_MAX_BOUND: f64 = 0.05;
+/// What holds today for the default tiled path: 9.2% on average, 40% on the worst seed (17:
+/// f/1.4, a masked card over a background 29 px out of focus). Issue 29's goal is 3% on every
+/// seed: set both to 0.03 when the seam-free tiled path lands.
+const TILED_MEAN_BOUND: f64 = 0.12;
+const TILED_MAX_BOUND: f64 = 0.45;
+
+/// realcam's camera for a generated scene: `--lens ideal` with the scene's lens, blades and
+/// sensor; the depth of field alone (no exposure, vignetting, film curve or flare); no CoC clamp
+/// within the scenes' range.
+fn camera(scene: &LayeredScene, bokeh: BokehMode) -> Camera {
+    let c = &scene.camera;
+    let request = CameraRequest {
+        sensor: Some(format!("{}x{}", c.sensor_width_mm, c.sensor_height_mm())),
+        blades: Some(c.blades),
+        blade_rotation_deg: Some(c.rotation_deg),
+        max_coc: CocLimit::Px(2.0 * (WIDTH as f64)),
+        force: true,
+        bokeh,
+        ..CameraRequest::blur_only().with_lens(c.focal_length_mm, c.f_number, c.focus_m)
+    };
+    let lens = LensFile::built_in("ideal").expect("the built-in ideal lens");
+    Camera::new(&lens, &request).expect("valid generated camera")
+}
+
+/// sRGB 8-bit display values of linear RGBA, as an RGB image.
+fn srgb(rgba: &[f32]) -> Vec<f32> {
+    rgba.chunks_exact(4)
+        .flat_map(|p| {
+            [p[0], p[1], p[2]].map(|v| {
+                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+                if v <= 0.0031308 {
+                    12.92 * v
+                } else {
+                    1.055 * v.powf(1.0 / 2.4) - 0.055
+                }
+            })
+        })
+        .collect()
+}
+
+/// input | truth | tiled | reference, side by side with 4 px gaps, written as a PNG.
+fn write_strip(path: &std::path::Path, passes: &LayeredPasses, tiled: &[f32], reference: &[f32]) {
+    let (w, h) = (passes.width as usize, passes.height as usize);
+    let images = [srgb(&passes.color), srgb(&passes.truth), srgb(tiled), srgb(reference)];
+    let gap = 4;
+    let sw = 4 * w + 3 * gap;
+    let mut data = vec![1.0f32; sw * h * 3];
+    for (k, img) in images.iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                for c in 0..3 {
+                    data[(y * sw + k * (w + gap) + x) * 3 + c] = img[(y * w + x) * 3 + c];
+                }
+            }
+        }
+    }
+    let image = realcam::io::Image { width: sw as u32, height: h as u32, channels: 3, data };
+    realcam::io::png::write_png(path, &image).expect("writing the PNG");
+}
+
+struct Row {
+    seed: u64,
+    scene: String,
+    input: LocalFidelity,
+    reference: LocalFidelity,
+    tiled: LocalFidelity,
+}
+
+fn cell(f: &LocalFidelity) -> String {
+    let worst =
+        f.tiles.worst.map_or(String::new(), |w| format!("{:+.3} @({},{})", w.relative_error, w.tile.0, w.tile.1));
+    format!("{:5.1}% {:>16} FLIP {:.4}", 100.0 * f.tiles.share_off(), worst, f.flip_mean)
+}
+
+#[test]
+fn generated_scenes_tiled_and_reference_against_the_exact_image() {
+    let start = std::time::Instant::now();
+    let gpu = gpu();
+    let out_dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated_scenes");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let (mut trace_s, mut gpu_s) = (0.0, 0.0);
+    let mut rows = Vec::new();
+    for seed in 0..SEEDS {
+        let t = std::time::Instant::now();
+        let scene = LayeredScene::random(seed, WIDTH, HEIGHT);
+        let passes = scene.render();
+        trace_s += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let frame = Frame::new(WIDTH, HEIGHT, passes.color.clone(), passes.depth_m.clone());
+        let (reference, _, _) = render(&gpu, &frame, &camera(&scene, BokehMode::Reference));
+        let (tiled, _, _) = render(&gpu, &frame, &camera(&scene, BokehMode::Tiled));
+        gpu_s += t.elapsed().as_secs_f64();
+        let judge = |rgba: &[f32]| local_fidelity(rgba, &passes.truth, &frame.color, WIDTH, HEIGHT);
+        write_strip(&out_dir.join(format!("seed_{seed:02}.png")), &passes, &tiled, &reference);
+        let c = &scene.camera;
+        let cocs: Vec<f64> = scene.layers.iter().map(|l| c.coc_px(l.depth_m)).collect();
+        let max_coc = cocs.iter().fold(c.coc_px(1e10).abs(), |a, b| a.max(b.abs()));
+        rows.push(Row {
+            seed,
+            scene: format!(
+                "f/{} S {:.2} m, {} blades, {} layers, max CoC {:.0} px",
+                c.f_number,
+                c.focus_m,
+                c.blades,
+                scene.layers.len(),
+                max_coc
+            ),
+            input: judge(&frame.color),
+            reference: judge(&reference),
+            tiled: judge(&tiled),
+        });
+    }
+    println!(
+        "\n{WIDTH}x{HEIGHT} px, {} tiles of 16 px; tiles off the exact image by > 5% (|mean - truth| / max(truth, 0.02)), the worst tile's \
+         relative error @(column, row), mean FLIP:",
+        WIDTH.div_ceil(16) * HEIGHT.div_ceil(16)
+    );
+    println!("| seed | scene | pinhole input | reference | tiled | tiled alpha min / holes |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    for r in &rows {
+        println!(
+            "| {} | {} | {} | {} | {} | {:.3} / {} |",
+            r.seed,
+            r.scene,
+            cell(&r.input),
+            cell(&r.reference),
+            cell(&r.tiled),
+            r.tiled.alpha.min,
+            r.tiled.alpha.holes
+        );
+    }
+    let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / rows.len() as f64;
+    let max = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).fold(0.0, f64::max);
+    let (ref_mean, ref_max) = (mean(&|r| r.reference.tiles.share_off()), max(&|r| r.reference.tiles.share_off()));
+    let (tiled_mean, tiled_max) = (mean(&|r| r.tiled.tiles.share_off()), max(&|r| r.tiled.tiles.share_off()));
+    println!(
+        "mean (max) share of tiles off: input {:.1}%, reference {:.1}% ({:.1}%), tiled {:.1}% ({:.1}%); mean FLIP reference {:.4}, tiled {:.4}",
+        100.0 * mean(&|r| r.input.tiles.share_off()),
+        100.0 * ref_mean,
+        100.0 * ref_max,
+        100.0 * tiled_mean,
+        100.0 * tiled_max,
+        mean(&|r| r.reference.flip_mean),
+        mean(&|r| r.tiled.flip_mean)
+    );
+    println!(
+        "ray tracing {trace_s:.1} s, GPU {gpu_s:.1} s, total {:.1} s; images in {}",
+        start.elapsed().as_secs_f64(),
+        out_dir.display()
+    );
+    // The reference as it is today (measured on lavapipe: docs/measurements.md).
+    assert!(ref_mean <= REFERENCE_MEAN_BOUND, "reference: {:.1}% of the tiles off on average", 100.0 * ref_mean);
+    assert!(ref_max <= REFERENCE_MAX_BOUND, "reference: up to {:.1}% of the tiles off", 100.0 * ref_max);
+    // The tiled path as it is today. Issue 29's goal: within 3% of the tiles on every seed;
+    // tighten these to 0.03 when the seam-free tiled path lands.
+    assert!(tiled_mean <= TILED_MEAN_BOUND, "tiled: {:.1}% of the tiles off on average", 100.0 * tiled_mean);
+    assert!(tiled_max <= TILED_MAX_BOUND, "tiled: up to {:.1}% of the tiles off", 100.0 * tiled_max);
+}
