@@ -138,6 +138,9 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
         bar(48, 34, [12.0, 3.0], Some([-10.0, 4.0])),
         camera,
     ));
+    // The edge resolve (mb_edges) changing pixels: a still 3x3 highlight whose anti-aliased
+    // fringe carries the depth and velocity of the plane moving behind it.
+    cases.push(("motion blur, anti-aliased highlight over a mover", highlight_frame(40, 24), motion_camera(24.0, 0.5)));
     let mut camera = motion_camera(24.0, 0.5);
     camera.motion.mode = realcam::model::camera::MotionBlurMode::Reference;
     cases.push(("motion blur reference", bar(36, 20, [6.0, 1.0], None), camera));
@@ -167,6 +170,27 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     camera.film = FilmMode::Linear;
     cases.push(("vignette without the film", busy_frame(40, 28), camera));
     cases
+}
+
+/// A still 3x3 highlight of 50 at 2 m at the frame's centre, its one-pixel fringe 30% (9% at the
+/// corners) highlight in colour but with the depth (5 m) and velocity (12, 2 px per frame) of the
+/// striped plane behind it.
+fn highlight_frame(w: u32, h: u32) -> Frame {
+    let (cx, cy) = (w as i32 / 2, h as i32 / 2);
+    let (mut color, mut depth, mut next) = (Vec::new(), Vec::new(), Vec::new());
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let share = |d: i32| [1.0f32, 1.0, 0.3, 0.0][d.unsigned_abs().min(3) as usize];
+            let a = share(x - cx) * share(y - cy);
+            let inside = (x - cx).abs() <= 1 && (y - cy).abs() <= 1;
+            let plane = [0.3 + 0.4 * ((x / 3) % 2) as f32, 0.5, 0.2];
+            color.extend([0, 1, 2].map(|k| a * 50.0 + (1.0 - a) * plane[k]));
+            color.push(1.0);
+            depth.push(if inside { 2.0 } else { 5.0 });
+            next.extend(if inside { [0.0, 0.0] } else { [12.0, 2.0] });
+        }
+    }
+    Frame::new(w, h, color, depth).with_velocity(next, None)
 }
 
 /// A dim frame with two lights: 3x3 px of 4000 across a tile edge and one pixel of 20000.

@@ -18,6 +18,7 @@
 pub mod barriers;
 pub mod copy;
 pub mod dof;
+pub mod edge_layers;
 pub mod film;
 pub mod filter;
 pub mod flare;

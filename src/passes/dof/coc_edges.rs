@@ -6,6 +6,7 @@
 use super::coc_push::CocPush;
 use crate::gpu::shaders::coc::COC_ARGS_COUNT;
 use crate::gpu::{HostData, HostImage, Shader, Twin};
+use crate::passes::edge_layers::{edge_layer, EDGE_FAR, EDGE_NEAR};
 use crate::passes::twin::{finite_or_zero, floats};
 
 pub const NAME: &str = "coc_edges";
@@ -40,69 +41,32 @@ pub fn resolved_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPu
 }
 
 /// The inverse depth (1/mm) whose light a pixel (x, y) at an edge mostly holds:
-/// glsl/dof/coc_edges.comp's, in the same f32 arithmetic.
+/// glsl/dof/coc_edges.comp's, in the same f32 arithmetic. The layer is decided by
+/// [`edge_layer`] (shared with the motion blur's edge resolve); the pixel takes its mean.
 pub fn edge_inverse_depth(depth: &HostImage, color: &HostImage, push: &CocPush, x: i32, y: i32) -> f32 {
     let w_p = push.inverse_depth(depth.clamped(x, y)[0]);
     let offset = |i: i32| (x + i % 3 - 1, y + i / 3 - 1);
-    let w: Vec<f32> = (0..9).map(offset).map(|(qx, qy)| push.inverse_depth(depth.clamped(qx, qy)[0])).collect();
+    let w: [f32; 9] = std::array::from_fn(|i| {
+        let (qx, qy) = offset(i as i32);
+        push.inverse_depth(depth.clamped(qx, qy)[0])
+    });
     let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
     let w_mid = 0.5 * (w_near + w_far);
-    let brightness = |c: [f32; 3]| c.iter().map(|v| v.max(0.0)).sum::<f32>();
-    let c9: Vec<[f32; 3]> =
-        (0..9).map(offset).map(|(qx, qy)| std::array::from_fn(|k| finite_or_zero(color.clamped(qx, qy)[k]))).collect();
-    let b9: Vec<f32> = c9.iter().map(|&c| brightness(c)).collect();
-    let is_near = |i: usize| w[i] > w_mid;
-    let (mut near, mut far) = (([0.0f32; 3], 0.0f32, 0.0f32), (0.0f32, 0.0f32));
-    for i in (0..9).filter(|&i| i != 4) {
-        if is_near(i) {
-            for (sum, v) in near.0.iter_mut().zip(c9[i]) {
-                *sum += v;
-            }
-            near.1 += 1.0;
-            near.2 += w[i];
-        } else {
-            far.0 += 1.0;
-            far.1 += w[i];
-        }
-    }
-    if near.1 == 0.0 || far.0 == 0.0 {
-        return w_p;
-    }
-    let c_near = near.0.map(|v| v / near.1);
-    // The far layer's colour: its neighbour of median brightness (the darker middle one of an
-    // even count, ties by position), not its mean, which a small highlight's other fringe
-    // pixels inflate (glsl/dof/coc_edges.comp).
-    let rank = (far.0 - 1.0) as usize / 2;
-    let far_of = || (0..9).filter(|&i| i != 4 && !is_near(i));
-    let c_far = far_of()
-        .find(|&i| far_of().filter(|&j| b9[j] < b9[i] || (b9[j] == b9[i] && j < i)).count() == rank)
-        .map_or([0.0; 3], |i| c9[i]);
-    let d: [f32; 3] = std::array::from_fn(|k| c_near[k] - c_far[k]);
-    let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if dd <= 1.0e-12 {
-        return w_p;
-    }
+    let c9: [[f32; 3]; 9] = std::array::from_fn(|i| {
+        let (qx, qy) = offset(i as i32);
+        std::array::from_fn(|k| finite_or_zero(color.clamped(qx, qy)[k]))
+    });
     let c_p: [f32; 3] = std::array::from_fn(|k| finite_or_zero(color.clamped(x, y)[k]));
-    // Along the line from the far layer's colour to the near one's mean, the own layer's pixels
-    // span a range of alpha: a near pixel inside it (a textured surface at a hard edge) stays.
-    let own_near = w_p > w_mid;
-    let alpha_of = |c: [f32; 3]| (0..3).map(|k| (c[k] - c_far[k]) * d[k]).sum::<f32>() / dd;
-    let (lo, hi) = (0..9)
-        .filter(|&i| i != 4 && is_near(i) == own_near)
-        .map(|i| alpha_of(c9[i]))
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
-    let alpha_p = alpha_of(c_p);
-    if own_near && alpha_p >= lo && alpha_p <= hi {
-        return w_p;
+    let (mut near, mut far) = ((0.0f32, 0.0f32), (0.0f32, 0.0f32));
+    for i in (0..9).filter(|&i| i != 4) {
+        let layer = if w[i] > w_mid { &mut near } else { &mut far };
+        layer.0 += 1.0;
+        layer.1 += w[i];
     }
-    let alpha = alpha_p.clamp(0.0, 1.0);
-    let to_near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
-    if to_near == own_near {
-        w_p
-    } else if to_near {
-        near.2 / near.1
-    } else {
-        far.1 / far.0
+    match edge_layer(&w, &c9, c_p, w_near, w_far, 0.0) {
+        EDGE_NEAR => near.1 / near.0,
+        EDGE_FAR => far.1 / far.0,
+        _ => w_p,
     }
 }
 

@@ -7,11 +7,12 @@
 //! long as its motion over the open time; the passes turn the renderer's per-frame velocity into
 //! that with the frame rate and the shutter (src/optics/shutter.rs).
 
+use super::edges::{changed_pixels, EdgeInputs, MbEdgesPush, MbEdgesShader};
 use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
 use super::neighbor::{MbNeighborPush, MbNeighborShader};
 use super::path::{clamped_velocity, ShutterPush};
 use super::tiles::{MbTilesPush, MbTilesShader};
-use super::{gather, neighbor, tiles};
+use super::{edges, gather, neighbor, tiles};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
 use crate::model::camera::MotionBlurMode;
 use crate::optics::shutter::ShutterCurve;
@@ -39,6 +40,9 @@ pub struct MotionPlan {
     pub speed_px: f64,
     /// The farthest (px) a pixel's path reaches from it on either side of the frame time.
     pub max_reach_px: f64,
+    /// The anti-aliased-edge resolve of the velocity and depth (`mb_edges`), unless
+    /// `--keep-edge-depth`.
+    pub edges: Option<MbEdgesPush>,
 }
 
 impl MotionPlan {
@@ -109,6 +113,23 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
         )));
     }
     let (w, h) = input.size();
+    // The edge resolve, counted here with its twin (the frame's colour is what the pass reads:
+    // motion blur comes first), so that --explain says how many pixels it changes.
+    let (edges, edges_why) = if input.camera.resolve_depth_edges {
+        let push = MbEdgesPush::new([w as i32, h as i32], timing.extent_frames(), max_speed_px);
+        let edge_input =
+            EdgeInputs { width: w, height: h, color: &frame.color, depth: &frame.depth_m, velocity: &rgba };
+        let changed = changed_pixels(&edge_input, &push);
+        let why = format!(
+            "; anti-aliased edges resolved ({}): {changed} pixels whose colour is mostly a neighbouring layer's (at least {:.0}% of their light) take that layer's velocity and depth",
+            edges::NAME,
+            100.0 * edges::MIN_SHARE
+        );
+        (Some(push), why)
+    } else {
+        (None, "; velocity and depth kept as stored at anti-aliased edges (--keep-edge-depth)".to_string())
+    };
+    let why = format!("{why}{edges_why}");
     let plan = MotionPlan {
         width: w,
         height: h,
@@ -117,6 +138,7 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
         max_blur_px: blur_px,
         speed_px,
         max_reach_px: reach_px,
+        edges,
     };
     Ok((plan, why))
 }
@@ -134,6 +156,7 @@ pub struct MotionBlurParams {
 
 /// The pipelines of the fast path, one per step.
 pub struct MotionBlur {
+    edges: Kernel<MbEdgesShader>,
     tiles: Kernel<MbTilesShader>,
     neighbor: Kernel<MbNeighborShader>,
     gather: Kernel<MbGatherShader>,
@@ -160,13 +183,25 @@ impl Pass for MotionBlur {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(MotionBlur { tiles: Kernel::new(gpu)?, neighbor: Kernel::new(gpu)?, gather: Kernel::new(gpu)? })
+        Ok(MotionBlur {
+            edges: Kernel::new(gpu)?,
+            tiles: Kernel::new(gpu)?,
+            neighbor: Kernel::new(gpu)?,
+            gather: Kernel::new(gpu)?,
+        })
     }
 
     /// The colour, depth and velocity in; a new colour written for every pixel.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionBlurParams) -> GpuResult<()> {
         let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
         let m = &p.motion;
+        let (depth, velocity) = match &m.edges {
+            Some(push) => {
+                rec.begin_pass(edges::NAME);
+                edges::record(&self.edges, rec, &color, &depth, &velocity, push)?
+            }
+            None => (depth, velocity),
+        };
         let tiles = m.tiles();
         let tile_count = (tiles[0] * tiles[1]) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;

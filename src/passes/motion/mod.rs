@@ -3,6 +3,7 @@
 //! shutter and paths of `path`. README.md says what they simulate.
 
 pub mod blur;
+pub mod edges;
 pub mod gather;
 pub mod neighbor;
 pub mod path;

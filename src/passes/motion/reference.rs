@@ -8,6 +8,7 @@
 //! mb_ref_resolve.
 
 use super::blur::{plan_motion, MotionPlan, ORDER_NOTE};
+use super::edges::{self, MbEdgesShader};
 use super::ref_resolve::{MbRefResolveBindings, MbRefResolvePush, MbRefResolveShader};
 use super::ref_splat::{MbRefSplatBindings, MbRefSplatPush, MbRefSplatShader};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
@@ -34,6 +35,7 @@ pub struct MotionReferenceParams {
 }
 
 pub struct MotionReference {
+    edges: Kernel<MbEdgesShader>,
     splat: Kernel<MbRefSplatShader>,
     resolve: Kernel<MbRefResolveShader>,
 }
@@ -61,13 +63,20 @@ impl Pass for MotionReference {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(MotionReference { splat: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
+        Ok(MotionReference { edges: Kernel::new(gpu)?, splat: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionReferenceParams) -> GpuResult<()> {
-        rec.begin_pass(NAME);
         let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
         let m = &p.motion;
+        let (depth, velocity) = match &m.edges {
+            Some(push) => {
+                rec.begin_pass(edges::NAME);
+                edges::record(&self.edges, rec, &color, &depth, &velocity, push)?
+            }
+            None => (depth, velocity),
+        };
+        rec.begin_pass(NAME);
         let (w, h) = (m.width, m.height);
         let size = [w as i32, h as i32];
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
