@@ -464,7 +464,13 @@ fn subject_between_a_wall_and_a_bar(w: u32, h: u32) -> Frame {
             let v = match kind(x, y) {
                 0 => 0.3,
                 1 => 0.5 + 0.3 * ((x as f32 * 0.7).sin() * (y as f32 * 0.5).cos()),
-                _ => if (x / 6 + y / 6) % 2 == 0 { 0.15 } else { 0.9 },
+                _ => {
+                    if (x / 6 + y / 6) % 2 == 0 {
+                        0.15
+                    } else {
+                        0.9
+                    }
+                }
             };
             [v, 0.8 * v, 0.6 * v, 1.0]
         })
@@ -499,8 +505,10 @@ fn an_opaque_frame_stays_opaque_through_the_depth_of_field() {
             let alpha: Vec<f32> = rgba.chunks_exact(4).map(|p| p[3]).collect();
             let low = alpha.iter().filter(|&&a| !(a >= 0.999)).count();
             let min = alpha.iter().copied().fold(f32::MAX, f32::min);
-            println!("f/{f_number} {mode:?}: alpha min {min:.5}, {low} px below 0.999, max {:.5}",
-                alpha.iter().copied().fold(f32::MIN, f32::max));
+            println!(
+                "f/{f_number} {mode:?}: alpha min {min:.5}, {low} px below 0.999, max {:.5}",
+                alpha.iter().copied().fold(f32::MIN, f32::max)
+            );
             assert!(low == 0, "f/{f_number} {mode:?}: {low} px of alpha below 0.999 (min {min})");
             assert!(alpha.iter().all(|&a| a <= 1.001), "f/{f_number} {mode:?}: alpha above 1");
         }
