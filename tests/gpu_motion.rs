@@ -488,7 +488,7 @@ fn write_the_scene_a_crop_when_asked() {
 /// plane, but carries the plane's depth and velocity, as a renderer's one-sample depth and
 /// vectors do. With `highlight` false: the plane alone (the fringe all plane).
 fn highlight_over_moving_plane(w: u32, h: u32, c: (u32, u32), highlight: bool) -> Frame {
-    let stripe = |x: u32| if (x / 4) % 2 == 0 { 0.2f32 } else { 0.8 };
+    let stripe = |x: u32| if (x / 4).is_multiple_of(2) { 0.2f32 } else { 0.8 };
     let (mut color, mut depth, mut next) = (Vec::new(), Vec::new(), Vec::new());
     for y in 0..h {
         for x in 0..w {

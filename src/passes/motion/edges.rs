@@ -105,7 +105,8 @@ pub fn resolve_pixel(input: &EdgeInputs, pc: &MbEdgesPush, x: i32, y: i32) -> Op
     let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
     // The depths first (most pixels lie within one layer), then the motions: the shader's one
     // loop, in another order (max and min are exact).
-    if !(w_near > w_far * LAYER_RATIO) {
+    // Not "greater" includes NaN, as in the shader.
+    if w_near.partial_cmp(&(w_far * LAYER_RATIO)) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let velocity = |i: usize| clamped_velocity(&input.velocity[4 * i..4 * i + 4], pc.max_speed_px);
@@ -116,7 +117,7 @@ pub fn resolve_pixel(input: &EdgeInputs, pc: &MbEdgesPush, x: i32, y: i32) -> Op
         let prev = length(v[2] - v_p[2], v[3] - v_p[3]) * pc.t_back;
         m.max(next.max(prev))
     });
-    if !(motion > 0.5) {
+    if motion.partial_cmp(&0.5) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let c9: [[f32; 3]; 9] =
