@@ -193,15 +193,8 @@ impl Pass for MotionBlur {
 
     /// The colour, depth and velocity in; a new colour written for every pixel.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionBlurParams) -> GpuResult<()> {
-        let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
         let m = &p.motion;
-        let (depth, velocity) = match &m.edges {
-            Some(push) => {
-                rec.begin_pass(edges::NAME);
-                edges::record(&self.edges, rec, &color, &depth, &velocity, push)?
-            }
-            None => (depth, velocity),
-        };
+        let (color, depth, velocity) = edges::inputs(&self.edges, rec, images, m.edges.as_ref())?;
         let tiles = m.tiles();
         let tile_count = (tiles[0] * tiles[1]) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;

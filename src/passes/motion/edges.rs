@@ -175,6 +175,21 @@ impl Twin for MbEdgesShader {
     }
 }
 
+/// The frame's colour, and its depth and velocity with the anti-aliased edges resolved when
+/// `push` asks for it (else as stored): the inputs both motion-blur paths start from.
+pub fn inputs(
+    kernel: &Kernel<MbEdgesShader>,
+    rec: &mut Recorder,
+    images: &crate::passes::FrameImages,
+    push: Option<&MbEdgesPush>,
+) -> GpuResult<(Arc<GpuImage>, Arc<GpuImage>, Arc<GpuImage>)> {
+    let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
+    let Some(push) = push else { return Ok((color, depth, velocity)) };
+    rec.begin_pass(NAME);
+    let (depth, velocity) = record(kernel, rec, &color, &depth, &velocity, push)?;
+    Ok((color, depth, velocity))
+}
+
 /// Record the resolve: the colour, depth and velocity in; new depth and velocity images out (in
 /// that order), complete and visible to the compute passes after it.
 pub fn record(

@@ -67,15 +67,8 @@ impl Pass for MotionReference {
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionReferenceParams) -> GpuResult<()> {
-        let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
         let m = &p.motion;
-        let (depth, velocity) = match &m.edges {
-            Some(push) => {
-                rec.begin_pass(edges::NAME);
-                edges::record(&self.edges, rec, &color, &depth, &velocity, push)?
-            }
-            None => (depth, velocity),
-        };
+        let (color, depth, velocity) = edges::inputs(&self.edges, rec, images, m.edges.as_ref())?;
         rec.begin_pass(NAME);
         let (w, h) = (m.width, m.height);
         let size = [w as i32, h as i32];
