@@ -449,47 +449,38 @@ impl LayeredScene {
             let key = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
                 ^ ((y * w + x) as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93);
             let rot = [0u64, 1, 2, 3].map(|k| hash_unit(key.wrapping_add(k.wrapping_mul(0x632B_E59B_D9B4_E019))));
-            let wrap = |v: f64| v - v.floor();
             // Depth: the pixel centre's pinhole ray.
             let (fx, fy) = self.film(x as f64 + 0.5, y as f64 + 0.5);
             *d = self.trace(0.0, 0.0, fx, fy).1;
             // Colour: the pinhole, box-filtered over the pixel.
-            let mut sum = [0.0f64; 3];
-            for s in 0..self.color_spp {
-                let (jx, jy) = (wrap(halton(s + 1, 2) + rot[0]), wrap(halton(s + 1, 3) + rot[1]));
-                let (fx, fy) = self.film(x as f64 + jx, y as f64 + jy);
-                let rgb = self.trace(0.0, 0.0, fx, fy).0;
-                for k in 0..3 {
-                    sum[k] += rgb[k] as f64;
-                }
-            }
-            let n = self.color_spp.max(1) as f64;
-            color[i * 4..i * 4 + 4].copy_from_slice(&[
-                (sum[0] / n) as f32,
-                (sum[1] / n) as f32,
-                (sum[2] / n) as f32,
-                1.0,
-            ]);
+            color[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.color_spp, rot, false));
             // Truth: the pixel's area x the aperture.
-            let mut sum = [0.0f64; 3];
-            for s in 0..self.truth_spp {
-                let (jx, jy) = (wrap(halton(s + 1, 2) + rot[0]), wrap(halton(s + 1, 3) + rot[1]));
-                let (u, v) = (wrap(halton(s + 1, 5) + rot[2]), wrap(halton(s + 1, 7) + rot[3]));
-                let (lx, ly) = self.camera.aperture_point(u, v);
-                let (fx, fy) = self.film(x as f64 + jx, y as f64 + jy);
-                let rgb = self.trace(lx, ly, fx, fy).0;
-                for k in 0..3 {
-                    sum[k] += rgb[k] as f64;
-                }
-            }
-            let n = self.truth_spp.max(1) as f64;
-            truth[i * 4..i * 4 + 4].copy_from_slice(&[
-                (sum[0] / n) as f32,
-                (sum[1] / n) as f32,
-                (sum[2] / n) as f32,
-                1.0,
-            ]);
+            truth[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.truth_spp, rot, true));
         }
+    }
+
+    /// The opaque RGBA mean of `spp` rays through pixel (x, y), over the pixel's area (Halton
+    /// bases 2, 3) and, `through_lens`, the aperture (bases 5, 7); the pinhole's otherwise;
+    /// `rot` shifts the sequences per pixel (Cranley-Patterson rotation).
+    fn pixel_mean(&self, x: usize, y: usize, spp: u32, rot: [f64; 4], through_lens: bool) -> [f32; 4] {
+        let wrap = |v: f64| v - v.floor();
+        let mut sum = [0.0f64; 3];
+        for s in 0..spp {
+            let (jx, jy) = (wrap(halton(s + 1, 2) + rot[0]), wrap(halton(s + 1, 3) + rot[1]));
+            let (lx, ly) = if through_lens {
+                let (u, v) = (wrap(halton(s + 1, 5) + rot[2]), wrap(halton(s + 1, 7) + rot[3]));
+                self.camera.aperture_point(u, v)
+            } else {
+                (0.0, 0.0)
+            };
+            let (fx, fy) = self.film(x as f64 + jx, y as f64 + jy);
+            let rgb = self.trace(lx, ly, fx, fy).0;
+            for k in 0..3 {
+                sum[k] += rgb[k] as f64;
+            }
+        }
+        let n = spp.max(1) as f64;
+        [(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, 1.0]
     }
 }
 
