@@ -275,9 +275,31 @@ pub fn tap_weight(
     sample_px: [f32; 2],
     data: &ApertureData,
 ) -> f32 {
+    tap_weight_at_reach(d, gather_reach(coc_p, coc_q), coc_q, p, sample_px, data)
+}
+
+/// How far sample q reaches pixel p in the gathers: its own radius, or p's where q lies behind p
+/// (occlusion: a sample behind a pixel reaches it no farther than the pixel's own CoC).
+pub fn gather_reach(coc_p: f32, coc_q: f32) -> f32 {
     let radius_p = (0.5 * coc_p.abs()).max(0.5);
     let radius_q = (0.5 * coc_q.abs()).max(0.5);
-    let reach = if coc_q > coc_p { radius_q.min(radius_p) } else { radius_q };
+    if coc_q > coc_p {
+        radius_q.min(radius_p)
+    } else {
+        radius_q
+    }
+}
+
+/// [`tap_weight`] for a given reach (the level gathers shorten it by the pyramid's own blur).
+pub fn tap_weight_at_reach(
+    d: [i32; 2],
+    reach: f32,
+    coc_q: f32,
+    p: &ApertureConstants,
+    sample_px: [f32; 2],
+    data: &ApertureData,
+) -> f32 {
+    let radius_q = (0.5 * coc_q.abs()).max(0.5);
     if ((d[0] * d[0] + d[1] * d[1]) as f32) > (reach + 1.0) * (reach + 1.0) {
         return 0.0;
     }

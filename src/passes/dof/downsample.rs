@@ -81,7 +81,7 @@ impl Twin for DownsampleShader {
         let mut listed = Vec::new();
         for hy in 0..pc.half_size[1] {
             for hx in 0..pc.half_size[0] {
-                let (mut sum, mut coc_sum, mut weight, mut candidate) = ([0.0f32; 4], 0.0f32, 0.0f32, false);
+                let (mut sum, mut coc_near, mut weight, mut candidate) = ([0.0f32; 4], f32::INFINITY, 0.0f32, false);
                 for (_, _, c, coc_p) in texel_pixels(&color, &coc, pc.size, hx, hy) {
                     let radius = 0.5 * coc_p.abs();
                     candidate |= radius > pc.small_radius_px && luminance(&c, pc.luminance_weights) > pc.highlight_min;
@@ -89,11 +89,13 @@ impl Twin for DownsampleShader {
                     for k in 0..4 {
                         sum[k] += w * c[k];
                     }
-                    coc_sum += w * coc_p;
                     weight += w;
+                    if w > 0.0 {
+                        coc_near = coc_near.min(coc_p);
+                    }
                 }
                 color_half.texel_mut(hx as u32, hy as u32).copy_from_slice(&sum.map(|v| 0.25 * v));
-                let cw = [if weight > 0.0 { coc_sum / weight } else { 0.0 }, 0.25 * weight];
+                let cw = [if weight > 0.0 { coc_near } else { 0.0 }, 0.25 * weight];
                 coc_half.texel_mut(hx as u32, hy as u32).copy_from_slice(&cw);
                 if candidate {
                     listed.push(pack_texel(hx, hy));

@@ -1,5 +1,5 @@
 //! Tiled depth of field: levels 2 .. 4 of the pyramid, each from the level below (the weighted
-//! averages of dof_downsample.comp). Shader: glsl/dof/dof_pyramid.comp.
+//! colour averages and nearest CoC of dof_downsample.comp). Shader: glsl/dof/dof_pyramid.comp.
 
 use crate::gpu::{GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::{after_compute_write, overwrite};
@@ -38,7 +38,7 @@ impl Twin for PyramidShader {
         let (mut color_coarse, mut coc_coarse) = (b[2].image().clone(), b[3].image().clone());
         for y in 0..pc.coarse_size[1] {
             for x in 0..pc.coarse_size[0] {
-                let (mut sum, mut coc_sum, mut weight) = ([0.0f32; 4], 0.0f32, 0.0f32);
+                let (mut sum, mut coc_near, mut weight) = ([0.0f32; 4], f32::INFINITY, 0.0f32);
                 for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let (qx, qy) = (2 * x + i, 2 * y + j);
                     if qx >= pc.fine_size[0] || qy >= pc.fine_size[1] {
@@ -49,11 +49,13 @@ impl Twin for PyramidShader {
                     for k in 0..4 {
                         sum[k] += c[k];
                     }
-                    coc_sum += cw[0] * cw[1];
                     weight += cw[1];
+                    if cw[1] > 0.0 {
+                        coc_near = coc_near.min(cw[0]);
+                    }
                 }
                 color_coarse.texel_mut(x as u32, y as u32).copy_from_slice(&sum.map(|v| 0.25 * v));
-                let cw = [if weight > 0.0 { coc_sum / weight } else { 0.0 }, 0.25 * weight];
+                let cw = [if weight > 0.0 { coc_near } else { 0.0 }, 0.25 * weight];
                 coc_coarse.texel_mut(x as u32, y as u32).copy_from_slice(&cw);
             }
         }
