@@ -24,8 +24,9 @@ pub struct AccuracyArgs {
     /// Aperture blades (0 = circular); default from the lens file.
     #[arg(long)]
     blades: Option<u32>,
-    /// Clamp on the CoC diameter: on the film in mm (1.2mm) or in pixels (64, 64px).
-    #[arg(long = "max-coc", default_value = "1.2mm")]
+    /// Clamp on the CoC diameter: `none` (the default, as `render`: every disc as large as the
+    /// lens draws it), on the film in mm (1.2mm) or in pixels (64, 64px).
+    #[arg(long = "max-coc", default_value = "none")]
     max_coc: String,
     /// Ray-traced ground truth (EXR of the frame's size): compare the pinhole input and the tiled
     /// and reference depth of field with it (energy-matched, clamped RMSE and its error budget;
