@@ -18,8 +18,10 @@ pub fn run(out: &Path, layered: Option<u64>, size: &str, motion: bool) -> Result
             let [color, depth, vector, truth] = paths.map(|p| p.display().to_string());
             let [open, close] = scene.shutter_frames;
             println!(
-                "shutter: centred, {:.0} degrees (open {open} to {close} frames), a box; no defocus (the truth is through a pinhole)
-                 e.g. realcam render --color {color} --depth {depth} --velocity {vector} --velocity-format blender                  --shutter-angle {:.0} --max-coc 0 --no-flare ... and compare with {truth}",
+                "shutter: centred, {:.0} degrees (open {open} to {close} frames), a box; no defocus (the truth is through a pinhole)\n\
+                 e.g. realcam render --color {color} --depth {depth} --velocity {vector} --velocity-format blender \
+                 --shutter-angle {:.0} --max-blur 1000 --max-coc 0 --no-flare -o out.exr \
+                 (exposure and film at their defaults), against {truth}",
                 360.0 * (close - open),
                 360.0 * (close - open),
             );
