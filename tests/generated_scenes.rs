@@ -239,6 +239,9 @@ const FAST_MEAN_RATIO_BOUND: f64 = 0.52;
 const FAST_MAX_RATIO_BOUND: f64 = 0.9;
 const REFERENCE_MEAN_RATIO_BOUND: f64 = 0.45;
 const REFERENCE_MAX_RATIO_BOUND: f64 = 1.0;
+/// The turning wheel's two-segment fast blur against the input's RMSE (today 0.49; the issue's
+/// goal).
+const WHEEL_RATIO_BOUND: f64 = 0.5;
 
 #[test]
 fn generated_moving_scenes_fast_and_reference_against_the_exact_motion_blur() {
@@ -306,4 +309,52 @@ fn generated_moving_scenes_fast_and_reference_against_the_exact_motion_blur() {
     assert!(max(0) <= FAST_MAX_RATIO_BOUND, "fast: worst ratio {:.2}", max(0));
     assert!(mean(1) <= REFERENCE_MEAN_RATIO_BOUND, "reference: mean ratio {:.2}", mean(1));
     assert!(max(1) <= REFERENCE_MAX_RATIO_BOUND, "reference: worst ratio {:.2}", max(1));
+}
+
+#[test]
+fn a_turning_wheel_blurs_along_its_arcs_with_both_vectors() {
+    // Issue 30 item 3: a checkered wheel of radius 36 px turning 30 degrees per frame about its
+    // still centre, a shutter of one frame centred: its points sweep arcs of 30 degrees (18.8 px
+    // at the rim). The renderer's vectors are the chords to the next and previous frame; the two
+    // segments (next for t > 0, previous for t < 0) bend toward the centre as the arc does, a
+    // single straight line (previous = -next, what a pass with one vector gives) leaves the arc
+    // by up to 2 r (1 - cos 30 deg) / 2 = 4.8 px at the rim by the shutter's ends. Against the
+    // exact image the reference must be closer with the two segments.
+    let gpu = gpu();
+    let out_dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated_scenes");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let scene = LayeredScene::turning_wheel(WIDTH, HEIGHT, 30f64.to_radians(), 1.0);
+    let passes = scene.render_motion();
+    let bent = motion_frame(&passes);
+    let straight = Frame::new(WIDTH, HEIGHT, passes.color.clone(), passes.depth_m.clone())
+        .with_velocity(passes.velocity_next_px.clone(), None);
+    let rmse = |rgba: &[f32]| compare_rgba(rgba, &passes.truth).rmse_matched;
+    let input = rmse(&passes.color);
+    println!("\nturning wheel, 30 deg/frame, 360 deg shutter: RMSE input {input:.4}");
+    for mode in [MotionBlurMode::Fast, MotionBlurMode::Reference] {
+        let camera = motion_camera(&scene, mode);
+        let (two, _, _) = render(&gpu, &bent, &camera);
+        let (one, _, _) = render(&gpu, &straight, &camera);
+        // truth | one straight line | two segments | input.
+        let images = [&passes.truth[..], &one, &two, &passes.color];
+        write_strip(&out_dir.join(format!("wheel_{mode:?}.png")), (WIDTH, HEIGHT), images);
+        let (two, one) = (rmse(&two), rmse(&one));
+        println!(
+            "{mode:?}: two segments {two:.4} ({:.2} of the input's), one line {one:.4} ({:.2})",
+            two / input,
+            one / input
+        );
+        // The reference follows the path model exactly: the arcs must show (today 0.83x the
+        // straight line's error). The fast path's lines are the neighbourhood's and the pixel's
+        // own next and previous directions, and on a turning field the sources on a pixel's arc lie
+        // on neither: it gains nothing from the bend (today 1.04x the straight line's error; the
+        // gap is in docs/measurements.md); asserted not to lose more than that, and to halve the
+        // input's error.
+        let (gain_bound, input_bound) = match mode {
+            MotionBlurMode::Reference => (0.9, 0.4),
+            _ => (1.1, WHEEL_RATIO_BOUND),
+        };
+        assert!(two <= gain_bound * one, "{mode:?}: two segments {two:.4}, one straight line {one:.4}");
+        assert!(two <= input_bound * input, "{mode:?}: two segments {two:.4}, input {input:.4}");
+    }
 }
