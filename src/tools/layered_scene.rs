@@ -24,10 +24,21 @@
 //! `truth_spp` rays over the pixel's area and the aperture (a 4D Halton sequence, rotated per
 //! pixel), which is what realcam's depth of field of the colour pass should give.
 //!
+//! **Motion** ([`LayeredScene::render_motion`], issue 30): layers move rigidly in their planes
+//! (a velocity and a turn, [`LayerMotion`]); a film point integrates the light over the open
+//! shutter (Kyaw 2013 sec 5.2: a point moving while the shutter is open leaves a streak as long
+//! as its motion over the open time), with realcam's times: frames from the frame time, the
+//! shutter open over `shutter_frames` (src/optics/shutter.rs `ShutterTiming`, a box curve). It
+//! writes the passes of a renderer with its motion blur off: the colour at the frame time
+//! (anti-aliased), the depth and the next and previous vectors of the pixel centre's one sample,
+//! and the exact motion-blurred image through the pinhole (no defocus, so the motion blur is
+//! judged alone).
+//!
 //! **What it does not model:** tilted or curved surfaces, transparency other than binary masks,
-//! lighting (the textures are the radiance), motion, aberrations, vignetting, diffraction, a
-//! pixel filter other than the box, noise beyond the sampling's (about 1/sqrt(spp) per pixel
-//! at hard edges; tile means are far better).
+//! lighting (the textures are the radiance), motion in depth or of the camera, a shutter curve
+//! other than the box, aberrations, vignetting, diffraction, a pixel filter other than the box,
+//! noise beyond the sampling's (about 1/sqrt(spp) per pixel at hard edges; tile means are far
+//! better).
 //!
 //! Deterministic from a seed: the same seed gives bit-identical images on any thread count.
 
