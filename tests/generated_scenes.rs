@@ -271,7 +271,9 @@ fn generated_moving_scenes_fast_and_reference_against_the_exact_motion_blur() {
         let speeds: Vec<f64> = scene
             .layers
             .iter()
-            .map(|l| l.motion.velocity_m[0].hypot(l.motion.velocity_m[1]) / scene.m_per_px(l.depth_m))
+            .map(|l| {
+                l.motion.velocity_m_per_frame[0].hypot(l.motion.velocity_m_per_frame[1]) / scene.m_per_px(l.depth_m)
+            })
             .collect();
         let [open, close] = scene.shutter_frames;
         println!(

@@ -187,13 +187,13 @@ pub enum Texture {
 
 /// How a layer moves over time t (frames from the frame time, the instant the colour, depth and
 /// velocity passes describe): rigidly in its own plane, turning `spin_rad_per_frame` about
-/// `centre_m` (clockwise on screen, x right and y down) while that centre moves `velocity_m` per
-/// frame. A fronto-parallel plane keeps its depth, so its image moves by `velocity_m` over the
+/// `centre_m` (clockwise on screen, x right and y down) while that centre moves `velocity_m_per_frame` per
+/// frame. A fronto-parallel plane keeps its depth, so its image moves by `velocity_m_per_frame` over the
 /// metres per pixel of its depth ([`LayeredScene::m_per_px`]).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct LayerMotion {
     /// Metres per frame on the layer's plane (x right, y down).
-    pub velocity_m: [f64; 2],
+    pub velocity_m_per_frame: [f64; 2],
     pub spin_rad_per_frame: f64,
     /// The centre of the turn at the frame time (metres on the plane).
     pub centre_m: [f64; 2],
@@ -201,10 +201,11 @@ pub struct LayerMotion {
 
 impl LayerMotion {
     /// Not moving.
-    pub const STILL: LayerMotion = LayerMotion { velocity_m: [0.0; 2], spin_rad_per_frame: 0.0, centre_m: [0.0; 2] };
+    pub const STILL: LayerMotion =
+        LayerMotion { velocity_m_per_frame: [0.0; 2], spin_rad_per_frame: 0.0, centre_m: [0.0; 2] };
 
     fn is_still(&self) -> bool {
-        self.velocity_m == [0.0; 2] && self.spin_rad_per_frame == 0.0
+        self.velocity_m_per_frame == [0.0; 2] && self.spin_rad_per_frame == 0.0
     }
 
     /// Where the layer's point that is at `q` at the frame time is at time `t`:
@@ -216,7 +217,10 @@ impl LayerMotion {
         let (s, c) = (self.spin_rad_per_frame * t).sin_cos();
         let [cx, cy] = self.centre_m;
         let (dx, dy) = (q[0] - cx, q[1] - cy);
-        [cx + self.velocity_m[0] * t + c * dx - s * dy, cy + self.velocity_m[1] * t + s * dx + c * dy]
+        [
+            cx + self.velocity_m_per_frame[0] * t + c * dx - s * dy,
+            cy + self.velocity_m_per_frame[1] * t + s * dx + c * dy,
+        ]
     }
 
     /// The inverse: which of the layer's points (at their frame-time positions) is at `p` at
@@ -228,7 +232,7 @@ impl LayerMotion {
         }
         let (s, c) = (self.spin_rad_per_frame * t).sin_cos();
         let [cx, cy] = self.centre_m;
-        let (dx, dy) = (p[0] - cx - self.velocity_m[0] * t, p[1] - cy - self.velocity_m[1] * t);
+        let (dx, dy) = (p[0] - cx - self.velocity_m_per_frame[0] * t, p[1] - cy - self.velocity_m_per_frame[1] * t);
         [cx + c * dx + s * dy, cy - s * dx + c * dy]
     }
 }
@@ -514,7 +518,7 @@ impl LayeredScene {
                 (rng.unit() < 0.3, rng.range(2.0, 40.0), rng.range(0.0, std::f64::consts::TAU));
             if !still {
                 let m = scene.m_per_px(scene.layers[k].depth_m);
-                scene.layers[k].motion.velocity_m = [speed_px * angle.cos() * m, speed_px * angle.sin() * m];
+                scene.layers[k].motion.velocity_m_per_frame = [speed_px * angle.cos() * m, speed_px * angle.sin() * m];
             }
         }
         scene
@@ -536,7 +540,7 @@ impl LayeredScene {
                 shape: Shape::Disc { cx: 0.0, cy: 0.0, r },
                 mask: Mask::Opaque,
                 texture: Texture::Checker { cell: 0.3 * r, a: [0.9, 0.8, 0.3], b: [0.05, 0.1, 0.3] },
-                motion: LayerMotion { velocity_m: [0.0; 2], spin_rad_per_frame, centre_m: [0.0; 2] },
+                motion: LayerMotion { velocity_m_per_frame: [0.0; 2], spin_rad_per_frame, centre_m: [0.0; 2] },
             },
             Layer {
                 depth_m: wall_m,
@@ -966,7 +970,7 @@ mod tests {
                 mask: Mask::Opaque,
                 texture: Texture::Flat([10.0; 3]),
                 motion: LayerMotion {
-                    velocity_m: velocity_px.map(|v| v * m),
+                    velocity_m_per_frame: velocity_px.map(|v| v * m),
                     spin_rad_per_frame: spin,
                     centre_m: [0.0; 2],
                 },
@@ -1054,7 +1058,8 @@ mod tests {
             assert_eq!(still.layers.len(), moving.layers.len());
             for (a, b) in still.layers.iter().zip(&moving.layers) {
                 assert_eq!((&a.shape, &a.mask, &a.texture, a.depth_m), (&b.shape, &b.mask, &b.texture, b.depth_m));
-                let speed_px = b.motion.velocity_m[0].hypot(b.motion.velocity_m[1]) / moving.m_per_px(b.depth_m);
+                let speed_px = b.motion.velocity_m_per_frame[0].hypot(b.motion.velocity_m_per_frame[1])
+                    / moving.m_per_px(b.depth_m);
                 assert!(speed_px == 0.0 || (2.0 - 1e-9..=40.0 + 1e-9).contains(&speed_px), "{speed_px}");
                 assert_eq!(b.motion.spin_rad_per_frame, 0.0);
             }
