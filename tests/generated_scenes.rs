@@ -5,17 +5,25 @@
 //! exact defocused image: the share of 16-px tiles whose mean luminance is off by more than 5%
 //! (src/tools/metrics.rs tile_luminance), the worst tile, FLIP, and the alpha.
 //!
-//! `cargo test --test generated_scenes -- --nocapture` prints the per-seed table; the images of
+//! The motion blur the same way (issue 30): the same 20 scenes set in motion
+//! (`LayeredScene::random_moving`: each layer still or moving 2..40 px per frame, a centred
+//! shutter of 90..360 degrees), their colour, one-sample depth and one-sample vectors through
+//! `--motion-blur fast` and `reference`, each against the exact motion-blurred image (pinhole,
+//! pixel area x open time), by the RMSE of `realcam accuracy --motion-blur` (energy matched,
+//! values clamped at 4); and a turning wheel, whose arcs the two-segment path follows.
+//!
+//! `cargo test --test generated_scenes -- --nocapture` prints the per-seed tables; the images of
 //! every seed (input | truth | tiled | reference, sRGB) are written to
-//! `target/tmp/generated_scenes/seed_NN.png`.
+//! `target/tmp/generated_scenes/seed_NN.png` (`motion_NN.png`: input | truth | fast |
+//! reference).
 
 mod support;
 
 use realcam::io::lens_file::LensFile;
-use realcam::model::camera::{BokehMode, Camera, CameraRequest, CocLimit};
+use realcam::model::camera::{BokehMode, Camera, CameraRequest, CocLimit, MotionBlurMode};
 use realcam::model::frame::Frame;
-use realcam::tools::layered_scene::{LayeredPasses, LayeredScene};
-use realcam::tools::metrics::{local_fidelity, LocalFidelity};
+use realcam::tools::layered_scene::{LayeredScene, MotionPasses};
+use realcam::tools::metrics::{compare_rgba, local_fidelity, LocalFidelity};
 use support::*;
 
 const WIDTH: u32 = 160;
@@ -68,10 +76,11 @@ fn srgb(rgba: &[f32]) -> Vec<f32> {
         .collect()
 }
 
-/// input | truth | tiled | reference, side by side with 4 px gaps, written as a PNG.
-fn write_strip(path: &std::path::Path, passes: &LayeredPasses, tiled: &[f32], reference: &[f32]) {
-    let (w, h) = (passes.width as usize, passes.height as usize);
-    let images = [srgb(&passes.color), srgb(&passes.truth), srgb(tiled), srgb(reference)];
+/// input | truth | tiled | reference (or fast | reference), side by side with 4 px gaps,
+/// written as a PNG.
+fn write_strip(path: &std::path::Path, (w, h): (u32, u32), [input, truth, tiled, reference]: [&[f32]; 4]) {
+    let (w, h) = (w as usize, h as usize);
+    let images = [srgb(input), srgb(truth), srgb(tiled), srgb(reference)];
     let gap = 4;
     let sw = 4 * w + 3 * gap;
     let mut data = vec![1.0f32; sw * h * 3];
@@ -121,7 +130,8 @@ fn generated_scenes_tiled_and_reference_against_the_exact_image() {
         let (tiled, _, _) = render(&gpu, &frame, &camera(&scene, BokehMode::Tiled));
         gpu_s += t.elapsed().as_secs_f64();
         let judge = |rgba: &[f32]| local_fidelity(rgba, &passes.truth, &frame.color, WIDTH, HEIGHT);
-        write_strip(&out_dir.join(format!("seed_{seed:02}.png")), &passes, &tiled, &reference);
+        let images = [&passes.color[..], &passes.truth, &tiled, &reference];
+        write_strip(&out_dir.join(format!("seed_{seed:02}.png")), (WIDTH, HEIGHT), images);
         let c = &scene.camera;
         let cocs: Vec<f64> = scene.layers.iter().map(|l| c.coc_px(l.depth_m)).collect();
         let max_coc = cocs.iter().fold(c.coc_px(1e10).abs(), |a, b| a.max(b.abs()));
@@ -188,5 +198,165 @@ fn generated_scenes_tiled_and_reference_against_the_exact_image() {
     // Every generated scene is opaque: so is the tiled path's output (issue 29, alpha).
     for r in &rows {
         assert!(r.tiled.alpha.min >= 0.999, "seed {}: tiled alpha falls to {}", r.seed, r.tiled.alpha.min);
+    }
+}
+
+/// realcam's camera for a moving scene: the motion blur alone (no depth of field, exposure,
+/// vignetting, film or flare), the scene's centred box shutter at 24 fps, no clamp on the blur
+/// within the scenes' range, by `mode`.
+fn motion_camera(scene: &LayeredScene, mode: MotionBlurMode) -> Camera {
+    let [open, close] = scene.shutter_frames;
+    let request = CameraRequest {
+        sensor: Some(format!("{}x{}", scene.camera.sensor_width_mm, scene.camera.sensor_height_mm())),
+        max_coc: CocLimit::Px(0.0),
+        force: true,
+        fps: Some(24.0),
+        shutter_angle_deg: Some(360.0 * (close - open)),
+        max_blur_px: 1000.0,
+        ..CameraRequest::blur_only().with_lens(50.0, 2.0, 2.0)
+    };
+    let mut camera = Camera::new(&LensFile::default_lens(), &request).expect("valid motion camera");
+    camera.motion.mode = mode;
+    let t = &camera.motion.timing;
+    assert!((t.open_frames - open).abs() < 1e-9 && (t.close_frames - close).abs() < 1e-9, "{t:?}");
+    camera
+}
+
+/// The frame a renderer would hand over: the colour, depth and both vectors of `passes`.
+fn motion_frame(passes: &MotionPasses) -> Frame {
+    Frame::new(passes.width, passes.height, passes.color.clone(), passes.depth_m.clone())
+        .with_velocity(passes.velocity_next_px.clone(), Some(passes.velocity_prev_px.clone()))
+}
+
+/// The issue's goal (issue 30): on every generated scene the motion blur's RMSE against the
+/// exact image at most half the unblurred input's.
+const MOTION_GOAL_RATIO: f64 = 0.5;
+/// What holds today (lavapipe, 2026-11-27, docs/measurements.md): the fast path's ratio 0.48 on
+/// average, 0.84 on the worst seed (8), above the goal on 7 of the 20 seeds; the reference's 0.40
+/// and 0.95 (8), above on 4. The bounds leave about 0.05 of room. Tighten each per-seed bound to
+/// MOTION_GOAL_RATIO when it holds.
+const FAST_MEAN_RATIO_BOUND: f64 = 0.52;
+const FAST_MAX_RATIO_BOUND: f64 = 0.9;
+const REFERENCE_MEAN_RATIO_BOUND: f64 = 0.45;
+const REFERENCE_MAX_RATIO_BOUND: f64 = 1.0;
+/// The turning wheel's two-segment fast blur against the input's RMSE (today 0.49; the issue's
+/// goal).
+const WHEEL_RATIO_BOUND: f64 = 0.5;
+
+#[test]
+fn generated_moving_scenes_fast_and_reference_against_the_exact_motion_blur() {
+    let start = std::time::Instant::now();
+    let gpu = gpu();
+    let out_dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated_scenes");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let (mut trace_s, mut gpu_s) = (0.0, 0.0);
+    println!("\n{WIDTH}x{HEIGHT} px; RMSE against the exact motion blur (energy matched, clamped at 4); ratio to the input's:");
+    println!("| seed | shutter | layers moving, fastest | input | fast | ratio | reference | ratio |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let mut ratios = Vec::new();
+    for seed in 0..SEEDS {
+        let t = std::time::Instant::now();
+        let scene = LayeredScene::random_moving(seed, WIDTH, HEIGHT);
+        let passes = scene.render_motion();
+        trace_s += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let frame = motion_frame(&passes);
+        let (fast, _, _) = render(&gpu, &frame, &motion_camera(&scene, MotionBlurMode::Fast));
+        let (reference, _, _) = render(&gpu, &frame, &motion_camera(&scene, MotionBlurMode::Reference));
+        gpu_s += t.elapsed().as_secs_f64();
+        let images = [&passes.color[..], &passes.truth, &fast, &reference];
+        write_strip(&out_dir.join(format!("motion_{seed:02}.png")), (WIDTH, HEIGHT), images);
+        let rmse = |rgba: &[f32]| compare_rgba(rgba, &passes.truth).rmse_matched;
+        let (input, fast, reference) = (rmse(&passes.color), rmse(&fast), rmse(&reference));
+        let speeds: Vec<f64> = scene
+            .layers
+            .iter()
+            .map(|l| {
+                l.motion.velocity_m_per_frame[0].hypot(l.motion.velocity_m_per_frame[1]) / scene.m_per_px(l.depth_m)
+            })
+            .collect();
+        let [open, close] = scene.shutter_frames;
+        println!(
+            "| {seed} | {:.0} deg | {} of {}, {:.0} px/frame | {input:.4} | {fast:.4} | {:.2} | {reference:.4} | {:.2} |",
+            360.0 * (close - open),
+            speeds.iter().filter(|&&v| v > 0.0).count(),
+            speeds.len(),
+            speeds.iter().fold(0.0f64, |a, &b| a.max(b)),
+            fast / input,
+            reference / input
+        );
+        ratios.push((seed, fast / input, reference / input));
+    }
+    let mean = |k: usize| ratios.iter().map(|r| [r.1, r.2][k]).sum::<f64>() / ratios.len() as f64;
+    let max = |k: usize| ratios.iter().map(|r| [r.1, r.2][k]).fold(0.0, f64::max);
+    let missing =
+        |k: usize| ratios.iter().filter(|r| [r.1, r.2][k] > MOTION_GOAL_RATIO).map(|r| r.0).collect::<Vec<_>>();
+    println!(
+        "ratio to the input's RMSE: fast mean {:.2}, worst {:.2} (above {MOTION_GOAL_RATIO} on seeds {:?}); reference mean {:.2}, worst {:.2} (above on {:?})",
+        mean(0),
+        max(0),
+        missing(0),
+        mean(1),
+        max(1),
+        missing(1)
+    );
+    println!(
+        "ray tracing {trace_s:.1} s, GPU {gpu_s:.1} s, total {:.1} s; images in {}",
+        start.elapsed().as_secs_f64(),
+        out_dir.display()
+    );
+    // Better than doing nothing on every seed, by the margins that hold today; the goal (0.5 on
+    // every seed) is printed above and not yet asserted.
+    assert!(mean(0) <= FAST_MEAN_RATIO_BOUND, "fast: mean ratio {:.2}", mean(0));
+    assert!(max(0) <= FAST_MAX_RATIO_BOUND, "fast: worst ratio {:.2}", max(0));
+    assert!(mean(1) <= REFERENCE_MEAN_RATIO_BOUND, "reference: mean ratio {:.2}", mean(1));
+    assert!(max(1) <= REFERENCE_MAX_RATIO_BOUND, "reference: worst ratio {:.2}", max(1));
+}
+
+#[test]
+fn a_turning_wheel_blurs_along_its_arcs_with_both_vectors() {
+    // Issue 30 item 3: a checkered wheel of radius 36 px turning 30 degrees per frame about its
+    // still centre, a shutter of one frame centred: its points sweep arcs of 30 degrees (18.8 px
+    // at the rim). The renderer's vectors are the chords to the next and previous frame; the two
+    // segments (next for t > 0, previous for t < 0) bend toward the centre as the arc does, a
+    // single straight line (previous = -next, what a pass with one vector gives) leaves the arc
+    // by up to 2 r (1 - cos 30 deg) / 2 = 4.8 px at the rim by the shutter's ends. Against the
+    // exact image the reference must be closer with the two segments.
+    let gpu = gpu();
+    let out_dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated_scenes");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let scene = LayeredScene::turning_wheel(WIDTH, HEIGHT, 30f64.to_radians(), 1.0);
+    let passes = scene.render_motion();
+    let bent = motion_frame(&passes);
+    let straight = Frame::new(WIDTH, HEIGHT, passes.color.clone(), passes.depth_m.clone())
+        .with_velocity(passes.velocity_next_px.clone(), None);
+    let rmse = |rgba: &[f32]| compare_rgba(rgba, &passes.truth).rmse_matched;
+    let input = rmse(&passes.color);
+    println!("\nturning wheel, 30 deg/frame, 360 deg shutter: RMSE input {input:.4}");
+    for mode in [MotionBlurMode::Fast, MotionBlurMode::Reference] {
+        let camera = motion_camera(&scene, mode);
+        let (two, _, _) = render(&gpu, &bent, &camera);
+        let (one, _, _) = render(&gpu, &straight, &camera);
+        // truth | one straight line | two segments | input.
+        let images = [&passes.truth[..], &one, &two, &passes.color];
+        write_strip(&out_dir.join(format!("wheel_{mode:?}.png")), (WIDTH, HEIGHT), images);
+        let (two, one) = (rmse(&two), rmse(&one));
+        println!(
+            "{mode:?}: two segments {two:.4} ({:.2} of the input's), one line {one:.4} ({:.2})",
+            two / input,
+            one / input
+        );
+        // The reference follows the path model exactly: the arcs must show (today 0.83x the
+        // straight line's error). The fast path's lines are the neighbourhood's and the pixel's
+        // own next and previous directions, and on a turning field the sources on a pixel's arc lie
+        // on neither: it gains nothing from the bend (today 1.04x the straight line's error; the
+        // gap is in docs/measurements.md); asserted not to lose more than that, and to halve the
+        // input's error.
+        let (gain_bound, input_bound) = match mode {
+            MotionBlurMode::Reference => (0.9, 0.4),
+            _ => (1.1, WHEEL_RATIO_BOUND),
+        };
+        assert!(two <= gain_bound * one, "{mode:?}: two segments {two:.4}, one straight line {one:.4}");
+        assert!(two <= input_bound * input, "{mode:?}: two segments {two:.4}, input {input:.4}");
     }
 }

@@ -24,10 +24,21 @@
 //! `truth_spp` rays over the pixel's area and the aperture (a 4D Halton sequence, rotated per
 //! pixel), which is what realcam's depth of field of the colour pass should give.
 //!
+//! **Motion** ([`LayeredScene::render_motion`], issue 30): layers move rigidly in their planes
+//! (a velocity and a turn, [`LayerMotion`]); a film point integrates the light over the open
+//! shutter (Kyaw 2013 sec 5.2: a point moving while the shutter is open leaves a streak as long
+//! as its motion over the open time), with realcam's times: frames from the frame time, the
+//! shutter open over `shutter_frames` (src/optics/shutter.rs `ShutterTiming`, a box curve). It
+//! writes the passes of a renderer with its motion blur off: the colour at the frame time
+//! (anti-aliased), the depth and the next and previous vectors of the pixel centre's one sample,
+//! and the exact motion-blurred image through the pinhole (no defocus, so the motion blur is
+//! judged alone).
+//!
 //! **What it does not model:** tilted or curved surfaces, transparency other than binary masks,
-//! lighting (the textures are the radiance), motion, aberrations, vignetting, diffraction, a
-//! pixel filter other than the box, noise beyond the sampling's (about 1/sqrt(spp) per pixel
-//! at hard edges; tile means are far better).
+//! lighting (the textures are the radiance), motion in depth or of the camera, a shutter curve
+//! other than the box, aberrations, vignetting, diffraction, a pixel filter other than the box,
+//! noise beyond the sampling's (about 1/sqrt(spp) per pixel at hard edges; tile means are far
+//! better).
 //!
 //! Deterministic from a seed: the same seed gives bit-identical images on any thread count.
 
@@ -40,6 +51,10 @@ pub const SKY_DEPTH_M: f32 = 1.0e10;
 /// The largest CoC diameter on the film of a random scene's layers, mm (48 px at 256 px wide;
 /// the sky's may reach 1.19 mm at f/1.4 focused at 1.5 m).
 pub const MAX_COC_SENSOR_MM: f64 = 1.2;
+
+/// Samples per pixel of the motion-blurred truth (pixel area x open time): a 40 px streak gets
+/// about 6 samples a pixel of its length.
+pub const MOTION_TRUTH_SPP: u32 = 256;
 
 /// The camera of a scene: realcam's `--lens ideal --focal-length F --fstop N --focus S
 /// --sensor WxH --blades B --blade-rotation R`.
@@ -170,12 +185,66 @@ pub enum Texture {
     },
 }
 
+/// How a layer moves over time t (frames from the frame time, the instant the colour, depth and
+/// velocity passes describe): rigidly in its own plane, turning `spin_rad_per_frame` about
+/// `centre_m` (clockwise on screen, x right and y down) while that centre moves `velocity_m_per_frame` per
+/// frame. A fronto-parallel plane keeps its depth, so its image moves by `velocity_m_per_frame` over the
+/// metres per pixel of its depth ([`LayeredScene::m_per_px`]).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct LayerMotion {
+    /// Metres per frame on the layer's plane (x right, y down).
+    pub velocity_m_per_frame: [f64; 2],
+    pub spin_rad_per_frame: f64,
+    /// The centre of the turn at the frame time (metres on the plane).
+    pub centre_m: [f64; 2],
+}
+
+impl LayerMotion {
+    /// Not moving.
+    pub const STILL: LayerMotion =
+        LayerMotion { velocity_m_per_frame: [0.0; 2], spin_rad_per_frame: 0.0, centre_m: [0.0; 2] };
+
+    fn is_still(&self) -> bool {
+        self.velocity_m_per_frame == [0.0; 2] && self.spin_rad_per_frame == 0.0
+    }
+
+    /// Where the layer's point that is at `q` at the frame time is at time `t`:
+    /// c + v t + R(spin t) (q - c).
+    pub fn position_at(&self, q: [f64; 2], t: f64) -> [f64; 2] {
+        if t == 0.0 || self.is_still() {
+            return q;
+        }
+        let (s, c) = (self.spin_rad_per_frame * t).sin_cos();
+        let [cx, cy] = self.centre_m;
+        let (dx, dy) = (q[0] - cx, q[1] - cy);
+        [
+            cx + self.velocity_m_per_frame[0] * t + c * dx - s * dy,
+            cy + self.velocity_m_per_frame[1] * t + s * dx + c * dy,
+        ]
+    }
+
+    /// The inverse: which of the layer's points (at their frame-time positions) is at `p` at
+    /// time `t`: c + R(-spin t) (p - c - v t). Exactly `p` at t = 0 and for a still layer, so the
+    /// depth of field's scenes trace bit for bit as before.
+    fn material_point(&self, p: [f64; 2], t: f64) -> [f64; 2] {
+        if t == 0.0 || self.is_still() {
+            return p;
+        }
+        let (s, c) = (self.spin_rad_per_frame * t).sin_cos();
+        let [cx, cy] = self.centre_m;
+        let (dx, dy) = (p[0] - cx - self.velocity_m_per_frame[0] * t, p[1] - cy - self.velocity_m_per_frame[1] * t);
+        [cx + c * dx + s * dy, cy - s * dx + c * dy]
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layer {
     pub depth_m: f64,
     pub shape: Shape,
     pub mask: Mask,
     pub texture: Texture,
+    /// [`LayerMotion::STILL`] in the depth of field's scenes.
+    pub motion: LayerMotion,
 }
 
 impl Layer {
@@ -236,8 +305,13 @@ pub struct LayeredScene {
     pub sky: [[f32; 3]; 2],
     /// Samples per pixel of the colour pass (pinhole, box filter).
     pub color_spp: u32,
-    /// Samples per pixel of the defocused truth (pixel area x aperture).
+    /// Samples per pixel of the defocused truth (pixel area x aperture), and of the motion-blurred
+    /// truth (pixel area x open time).
     pub truth_spp: u32,
+    /// When the shutter opens and closes (frames from the frame time; realcam's
+    /// [`crate::optics::shutter::ShutterTiming`] `open_frames`, `close_frames`, a box curve):
+    /// (0, 0) in the depth of field's scenes.
+    pub shutter_frames: [f64; 2],
 }
 
 /// The passes of a scene, RGBA row-major top row first (depth: one value per pixel).
@@ -250,6 +324,28 @@ pub struct LayeredPasses {
     /// Planar depth of the pixel centre's pinhole ray, m.
     pub depth_m: Vec<f32>,
     /// The exact defocused image of the scene's thin lens.
+    pub truth: Vec<f32>,
+}
+
+/// The passes of a scene with movers ([`LayeredScene::render_motion`]), as a renderer writes them
+/// with its motion blur off, and the exact motion-blurred image; RGBA or xy per pixel, row-major,
+/// top row first.
+#[derive(Clone, Debug)]
+pub struct MotionPasses {
+    pub width: u32,
+    pub height: u32,
+    /// The pinhole colour at the frame time (the centred shutter's middle), anti-aliased; alpha 1.
+    pub color: Vec<f32>,
+    /// Planar depth of the pixel centre's pinhole ray at the frame time, m.
+    pub depth_m: Vec<f32>,
+    /// Px per frame (x right, y down) from where the point of the layer the pixel centre's ray
+    /// hits at the frame time is to where it is one frame later (the chord, as renderers write
+    /// it); 0 on the sky. Two values per pixel.
+    pub velocity_next_px: Vec<f32>,
+    /// The same toward one frame earlier.
+    pub velocity_prev_px: Vec<f32>,
+    /// The exact image with the shutter open over `shutter_frames` (box), through the pinhole:
+    /// the mean over the pixel's area and the open time; no defocus.
     pub truth: Vec<f32>,
 }
 
@@ -342,7 +438,13 @@ impl LayeredScene {
         if rng.unit() < 0.5 {
             let d = rng.range(6.0, 30.0);
             let t = texture(&mut rng, d);
-            layers.push(Layer { depth_m: d, shape: Shape::Everywhere, mask: Mask::Opaque, texture: t });
+            layers.push(Layer {
+                depth_m: d,
+                shape: Shape::Everywhere,
+                mask: Mask::Opaque,
+                texture: t,
+                motion: LayerMotion::STILL,
+            });
         }
         let depth = |rng: &mut Rng| loop {
             let d = (0.6f64.ln() + rng.unit() * (12.0f64.ln() - 0.6f64.ln())).exp();
@@ -375,7 +477,7 @@ impl LayeredScene {
                 Mask::Opaque
             };
             let t = texture(&mut rng, d);
-            layers.push(Layer { depth_m: d, shape, mask, texture: t });
+            layers.push(Layer { depth_m: d, shape, mask, texture: t, motion: LayerMotion::STILL });
         }
         for _ in 0..rng.pick(5) {
             let d = depth(&mut rng);
@@ -387,23 +489,85 @@ impl LayeredScene {
                 shape: Shape::Disc { cx: x, cy: y, r: rng.range(0.5, 1.2) * m_per_px(d) },
                 mask: Mask::Opaque,
                 texture: Texture::Flat(tint.map(|c| c * v)),
+                motion: LayerMotion::STILL,
             });
         }
         layers.sort_by(|a, b| a.depth_m.total_cmp(&b.depth_m));
-        LayeredScene { seed, camera, layers, sky, color_spp: 16, truth_spp: 128 }
+        LayeredScene { seed, camera, layers, sky, color_spp: 16, truth_spp: 128, shutter_frames: [0.0; 2] }
+    }
+
+    /// Metres on a plane at depth `depth_m` per pixel of the image (pinhole).
+    pub fn m_per_px(&self, depth_m: f64) -> f64 {
+        self.camera.pixel_pitch_mm() * depth_m / self.camera.focal_length_mm
+    }
+
+    /// The scene of [`Self::random`] for `seed` (the same layers, textures and masks), set in
+    /// motion from a second random stream of the seed: each layer (the wall and the highlights
+    /// too) is still with probability 0.3, else moves 2..40 px per frame in a uniform direction;
+    /// the sky is still; the shutter is centred on the frame time and open 90, 180, 270 or 360
+    /// degrees (0.25..1 frame), a box. No layer turns. Its truth ([`Self::render_motion`]) is
+    /// through the pinhole: motion blur alone.
+    pub fn random_moving(seed: u64, width: u32, height: u32) -> LayeredScene {
+        let mut scene = LayeredScene::random(seed, width, height);
+        let mut rng = Rng(seed.wrapping_mul(0x9FB2_1C65_1E98_DF25) ^ 0x3C6E_F372_FE94_F82B);
+        let open = [0.25, 0.5, 0.75, 1.0][rng.pick(4)];
+        scene.shutter_frames = [-0.5 * open, 0.5 * open];
+        scene.truth_spp = MOTION_TRUTH_SPP;
+        for k in 0..scene.layers.len() {
+            let (still, speed_px, angle) =
+                (rng.unit() < 0.3, rng.range(2.0, 40.0), rng.range(0.0, std::f64::consts::TAU));
+            if !still {
+                let m = scene.m_per_px(scene.layers[k].depth_m);
+                scene.layers[k].motion.velocity_m_per_frame = [speed_px * angle.cos() * m, speed_px * angle.sin() * m];
+            }
+        }
+        scene
+    }
+
+    /// A turning textured disc: a wheel of radius 36 px with a checker of 11 px cells in front of a still striped wall, turning `spin_rad_per_frame`
+    /// about its centre, its centre still; the shutter centred, open `open_frames`. Its points
+    /// move along arcs: the chords to the previous and next frame bend, so a blur along one
+    /// straight line through the pixel (the next vector and its negation) misses the arc, the
+    /// two segments (next and previous vectors) follow it.
+    pub fn turning_wheel(width: u32, height: u32, spin_rad_per_frame: f64, open_frames: f64) -> LayeredScene {
+        let mut scene = LayeredScene::random(0, width, height);
+        let (wheel_m, wall_m) = (2.0, 8.0);
+        let r = 36.0 * scene.m_per_px(wheel_m);
+        let cell = 6.0 * scene.m_per_px(wall_m);
+        scene.layers = vec![
+            Layer {
+                depth_m: wheel_m,
+                shape: Shape::Disc { cx: 0.0, cy: 0.0, r },
+                mask: Mask::Opaque,
+                texture: Texture::Checker { cell: 0.3 * r, a: [0.9, 0.8, 0.3], b: [0.05, 0.1, 0.3] },
+                motion: LayerMotion { velocity_m_per_frame: [0.0; 2], spin_rad_per_frame, centre_m: [0.0; 2] },
+            },
+            Layer {
+                depth_m: wall_m,
+                shape: Shape::Everywhere,
+                mask: Mask::Opaque,
+                texture: Texture::Stripes { period: cell, a: [0.4, 0.4, 0.45], b: [0.1, 0.12, 0.1] },
+                motion: LayerMotion::STILL,
+            },
+        ];
+        scene.shutter_frames = [-0.5 * open_frames, 0.5 * open_frames];
+        scene.truth_spp = MOTION_TRUTH_SPP;
+        scene
     }
 
     /// The radiance and depth along the ray from aperture point (lx, ly) (metres) through the
-    /// film point (fx, fy) (mm, x right, y down): the nearest layer that takes it, else the sky.
-    fn trace(&self, lx: f64, ly: f64, fx: f64, fy: f64) -> ([f32; 3], f32) {
+    /// film point (fx, fy) (mm, x right, y down) at time `t` (frames): the nearest layer that takes
+    /// it, else the sky; and the index of that layer (None: the sky).
+    fn trace(&self, lx: f64, ly: f64, fx: f64, fy: f64, t: f64) -> ([f32; 3], f32, Option<usize>) {
         let c = &self.camera;
         // The pinhole ray's point at the focus distance.
         let s = c.focus_m;
         let (px, py) = (fx / c.focal_length_mm * s, fy / c.focal_length_mm * s);
-        for layer in &self.layers {
-            let t = layer.depth_m / s;
-            if let Some(rgb) = layer.hit(lx + t * (px - lx), ly + t * (py - ly)) {
-                return (rgb, layer.depth_m as f32);
+        for (k, layer) in self.layers.iter().enumerate() {
+            let d = layer.depth_m / s;
+            let [x, y] = layer.motion.material_point([lx + d * (px - lx), ly + d * (py - ly)], t);
+            if let Some(rgb) = layer.hit(x, y) {
+                return (rgb, layer.depth_m as f32, Some(k));
             }
         }
         // The sky by the ray's vertical direction, -0.5..0.5 of the frame's height at the top and
@@ -411,7 +575,7 @@ impl LayeredScene {
         let dir_y = (py - ly) / s * c.focal_length_mm / c.sensor_height_mm();
         let t = (dir_y + 0.5).clamp(0.0, 1.0) as f32;
         let [top, bottom] = self.sky;
-        ([0, 1, 2].map(|k| top[k] + t * (bottom[k] - top[k])), SKY_DEPTH_M)
+        ([0, 1, 2].map(|k| top[k] + t * (bottom[k] - top[k])), SKY_DEPTH_M, None)
     }
 
     /// The film point (mm) of pixel position (x, y) (px, continuous).
@@ -451,30 +615,34 @@ impl LayeredScene {
             let rot = [0u64, 1, 2, 3].map(|k| hash_unit(key.wrapping_add(k.wrapping_mul(0x632B_E59B_D9B4_E019))));
             // Depth: the pixel centre's pinhole ray.
             let (fx, fy) = self.film(x as f64 + 0.5, y as f64 + 0.5);
-            *d = self.trace(0.0, 0.0, fx, fy).1;
+            *d = self.trace(0.0, 0.0, fx, fy, 0.0).1;
             // Colour: the pinhole, box-filtered over the pixel.
-            color[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.color_spp, rot, false));
+            color[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.color_spp, rot, Sampling::Pinhole));
             // Truth: the pixel's area x the aperture.
-            truth[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.truth_spp, rot, true));
+            truth[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.truth_spp, rot, Sampling::Lens));
         }
     }
 
     /// The opaque RGBA mean of `spp` rays through pixel (x, y), over the pixel's area (Halton
-    /// bases 2, 3) and, `through_lens`, the aperture (bases 5, 7); the pinhole's otherwise;
+    /// bases 2, 3) and, by `sampling`, the aperture (bases 5, 7) or the open time (base 5);
     /// `rot` shifts the sequences per pixel (Cranley-Patterson rotation).
-    fn pixel_mean(&self, x: usize, y: usize, spp: u32, rot: [f64; 4], through_lens: bool) -> [f32; 4] {
+    fn pixel_mean(&self, x: usize, y: usize, spp: u32, rot: [f64; 4], sampling: Sampling) -> [f32; 4] {
         let wrap = |v: f64| v - v.floor();
         let mut sum = [0.0f64; 3];
+        let [open, close] = self.shutter_frames;
         for s in 0..spp {
             let (jx, jy) = (wrap(halton(s + 1, 2) + rot[0]), wrap(halton(s + 1, 3) + rot[1]));
-            let (lx, ly) = if through_lens {
-                let (u, v) = (wrap(halton(s + 1, 5) + rot[2]), wrap(halton(s + 1, 7) + rot[3]));
-                self.camera.aperture_point(u, v)
-            } else {
-                (0.0, 0.0)
+            let ((lx, ly), t) = match sampling {
+                Sampling::Pinhole => ((0.0, 0.0), 0.0),
+                Sampling::Lens => {
+                    let (u, v) = (wrap(halton(s + 1, 5) + rot[2]), wrap(halton(s + 1, 7) + rot[3]));
+                    (self.camera.aperture_point(u, v), 0.0)
+                }
+                // A box shutter: time uniform over the open interval.
+                Sampling::Shutter => ((0.0, 0.0), open + (close - open) * wrap(halton(s + 1, 5) + rot[2])),
             };
             let (fx, fy) = self.film(x as f64 + jx, y as f64 + jy);
-            let rgb = self.trace(lx, ly, fx, fy).0;
+            let rgb = self.trace(lx, ly, fx, fy, t).0;
             for k in 0..3 {
                 sum[k] += rgb[k] as f64;
             }
@@ -482,6 +650,87 @@ impl LayeredScene {
         let n = spp.max(1) as f64;
         [(sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32, 1.0]
     }
+
+    /// The passes of a scene with movers and its exact motion-blurred image. Rows are shared
+    /// among the machine's threads; the result does not depend on their number.
+    pub fn render_motion(&self) -> MotionPasses {
+        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        let mut p = MotionPasses {
+            width: self.camera.width,
+            height: self.camera.height,
+            color: vec![0.0; w * h * 4],
+            depth_m: vec![0.0; w * h],
+            velocity_next_px: vec![0.0; w * h * 2],
+            velocity_prev_px: vec![0.0; w * h * 2],
+            truth: vec![0.0; w * h * 4],
+        };
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 16);
+        let rows = h.div_ceil(threads).max(1);
+        std::thread::scope(|scope| {
+            let chunks = p
+                .color
+                .chunks_mut(rows * w * 4)
+                .zip(p.truth.chunks_mut(rows * w * 4))
+                .zip(p.depth_m.chunks_mut(rows * w))
+                .zip(p.velocity_next_px.chunks_mut(rows * w * 2).zip(p.velocity_prev_px.chunks_mut(rows * w * 2)));
+            for (k, (((c, t), d), (n, b))) in chunks.enumerate() {
+                scope.spawn(move || self.render_motion_rows(k * rows, c, t, d, [n, b]));
+            }
+        });
+        p
+    }
+
+    fn render_motion_rows(
+        &self,
+        y0: usize,
+        color: &mut [f32],
+        truth: &mut [f32],
+        depth: &mut [f32],
+        [next, prev]: [&mut [f32]; 2],
+    ) {
+        let w = self.camera.width as usize;
+        for (i, d) in depth.iter_mut().enumerate() {
+            let (x, y) = (i % w, y0 + i / w);
+            let key = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ ((y * w + x) as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93);
+            let rot = [0u64, 1, 2, 3].map(|k| hash_unit(key.wrapping_add(k.wrapping_mul(0x632B_E59B_D9B4_E019))));
+            // Depth and vectors: one sample, the pixel centre's pinhole ray at the frame time.
+            let (fx, fy) = self.film(x as f64 + 0.5, y as f64 + 0.5);
+            let (_, z, hit) = self.trace(0.0, 0.0, fx, fy, 0.0);
+            *d = z;
+            let (n, b) = hit.map_or(([0.0; 2], [0.0; 2]), |k| self.chords_px(k, fx, fy));
+            next[i * 2..i * 2 + 2].copy_from_slice(&n.map(|v| v as f32));
+            prev[i * 2..i * 2 + 2].copy_from_slice(&b.map(|v| v as f32));
+            color[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.color_spp, rot, Sampling::Pinhole));
+            truth[i * 4..i * 4 + 4].copy_from_slice(&self.pixel_mean(x, y, self.truth_spp, rot, Sampling::Shutter));
+        }
+    }
+
+    /// The image motion (px, x right, y down) of layer `k`'s point seen through the pinhole at
+    /// film point (fx, fy) (mm) at the frame time, to where it is one frame later and one frame
+    /// earlier: what a renderer's vector pass holds (Blender's Z,W and X,Y before its sign and
+    /// y-up conventions).
+    fn chords_px(&self, k: usize, fx: f64, fy: f64) -> ([f64; 2], [f64; 2]) {
+        let layer = &self.layers[k];
+        let m = self.m_per_px(layer.depth_m);
+        let q = [fx / self.camera.focal_length_mm * layer.depth_m, fy / self.camera.focal_length_mm * layer.depth_m];
+        let chord = |t: f64| {
+            let p = layer.motion.position_at(q, t);
+            [(p[0] - q[0]) / m, (p[1] - q[1]) / m]
+        };
+        (chord(1.0), chord(-1.0))
+    }
+}
+
+/// What a pixel's samples range over besides its area.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Sampling {
+    /// The pinhole at the frame time (the colour pass).
+    Pinhole,
+    /// The aperture (the defocused truth).
+    Lens,
+    /// The open time (the motion-blurred truth).
+    Shutter,
 }
 
 impl LayeredPasses {
@@ -497,6 +746,32 @@ impl LayeredPasses {
         write_exr_rgba(&paths[0], &self.image(&self.color), &opts)?;
         write_exr_channels(&paths[1], self.width, self.height, &[("Z", &self.depth_m)], &opts)?;
         write_exr_rgba(&paths[2], &self.image(&self.truth), &opts)?;
+        Ok(paths)
+    }
+}
+
+impl MotionPasses {
+    /// The velocity as Blender's `Vector` pass holds it, X,Y,Z,W: px per frame, y up;
+    /// X,Y = p[f-1] - p[f] (the previous chord), Z,W = p[f] - p[f+1] (the next chord negated), as
+    /// src/io/exr_read/velocity.rs reads it back.
+    pub fn blender_vector(&self) -> [Vec<f32>; 4] {
+        let (n, p) = (&self.velocity_next_px, &self.velocity_prev_px);
+        let each = |f: &dyn Fn(usize) -> f32| (0..n.len() / 2).map(f).collect::<Vec<f32>>();
+        [each(&|i| p[2 * i]), each(&|i| -p[2 * i + 1]), each(&|i| -n[2 * i]), each(&|i| n[2 * i + 1])]
+    }
+
+    /// Writes `<dir>/<name>_color.exr` (RGBA, float32), `<dir>/<name>_depth.exr` (Z, metres),
+    /// `<dir>/<name>_vector.exr` (Blender's X,Y,Z,W) and `<dir>/<name>_truth.exr` (RGBA, the
+    /// exact motion-blurred image); returns their paths.
+    pub fn write(&self, dir: &Path, name: &str) -> Result<[PathBuf; 4], IoError> {
+        let opts = ExrWriteOptions { float32: true, ..ExrWriteOptions::default() };
+        let paths = ["color", "depth", "vector", "truth"].map(|p| dir.join(format!("{name}_{p}.exr")));
+        let image = |data: &[f32]| Image { width: self.width, height: self.height, channels: 4, data: data.to_vec() };
+        write_exr_rgba(&paths[0], &image(&self.color), &opts)?;
+        write_exr_channels(&paths[1], self.width, self.height, &[("Z", &self.depth_m)], &opts)?;
+        let [x, y, z, w] = self.blender_vector();
+        write_exr_channels(&paths[2], self.width, self.height, &[("X", &x), ("Y", &y), ("Z", &z), ("W", &w)], &opts)?;
+        write_exr_rgba(&paths[3], &image(&self.truth), &opts)?;
         Ok(paths)
     }
 }
@@ -582,17 +857,20 @@ mod tests {
                     shape: Shape::Disc { cx: 0.0, cy: 0.0, r: 2.0 * m_per_px },
                     mask: Mask::Opaque,
                     texture: Texture::Flat([100.0; 3]),
+                    motion: LayerMotion::STILL,
                 },
                 Layer {
                     depth_m: 6.0 + 1e-9,
                     shape: Shape::Everywhere,
                     mask: Mask::Opaque,
                     texture: Texture::Flat([0.0; 3]),
+                    motion: LayerMotion::STILL,
                 },
             ],
             sky: [[0.0; 3]; 2],
             color_spp: 64,
             truth_spp: 256,
+            shutter_frames: [0.0; 2],
         };
         let p = scene.render();
         let energy = |v: &[f32]| v.chunks_exact(4).map(|q| q[1] as f64).sum::<f64>();
@@ -639,12 +917,20 @@ mod tests {
                     shape: Shape::Rect { x0: -1.0, y0: -1.0, x1: 0.0, y1: 1.0 },
                     mask: Mask::Opaque,
                     texture: Texture::Flat([0.0; 3]),
+                    motion: LayerMotion::STILL,
                 },
-                Layer { depth_m: 10.0, shape: Shape::Everywhere, mask: Mask::Opaque, texture: Texture::Flat([1.0; 3]) },
+                Layer {
+                    depth_m: 10.0,
+                    shape: Shape::Everywhere,
+                    mask: Mask::Opaque,
+                    texture: Texture::Flat([1.0; 3]),
+                    motion: LayerMotion::STILL,
+                },
             ],
             sky: [[0.0; 3]; 2],
             color_spp: 16,
             truth_spp: 256,
+            shutter_frames: [0.0; 2],
         };
         let p = scene.render();
         let at = |v: &[f32], x: usize| v[(8 * 64 + x) * 4];
@@ -652,5 +938,152 @@ mod tests {
         assert_eq!((p.depth_m[8 * 64 + 30], p.depth_m[8 * 64 + 33]), (1.0, 10.0));
         assert!(at(&p.truth, 30) > 0.2 && at(&p.truth, 33) < 0.8, "{} {}", at(&p.truth, 30), at(&p.truth, 33));
         assert!(at(&p.truth, 0) < 0.01 && at(&p.truth, 63) > 0.99);
+    }
+
+    /// A bright square of `side_m` on a black wall, both at 5 m, the square moving
+    /// `velocity_px` per frame; the shutter centred, open `open` frames.
+    fn moving_square(velocity_px: [f64; 2], open: f64, spin: f64) -> LayeredScene {
+        let camera = LayeredCamera {
+            width: 96,
+            height: 48,
+            focal_length_mm: 50.0,
+            f_number: 2.0,
+            focus_m: 5.0,
+            sensor_width_mm: 2.4,
+            blades: 0,
+            rotation_deg: 0.0,
+        };
+        let mut scene = LayeredScene {
+            seed: 5,
+            camera,
+            layers: Vec::new(),
+            sky: [[0.0; 3]; 2],
+            color_spp: 64,
+            truth_spp: 256,
+            shutter_frames: [-0.5 * open, 0.5 * open],
+        };
+        let m = scene.m_per_px(5.0);
+        scene.layers = vec![
+            Layer {
+                depth_m: 5.0,
+                shape: Shape::Rect { x0: -4.0 * m, y0: -4.0 * m, x1: 4.0 * m, y1: 4.0 * m },
+                mask: Mask::Opaque,
+                texture: Texture::Flat([10.0; 3]),
+                motion: LayerMotion {
+                    velocity_m_per_frame: velocity_px.map(|v| v * m),
+                    spin_rad_per_frame: spin,
+                    centre_m: [0.0; 2],
+                },
+            },
+            Layer {
+                depth_m: 5.0 + 1e-9,
+                shape: Shape::Everywhere,
+                mask: Mask::Opaque,
+                texture: Texture::Flat([0.0; 3]),
+                motion: LayerMotion::STILL,
+            },
+        ];
+        scene
+    }
+
+    #[test]
+    fn a_mover_streaks_by_its_velocity_times_the_open_time_and_keeps_its_light() {
+        // 24 px per frame to the right, open half a frame centred: the truth is the 8 px square
+        // convolved with a 12 px box along x centred on it and with the pixel: the same light,
+        // the same mean position, the horizontal variance (8^2 + 12^2 + 1) / 12 (variances add
+        // under convolution; the smooth result's pixel samples keep it, where the colour's 8 equal
+        // pixels have (8^2 - 1) / 12); nothing moves vertically.
+        let p = moving_square([24.0, 0.0], 0.5, 0.0).render_motion();
+        let moments = |v: &[f32], axis: usize| {
+            let (mut e, mut m1, mut m2) = (0.0f64, 0.0f64, 0.0f64);
+            for (i, q) in v.chunks_exact(4).enumerate() {
+                let c = [(i % 96) as f64 + 0.5 - 48.0, (i / 96) as f64 + 0.5 - 24.0][axis];
+                e += q[0] as f64;
+                m1 += q[0] as f64 * c;
+                m2 += q[0] as f64 * c * c;
+            }
+            (e, m1 / e, m2 / e - (m1 / e).powi(2))
+        };
+        let ((e_c, x_c, vx_c), (e_t, x_t, vx_t)) = (moments(&p.color, 0), moments(&p.truth, 0));
+        assert!((e_c / 640.0 - 1.0).abs() < 1e-3 && (e_t / e_c - 1.0).abs() < 2e-3, "{e_c} {e_t}");
+        assert!(x_c.abs() < 1e-3 && x_t.abs() < 0.02, "{x_c} {x_t}");
+        assert!((vx_c - 63.0 / 12.0).abs() < 1e-3, "{vx_c}");
+        assert!((vx_t - 209.0 / 12.0).abs() < 0.1, "variance {vx_t}, expected {}", 209.0 / 12.0);
+        let (vy_c, vy_t) = (moments(&p.color, 1).2, moments(&p.truth, 1).2);
+        assert!((vy_t - vy_c).abs() < 0.02, "{vy_c} {vy_t}");
+        // The vectors: (24, 0) and (-24, 0) on the square's pixels (centres within it), 0 on the
+        // wall; the depth the square's.
+        let at = |v: &[f32], x: usize, y: usize| [v[(y * 96 + x) * 2], v[(y * 96 + x) * 2 + 1]];
+        assert_eq!((at(&p.velocity_next_px, 48, 24), at(&p.velocity_prev_px, 48, 24)), ([24.0, 0.0], [-24.0, 0.0]));
+        assert_eq!((at(&p.velocity_next_px, 52, 24), at(&p.velocity_next_px, 44, 24)), ([0.0; 2], [24.0, 0.0]));
+        assert_eq!(p.depth_m[24 * 96 + 48], 5.0);
+    }
+
+    #[test]
+    fn a_turning_layers_vectors_are_the_chords_of_its_arcs() {
+        // 20 degrees per frame about the centre: a point at radius r moves along a chord of
+        // 2 r sin(10 deg) to each neighbouring frame, the two chords bending inward (next + prev
+        // = -2 r (1 - cos 20 deg) toward the centre), and through the pinhole at the frame time the
+        // square sits where it was built.
+        let spin = 20f64.to_radians();
+        let scene = moving_square([0.0; 2], 0.5, spin);
+        let p = scene.render_motion();
+        let i = 24 * 96 + 51; // pixel centre (3.5, 0.5) px from the centre
+        let (n, b) = (
+            [p.velocity_next_px[2 * i], p.velocity_next_px[2 * i + 1]],
+            [p.velocity_prev_px[2 * i], p.velocity_prev_px[2 * i + 1]],
+        );
+        let r = 3.5f64.hypot(0.5);
+        for c in [n, b] {
+            assert!(((c[0] as f64).hypot(c[1] as f64) - 2.0 * r * (spin / 2.0).sin()).abs() < 1e-4, "{c:?}");
+        }
+        let bend = [(n[0] + b[0]) as f64, (n[1] + b[1]) as f64];
+        let inward = 2.0 * r * (1.0 - spin.cos());
+        assert!((bend[0] + inward * 3.5 / r).abs() < 1e-4 && (bend[1] + inward * 0.5 / r).abs() < 1e-4, "{bend:?}");
+        // Clockwise on screen (y down): the point right of the centre moves down.
+        assert!(n[1] > 0.0 && b[1] < 0.0);
+        let unturned = moving_square([0.0; 2], 0.5, 0.0).render_motion();
+        assert_eq!(p.color, unturned.color);
+        // A turn keeps the light.
+        let e = |v: &[f32]| v.chunks_exact(4).map(|q| q[0] as f64).sum::<f64>();
+        assert!((e(&p.truth) / e(&p.color) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn the_moving_scenes_are_the_still_ones_set_in_motion() {
+        // The same layers as the depth of field's scene of the seed, some still and some moving
+        // at most 40 px per frame; a centred shutter.
+        for seed in 0..8 {
+            let (still, moving) = (LayeredScene::random(seed, 160, 96), LayeredScene::random_moving(seed, 160, 96));
+            assert_eq!(still.layers.len(), moving.layers.len());
+            for (a, b) in still.layers.iter().zip(&moving.layers) {
+                assert_eq!((&a.shape, &a.mask, &a.texture, a.depth_m), (&b.shape, &b.mask, &b.texture, b.depth_m));
+                let speed_px = b.motion.velocity_m_per_frame[0].hypot(b.motion.velocity_m_per_frame[1])
+                    / moving.m_per_px(b.depth_m);
+                assert!(speed_px == 0.0 || (2.0 - 1e-9..=40.0 + 1e-9).contains(&speed_px), "{speed_px}");
+                assert_eq!(b.motion.spin_rad_per_frame, 0.0);
+            }
+            let [o, c] = moving.shutter_frames;
+            assert!(o == -c && (0.25..=1.0).contains(&(c - o)));
+        }
+    }
+
+    #[test]
+    fn the_vector_pass_reads_back_as_written() {
+        // Blender's X,Y,Z,W through realcam's reader: the same next and previous vectors.
+        let p = moving_square([6.0, -3.0], 0.5, 0.3).render_motion();
+        let dir = std::env::temp_dir().join(format!("realcam_layered_vector_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let [color, depth, vector, _] = p.write(&dir, "square").unwrap();
+        let sources = crate::io::PassSources {
+            depth_path: Some(depth),
+            velocity_path: Some(vector),
+            ..crate::io::PassSources::new(color)
+        };
+        let passes = crate::io::load_passes(&sources).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        assert_eq!(passes.velocity_format, Some(crate::io::VelocityFormat::Blender));
+        assert_eq!(passes.velocity_px.unwrap().data, p.velocity_next_px);
+        assert_eq!(passes.velocity_prev_px.unwrap().data, p.velocity_prev_px);
     }
 }

@@ -92,6 +92,12 @@ enum Command {
         /// Size of the layered scene.
         #[arg(long, default_value = "160x96", requires = "layered")]
         size: String,
+        /// With --layered: the scene set in motion (`LayeredScene::random_moving`, as
+        /// tests/generated_scenes.rs renders it): layered_SEED_motion_color.exr, _depth.exr,
+        /// _vector.exr (Blender's X,Y,Z,W) and _truth.exr (the exact motion blur through a pinhole),
+        /// and the realcam flags of its shutter.
+        #[arg(long, requires = "layered")]
+        motion: bool,
     },
 }
 
@@ -119,7 +125,7 @@ fn main() {
         Command::Compare { test, reference, highlights, fstop } => {
             compare::run(&test, &reference, highlights.as_deref().zip(fstop))
         }
-        Command::Synth { out, layered, size } => synth::run(&out, layered, &size),
+        Command::Synth { out, layered, size, motion } => synth::run(&out, layered, &size, motion),
     };
     if let Err(e) = result {
         realcam::session::report::say_on_stderr(&format!("error: {}", error_text(&e)));

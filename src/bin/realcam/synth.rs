@@ -5,10 +5,28 @@ use realcam::tools::layered_scene::LayeredScene;
 use realcam::tools::synth::{testdata_scenes, write_scene};
 use std::path::Path;
 
-pub fn run(out: &Path, layered: Option<u64>, size: &str) -> Result<()> {
+pub fn run(out: &Path, layered: Option<u64>, size: &str, motion: bool) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     if let Some(seed) = layered {
         let (width, height) = realcam::model::settings::parse_size_px(size).context("--size")?;
+        if motion {
+            let scene = LayeredScene::random_moving(seed, width, height);
+            let paths = scene.render_motion().write(out, &format!("layered_{seed}_motion"))?;
+            for p in &paths {
+                println!("wrote {}", p.display());
+            }
+            let [color, depth, vector, truth] = paths.map(|p| p.display().to_string());
+            let [open, close] = scene.shutter_frames;
+            println!(
+                "shutter: centred, {:.0} degrees (open {open} to {close} frames), a box; no defocus (the truth is through a pinhole)\n\
+                 e.g. realcam render --color {color} --depth {depth} --velocity {vector} --velocity-format blender \
+                 --shutter-angle {:.0} --max-blur 1000 --max-coc 0 --no-flare -o out.exr \
+                 (exposure and film at their defaults), against {truth}",
+                360.0 * (close - open),
+                360.0 * (close - open),
+            );
+            return Ok(());
+        }
         let scene = LayeredScene::random(seed, width, height);
         let paths = scene.render().write(out, &format!("layered_{seed}"))?;
         for p in &paths {
