@@ -21,8 +21,7 @@ layout(binding = 0, std430) readonly buffer TileCoc { vec2 tile_coc[]; };
 layout(binding = 1, std430) buffer Args { uint args[]; };
 layout(binding = 2, std430) writeonly buffer TileLists { uint tile_list[]; }; // LIST_COUNT lists of tile_count
 // [0, n): the gather radius (px); [n, 2n): the largest radius of a foreground sample (in front
-// of the focus plane) that reaches the tile; [2n, 3n): the class, as a float; [3n, 4n): the
-// pyramid levels the tile's composite reads (bit L - 1), as a float.
+// of the focus plane) that reaches the tile; [2n, 3n): the class, as a float.
 layout(binding = 3, std430) writeonly buffer TileRadius { float tile_radius_px[]; };
 
 layout(push_constant) uniform Push {
@@ -70,28 +69,16 @@ void main() {
     float radius = max(0.5 * max(abs(own.x), abs(own.y)), fg_radius);
     int cls = CLASS_COPY;
     if (radius > 0.5) cls = CLASS_SMALL;
-    if (radius > pc.small_radius_px) cls = CLASS_LEVEL1 + level_for_radius(radius) - 1;
-    // The tile's own pixels: the smallest |CoC| of its signed range (0 if the range holds 0).
-    float own_min_radius = 0.5 * (own.x > 0.0 ? own.x : (own.y < 0.0 ? -own.y : 0.0));
-    // The levels its composite reads: the foreground from the tile's level (the radius of the
-    // farthest-reaching foreground), each blurred pixel's background from the level of its own
-    // radius and the next (dof_composite.comp), so a wall beside a defocused pole is blurred by
-    // its own CoC, not the pole's. Blurred pixels: those above small_radius_px - 0.5.
-    uint levels = 0u;
-    if (cls >= CLASS_LEVEL1) {
-        levels = 1u << uint(cls - CLASS_LEVEL1);
-        float own_max_radius = 0.5 * max(abs(own.x), abs(own.y));
-        float blurred_from = pc.small_radius_px - 0.5;
-        if (own_max_radius > blurred_from) {
-            int last = level_for_radius(own_max_radius);
-            if (next_level_share(own_max_radius, last) > 0.0) ++last;
-            for (int l = level_for_radius(max(own_min_radius, blurred_from)); l <= last; ++l) levels |= 1u << uint(l - 1);
-        }
+    if (radius > pc.small_radius_px) {
+        int level = 1;
+        while (level < LEVELS && radius > float(LEVEL_RADIUS << level)) ++level;
+        cls = CLASS_LEVEL1 + level - 1;
     }
     tile_radius_px[t] = radius;
     tile_radius_px[tile_count + t] = fg_radius;
     tile_radius_px[2 * tile_count + t] = float(cls);
-    tile_radius_px[3 * tile_count + t] = float(levels);
+    // The tile's own pixels: the smallest |CoC| of its signed range (0 if the range holds 0).
+    float own_min_radius = 0.5 * (own.x > 0.0 ? own.x : (own.y < 0.0 ? -own.y : 0.0));
     bool blurred = cls >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px;
     int list = blurred ? LIST_BLURRED_LEVEL1 + cls - CLASS_LEVEL1 : cls;
     uint slot = atomicAdd(args[blurred ? ARGS_BLURRED_TILES(cls - CLASS_LEVEL1 + 1) : ARGS_TILES(cls)], 1u);

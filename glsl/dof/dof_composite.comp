@@ -21,22 +21,14 @@ layout(constant_id = 2) const bool EXACT_GATHER = true;
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 layout(binding = 0, rgba32f) uniform readonly image2D color_in;   // less the sprites' energy
 layout(binding = 1, r32f) uniform readonly image2D coc_px;
-// The backgrounds and CoCs of every level: a blurred pixel's background comes from the level
-// of its own CoC (dof_classify.comp lists its tile for the levels its pixels read).
-layout(binding = 2, rgba32f) uniform readonly image2D bg_level1;
+layout(binding = 2, rgba32f) uniform readonly image2D bg_level;
 layout(binding = 3, rgba32f) uniform readonly image2D fg_level;
 layout(binding = 4, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 5, std430) readonly buffer TileLists { uint tile_list[]; };
-layout(binding = 7, rg32f) uniform readonly image2D coc_level1;
+layout(binding = 7, rg32f) uniform readonly image2D coc_level;
 layout(binding = 8, rgba32f) uniform readonly image2D fg_big_level;
 layout(binding = 9, std430) readonly buffer TileRadius { float tile_radius_px[]; };
 layout(binding = 11, rg32f) uniform readonly image2D coverage_level;  // (foreground, large-CoC foreground)
-layout(binding = 12, rgba32f) uniform readonly image2D bg_level2;
-layout(binding = 13, rgba32f) uniform readonly image2D bg_level3;
-layout(binding = 14, rgba32f) uniform readonly image2D bg_level4;
-layout(binding = 15, rg32f) uniform readonly image2D coc_level2;
-layout(binding = 16, rg32f) uniform readonly image2D coc_level3;
-layout(binding = 17, rg32f) uniform readonly image2D coc_level4;
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -51,58 +43,15 @@ layout(push_constant) uniform Push {
 
 #include "gather.glsl"
 
-// The tile's level's foreground layers: 1 fg, 2 fg_big, 3 coverage.
 vec4 load_level(int which, ivec2 q) {
     q = clamp(q, ivec2(0), pc.level_size - 1);
-    return which == 1 ? imageLoad(fg_level, q) : (which == 2 ? imageLoad(fg_big_level, q) : imageLoad(coverage_level, q));
-}
-
-vec4 load_bg(int level, ivec2 q) {
-    return level == 1 ? imageLoad(bg_level1, q)
-        : (level == 2 ? imageLoad(bg_level2, q) : (level == 3 ? imageLoad(bg_level3, q) : imageLoad(bg_level4, q)));
-}
-
-// The CoC's weight (its texel's share of blurring pixels, dof_pyramid.comp).
-float load_weight(int level, ivec2 q) {
-    return level == 1 ? imageLoad(coc_level1, q).g
-        : (level == 2 ? imageLoad(coc_level2, q).g : (level == 3 ? imageLoad(coc_level3, q).g : imageLoad(coc_level4, q).g));
-}
-
-// The background of level `level` at pixel p: joint bilateral upsampling, each of the four
-// bilinear texels also weighted by its share of blurring pixels, so a blurred pixel next to a
-// sharp subject (or an in-focus highlight) does not pull that content in from the coarser grid.
-vec4 level_background(int level, ivec2 p) {
-    ivec2 level_size = (pc.size + (1 << level) - 1) >> level;
-    vec2 h = (vec2(p) + 0.5) / float(1 << level) - 0.5;
-    ivec2 h0 = ivec2(floor(h));
-    vec2 f = h - vec2(h0);
-    vec4 bg = vec4(0.0);
-    float bg_weight = 0.0;
-    for (int j = 0; j < 2; ++j) {
-        for (int i = 0; i < 2; ++i) {
-            ivec2 q = clamp(h0 + ivec2(i, j), ivec2(0), level_size - 1);
-            float w = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y) * load_weight(level, q);
-            bg += w * load_bg(level, q);
-            bg_weight += w;
-        }
-    }
-    return bg_weight > 0.0 ? bg / bg_weight : load_bg(level, clamp(h0, ivec2(0), level_size - 1));
+    return which == 0 ? imageLoad(bg_level, q)
+        : (which == 1 ? imageLoad(fg_level, q) : (which == 2 ? imageLoad(fg_big_level, q) : imageLoad(coverage_level, q)));
 }
 
 vec4 bilinear_level(int which, ivec2 h0, vec2 f) {
     return mix(mix(load_level(which, h0), load_level(which, h0 + ivec2(1, 0)), f.x),
                mix(load_level(which, h0 + ivec2(0, 1)), load_level(which, h0 + ivec2(1, 1)), f.x), f.y);
-}
-
-// The tile's level's CoC at pixel centre h0 + f (bilinear, edge texels continue).
-float bilinear_coc(ivec2 h0, vec2 f) {
-    float c[4];
-    for (int k = 0; k < 4; ++k) {
-        ivec2 q = clamp(h0 + ivec2(k & 1, k >> 1), ivec2(0), pc.level_size - 1);
-        c[k] = pc.level == 1 ? imageLoad(coc_level1, q).r
-            : (pc.level == 2 ? imageLoad(coc_level2, q).r : (pc.level == 3 ? imageLoad(coc_level3, q).r : imageLoad(coc_level4, q).r));
-    }
-    return mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
 }
 
 void main() {
@@ -120,7 +69,23 @@ void main() {
     vec2 h = (vec2(p) + 0.5) / scale - 0.5;
     ivec2 h0 = ivec2(floor(h));
     vec2 f = h - vec2(h0);
+    // Joint bilateral upsampling of the background: each level texel also weighted by how close
+    // its CoC is to this pixel's, so a blurred pixel next to a sharp subject (or an in-focus
+    // highlight) does not pull that content in from the coarser grid.
     float coc_here = imageLoad(coc_px, p).r;
+    vec4 bg = vec4(0.0);
+    float bg_weight = 0.0;
+    for (int j = 0; j < 2; ++j) {
+        for (int i = 0; i < 2; ++i) {
+            ivec2 q = clamp(h0 + ivec2(i, j), ivec2(0), pc.level_size - 1);
+            vec2 cw = imageLoad(coc_level, q).rg;
+            float bilinear = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
+            float similar = cw.y;
+            bg += (bilinear * similar) * imageLoad(bg_level, q);
+            bg_weight += bilinear * similar;
+        }
+    }
+    bg = bg_weight > 0.0 ? bg / bg_weight : load_level(0, h0);
     vec4 fg = bilinear_level(1, h0, f);
     // The foregrounds' coverages (x: all foreground samples, y: the large-CoC ones).
     vec2 coverage = bilinear_level(3, h0, f).xy;
@@ -130,28 +95,9 @@ void main() {
     // blurred pixels take the level's layers. A blend over the last half pixel below the
     // small-CoC radius joins the two (every pixel there weighs fully in the pyramid: radius
     // at least 1.5), so a pixel at or above it costs only the upsampling. A nearly sharp pixel
-    // (radius below 1.5) takes nothing of the levels' background: the pyramid holds little or
-    // none of it (its weight clamp(radius - 0.5, 0, 1)), and a level would blur it by 2^L px.
+    // (radius below 1.5) takes nothing of the level's background: the pyramid holds little or
+    // none of it (its weight clamp(radius - 0.5, 0, 1)), and the level would blur it by 2^L px.
     float blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
-    // The background from the level of the pixel's own CoC and the next (not the tile's, which
-    // the farthest-reaching foreground sets): no pixel blurred more than its own CoC asks, and
-    // the same CoC blurred the same in every tile. Only where it is used: the other levels'
-    // texels of a tile are not gathered (dof_classify.comp lists the ones its pixels read).
-    // Where the tile's level has a nearer layer over the pixel (its texels' CoC in front of the
-    // pixel's own: a hole in a defocused card, the far side of a foreground's edge), that
-    // layer's gather splits the light, not the pixel's own level: the pixel's background is
-    // the tile level's there (it holds the nearer layer, which covers the pixel), blended over
-    // one level texel of CoC difference.
-    vec4 bg = vec4(0.0);
-    if (blurred > 0.0) {
-        int bg_level = level_for_radius(radius_p);
-        bg = level_background(bg_level, p);
-        float next_share = next_level_share(radius_p, bg_level);
-        if (next_share > 0.0) bg = mix(bg, level_background(bg_level + 1, p), next_share);
-        float level_coc = bilinear_coc(h0, f);
-        float behind = clamp((coc_here - level_coc) / scale, 0.0, 1.0);
-        if (behind > 0.0) bg = mix(bg, level_background(pc.level, p), behind);
-    }
     vec4 base = bg;
     Aperture ap = pc.ap;
     if (EXACT_GATHER) {

@@ -44,21 +44,17 @@ layout(push_constant) uniform Push {
     float small_radius_px;      // in level units: larger CoC samples also go to fg_big
 } pc;
 
-// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile tc (the tile itself at bit 4)
-// reads this level: with `fg` of this level's class (its composite takes the foreground here,
-// gathered with the full tile radius), otherwise with this level in its mask (the background of
-// its blurred pixels, which no sample farther than LEVEL_RADIUS + 1 texels reaches).
-uint level_neighbours(ivec2 tc, bool fg) {
+// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile tc (the tile itself at bit 4) is of
+// this level's class.
+uint level_neighbours(ivec2 tc) {
     int tile_count = pc.tiles.x * pc.tiles.y;
     uint near = 0u;
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             ivec2 n = tc + ivec2(dx, dy);
             if (outside(n, pc.tiles)) continue;
-            int at = n.y * pc.tiles.x + n.x;
-            bool reads = fg ? int(tile_radius_px[2 * tile_count + at]) == CLASS_LEVEL1 + pc.level - 1
-                            : (uint(tile_radius_px[3 * tile_count + at]) & (1u << uint(pc.level - 1))) != 0u;
-            if (reads) near |= 1u << uint((dy + 1) * 3 + dx + 1);
+            int cls = int(tile_radius_px[2 * tile_count + n.y * pc.tiles.x + n.x]);
+            if (cls == CLASS_LEVEL1 + pc.level - 1) near |= 1u << uint((dy + 1) * 3 + dx + 1);
         }
     }
     return near;
@@ -100,8 +96,8 @@ void main() {
     uint t = level_list[(pc.level - 1) * tile_count + slot];
     int lane = int(gl_LocalInvocationIndex) % texels;
     ivec2 tc = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x));
-    uint near = level_neighbours(tc, false), near_fg = level_neighbours(tc, true);
-    // A tile that reads the level: its texels row by row; a neighbour: in ring order.
+    uint near = level_neighbours(tc);
+    // A tile of the level: its texels row by row; a neighbour: in ring order.
     ivec2 xy = (near & 16u) != 0u ? ivec2(lane % side, lane / side) : ring_texel(lane, side);
     ivec2 p = tc * side + xy;
     if (outside(p, pc.level_size)) return;
@@ -110,16 +106,10 @@ void main() {
     float coc_p = imageLoad(coc_level, p).r * to_level;
     float radius_p = max(0.5 * abs(coc_p), 0.5);
     // The taps' disc (aperture.glsl): no sample near the tile reaches farther than the tile's
-    // radius (its CoC here is a weighted mean of CoCs that radius bounds). Where only the
-    // background of pixels whose own level this is reads the texel (a tile of a coarser class),
-    // no sample it holds reaches farther than LEVEL_RADIUS + 1 texels: the disc stops there
-    // (the foreground taken there is never read), so the cost per texel stays bounded. No
-    // composite reads the texel: a disc of radius -1, so the gather's loops take no trip and it
-    // stores zero (the CPU twin's value).
-    float radius = tile_radius_px[t] * to_level;
-    float background_radius = pc.level < LEVELS ? min(radius, float(LEVEL_RADIUS + 1)) : radius;
-    float tap_disc = texel_read(xy, side, near_fg) ? tap_disc_px(radius)
-        : (texel_read(xy, side, near) ? tap_disc_px(background_radius) : -1.0);
+    // radius (its CoC here is a weighted mean of CoCs that radius bounds). No composite reads
+    // the texel: a disc of radius -1, so the gather's loops take no trip and it stores zero
+    // (the CPU twin's value).
+    float tap_disc = texel_read(xy, side, near) ? tap_disc_px(tile_radius_px[t] * to_level) : -1.0;
     int r = int(floor(tap_disc));
     vec4 bg = vec4(0.0), fg = vec4(0.0), fg_big = vec4(0.0);
     float bg_w = 0.0, fg_w = 0.0, fg_big_w = 0.0;
@@ -133,12 +123,10 @@ void main() {
             if (cw.y <= 0.0) continue;
             float coc_q = cw.x * to_level;
             float radius_q = max(0.5 * abs(coc_q), 0.5);
-            float reach = coc_q > coc_p ? min(radius_q, radius_p) : radius_q;
             // The level's own blur: the pyramid's 2^L box (variance 1/12 texel^2 per axis) and
             // the composite's bilinear tent (1/6) add 1/4 texel^2 to the disc's r^2 / 4, so the
-            // disc reaches sqrt(r^2 - 1): the sum blurs as the CoC asks (scene A f/2: 7.6% -> 5.1%
-            // of the tiles off the reference by more than 5%; a larger correction did worse).
-            reach = level_reach(reach);
+            // disc reaches sqrt(r^2 - 1): the sum blurs as the CoC asks.
+            float reach = level_reach(coc_q > coc_p ? min(radius_q, radius_p) : radius_q);
             if (float(dx * dx + dy * dy) > (reach + 1.0) * (reach + 1.0)) continue;
             int flip = coc_q < 0.0 ? -1 : 1;
             ivec2 o = ivec2(-dx, -dy) * flip;

@@ -1,8 +1,7 @@
 #version 450
-// Tiled depth of field: which tiles each pyramid level gathers. The tiles whose composite reads
-// the level (the tile's class level for the foreground, its blurred pixels' own levels for the
-// background: the mask of dof_classify.comp) upsample it bilinearly, reaching a texel beyond the
-// tile's own, so the level gathers those tiles and their eight neighbours (whatever their class): every texel a composite reads is then written, once,
+// Tiled depth of field: which tiles each pyramid level gathers. A level's composite upsamples
+// bilinearly, reaching a texel beyond its tile's own, so the level gathers its tiles and their
+// eight neighbours (whatever their class): every texel a composite reads is then written, once,
 // by the workgroup of the tile that holds it, with that tile's own radius. One invocation per
 // tile; each level list grows the level gather's dispatch by a workgroup per
 // GROUP_SIZE / (texels of a tile at the level) tiles.
@@ -28,13 +27,14 @@ void main() {
     int tile_count = pc.tiles.x * pc.tiles.y;
     if (t >= tile_count) return;
     ivec2 tc = ivec2(t % pc.tiles.x, t / pc.tiles.x);
-    // Bit L-1: the composite of the tile or of a neighbour reads level L.
+    // Bit L-1: the tile or a neighbour is of level L.
     uint levels = 0u;
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             ivec2 n = tc + ivec2(dx, dy);
             if (outside(n, pc.tiles)) continue;
-            levels |= uint(tile_radius_px[3 * tile_count + n.y * pc.tiles.x + n.x]);
+            int cls = int(tile_radius_px[2 * tile_count + n.y * pc.tiles.x + n.x]);
+            if (cls >= CLASS_LEVEL1) levels |= 1u << uint(cls - CLASS_LEVEL1);
         }
     }
     for (int level = 1; level <= LEVELS; ++level) {

@@ -16,24 +16,6 @@
 #define LEVELS 4
 #define CLASS_COUNT 6
 #define LEVEL_RADIUS 3
-
-// The pyramid level whose gather holds a CoC radius in at most LEVEL_RADIUS texels (LEVELS
-// beyond): a tile's level (from its gather radius) and a blurred pixel's background level (from
-// its own radius).
-int level_for_radius(float radius_px) {
-    int level = 1;
-    while (level < LEVELS && radius_px > float(LEVEL_RADIUS << level)) ++level;
-    return level;
-}
-
-// The share of level L + 1's background in a pixel of own radius r whose level is L: 0 up to
-// 3/4 of L's bound, 1 at the bound, where L + 1 holds r in LEVEL_RADIUS / 2 texels as it does just
-// above it. The background's blur follows the CoC smoothly instead of stepping at the bound.
-float next_level_share(float radius_px, int level) {
-    if (level >= LEVELS) return 0.0;
-    float bound = float(LEVEL_RADIUS << level);
-    return smoothstep(0.75 * bound, bound, radius_px);
-}
 // The tile lists: one per class, then per level the level's tiles with no nearly sharp pixel
 // (every pixel's CoC radius at least the small-CoC radius), which the composite takes without
 // its exact gather; the level classes' own lists keep the others. Last, the level tiles whose

@@ -333,7 +333,7 @@ mod tests {
         let composite = shader("dof_composite");
         assert_eq!(composite.push_constant_bytes, (2 + 2 + 2 + 1 + 1 + 12 + 1 + 1) * 4);
         let bindings: Vec<u32> = composite.bindings.iter().map(|b| b.binding).collect();
-        assert_eq!(bindings, (0..18).collect::<Vec<_>>());
+        assert_eq!(bindings, (0..12).collect::<Vec<_>>());
         assert_eq!(composite.bindings[6].name, "ApertureMask");
     }
 

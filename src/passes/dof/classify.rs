@@ -47,7 +47,7 @@ impl Twin for ClassifyShader {
     fn cpu(pc: &ClassifyPush, _groups: [u32; 3], b: &mut [HostData]) {
         let tile_coc = crate::passes::twin::floats(b[0].words());
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
-        let (mut radii, mut lists) = (vec![0.0f32; 4 * tile_count], vec![Vec::new(); LIST_COUNT as usize]);
+        let (mut radii, mut lists) = (vec![0.0f32; 3 * tile_count], vec![Vec::new(); LIST_COUNT as usize]);
         for t in 0..tile_count {
             let (tx, ty) = ((t as i32) % pc.tiles[0], (t as i32) / pc.tiles[0]);
             let mut fg_radius = 0.0f32;
@@ -76,29 +76,16 @@ impl Twin for ClassifyShader {
             let radius = (0.5 * own[0].abs().max(own[1].abs())).max(fg_radius);
             let mut class = if radius <= 0.5 { CLASS_COPY } else { CLASS_SMALL };
             if radius > pc.small_radius_px {
-                class = CLASS_LEVEL1 + level_for_radius(radius) - 1;
-            }
-            let own_min_radius = 0.5 * if own[0] > 0.0 { own[0] } else { (-own[1]).max(0.0) };
-            // The levels its composite reads: the class's (foreground), its blurred pixels' own.
-            let mut levels = 0u32;
-            if class >= CLASS_LEVEL1 {
-                levels = 1 << (class - CLASS_LEVEL1);
-                let own_max_radius = 0.5 * own[0].abs().max(own[1].abs());
-                let blurred_from = pc.small_radius_px - 0.5;
-                if own_max_radius > blurred_from {
-                    let mut last = level_for_radius(own_max_radius);
-                    if next_level_share(own_max_radius, last) > 0.0 {
-                        last += 1;
-                    }
-                    for l in level_for_radius(own_min_radius.max(blurred_from))..=last {
-                        levels |= 1 << (l - 1);
-                    }
+                let mut level = 1;
+                while level < LEVELS && radius > (LEVEL_RADIUS << level) as f32 {
+                    level += 1;
                 }
+                class = CLASS_LEVEL1 + level - 1;
             }
             radii[t] = radius;
             radii[tile_count + t] = fg_radius;
             radii[2 * tile_count + t] = class as f32;
-            radii[3 * tile_count + t] = levels as f32;
+            let own_min_radius = 0.5 * if own[0] > 0.0 { own[0] } else { (-own[1]).max(0.0) };
             let list = if class >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px {
                 LIST_BLURRED_LEVEL1 + class - CLASS_LEVEL1
             } else {
@@ -140,27 +127,6 @@ impl Twin for ClassifyShader {
             lists[start..end].sort_unstable();
         }
     }
-}
-
-/// The pyramid level whose gather holds a CoC radius in at most `LEVEL_RADIUS` texels (`LEVELS`
-/// beyond): a tile's level and a blurred pixel's background level (glsl/include/dof_tiles.glsl).
-pub fn level_for_radius(radius_px: f32) -> u32 {
-    let mut level = 1;
-    while level < LEVELS && radius_px > (LEVEL_RADIUS << level) as f32 {
-        level += 1;
-    }
-    level
-}
-
-/// The share of level L + 1's background in a pixel of own radius `radius_px` whose level is
-/// L: 0 up to 3/4 of L's bound, 1 at the bound (glsl/include/dof_tiles.glsl).
-pub fn next_level_share(radius_px: f32, level: u32) -> f32 {
-    if level >= LEVELS {
-        return 0.0;
-    }
-    let bound = (LEVEL_RADIUS << level) as f32;
-    let t = ((radius_px - 0.75 * bound) / (0.25 * bound)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 /// Tiles of pyramid level `level` one workgroup of the level gather takes.

@@ -4,7 +4,6 @@
 
 use super::aperture::{ApertureConstants, ApertureData};
 use super::bokeh_gather::gather_exact;
-use super::classify::{level_for_radius, next_level_share};
 use crate::gpu::shaders::dof_tiles::LIST_BLURRED_LEVEL1;
 use crate::gpu::{GpuBuffer, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 use crate::passes::barriers::{after_compute_write, args_for_indirect, buffer_after_compute_write, write_after_write};
@@ -34,22 +33,16 @@ crate::shader_bindings! {
     pub struct CompositeBindings {
         color: image(color_in),
         coc: image(coc_px),
-        bg_level1: image(bg_level1),
+        bg_level: image(bg_level),
         fg_level: image(fg_level),
         output: image(color_out),
         tile_lists: buffer(TileLists),
         aperture_mask: buffer(ApertureMask),
-        coc_level1: image(coc_level1),
+        coc_level: image(coc_level),
         fg_big_level: image(fg_big_level),
         tile_radius: buffer(TileRadius),
         aperture_shape: image(aperture_shape),
         coverage_level: image(coverage_level),
-        bg_level2: image(bg_level2),
-        bg_level3: image(bg_level3),
-        bg_level4: image(bg_level4),
-        coc_level2: image(coc_level2),
-        coc_level3: image(coc_level3),
-        coc_level4: image(coc_level4),
     }
 }
 
@@ -81,44 +74,13 @@ fn bilinear(img: &HostImage, h0: [i32; 2], f: [f32; 2]) -> [f32; 4] {
     mix4(&top, &bottom, f[1])
 }
 
-/// The background of level `level` at pixel `p`: the four bilinear texels, each also weighted by
-/// its share of blurring pixels (the CoC image's second channel). `bg` and `coc` are the level's.
-fn level_background(bg: &HostImage, coc: &HostImage, size: [i32; 2], level: u32, p: [i32; 2]) -> [f32; 4] {
-    let level_size = size.map(|v| (v + (1 << level) - 1) >> level);
-    let scale = (1 << level) as f32;
-    let h = p.map(|v| (v as f32 + 0.5) / scale - 0.5);
-    let h0 = h.map(|v| v.floor() as i32);
-    let f = [h[0] - h0[0] as f32, h[1] - h0[1] as f32];
-    let (mut sum, mut weight) = ([0.0f32; 4], 0.0f32);
-    for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-        let q = [(h0[0] + i).clamp(0, level_size[0] - 1), (h0[1] + j).clamp(0, level_size[1] - 1)];
-        let w = (if i == 0 { 1.0 - f[0] } else { f[0] })
-            * (if j == 0 { 1.0 - f[1] } else { f[1] })
-            * coc.clamped(q[0], q[1])[1];
-        let texel = bg.clamped(q[0], q[1]);
-        for k in 0..4 {
-            sum[k] += w * texel[k];
-        }
-        weight += w;
-    }
-    if weight > 0.0 {
-        sum.map(|v| v / weight)
-    } else {
-        let q = [h0[0].clamp(0, level_size[0] - 1), h0[1].clamp(0, level_size[1] - 1)];
-        std::array::from_fn(|k| bg.clamped(q[0], q[1])[k])
-    }
-}
-
 impl Twin for CompositeShader {
     fn cpu(pc: &CompositePush, groups: [u32; 3], b: &mut [HostData]) {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
-        let fg_level = b[3].image().clone();
-        // Each level's background and CoC (binding 2 and 7 for level 1, 12-14 and 15-17 after).
-        let bg_levels = [2, 12, 13, 14].map(|k| b[k].image().clone());
-        let coc_levels = [7, 15, 16, 17].map(|k| b[k].image().clone());
+        let (bg_level, fg_level) = (b[2].image().clone(), b[3].image().clone());
         let (lists, radii) = (b[5].words().to_vec(), floats(b[9].words()));
         let data = ApertureData::from_bindings(&b[6], &b[10], pc.aperture.shape_radius);
-        let fg_big_level = b[8].image().clone();
+        let (coc_level, fg_big_level) = (b[7].image().clone(), b[8].image().clone());
         let coverage_level = b[11].image().clone();
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
         let scale = (1 << pc.level) as f32;
@@ -133,34 +95,29 @@ impl Twin for CompositeShader {
                 let h0 = [h[0].floor() as i32, h[1].floor() as i32];
                 let f = [h[0] - h0[0] as f32, h[1] - h0[1] as f32];
                 let coc_here = coc.clamped(p[0], p[1])[0];
+                let (mut bg, mut bg_weight) = ([0.0f32; 4], 0.0f32);
+                for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let q = [(h0[0] + i).clamp(0, pc.level_size[0] - 1), (h0[1] + j).clamp(0, pc.level_size[1] - 1)];
+                    let cw = coc_level.clamped(q[0], q[1]);
+                    let bilinear_w =
+                        (if i == 0 { 1.0 - f[0] } else { f[0] }) * (if j == 0 { 1.0 - f[1] } else { f[1] });
+                    let similar = cw[1];
+                    let texel = bg_level.clamped(q[0], q[1]);
+                    for k in 0..4 {
+                        bg[k] += bilinear_w * similar * texel[k];
+                    }
+                    bg_weight += bilinear_w * similar;
+                }
+                if bg_weight > 0.0 {
+                    bg = bg.map(|v| v / bg_weight);
+                } else {
+                    bg.copy_from_slice(bg_level.clamped(h0[0], h0[1]));
+                }
                 let mut fg = bilinear(&fg_level, h0, f);
                 let coverage = bilinear(&coverage_level, h0, f);
                 let mut fg_coverage = coverage[0];
                 let radius_p = 0.5 * coc_here.abs();
                 let blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
-                // The background from the levels of the pixel's own CoC, where it is used.
-                let mut bg = [0.0f32; 4];
-                if blurred > 0.0 {
-                    let level = level_for_radius(radius_p);
-                    let at = |l: u32| level_background(&bg_levels[l as usize - 1], &coc_levels[l as usize - 1], pc.size, l, p);
-                    bg = at(level);
-                    let next_share = next_level_share(radius_p, level);
-                    if next_share > 0.0 {
-                        bg = mix4(&bg, &at(level + 1), next_share);
-                    }
-                    // Where the tile's level has a nearer layer over the pixel: its background.
-                    let tile_level = &coc_levels[pc.level as usize - 1];
-                    let c = [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(i, j)| {
-                        let q = [(h0[0] + i).clamp(0, pc.level_size[0] - 1), (h0[1] + j).clamp(0, pc.level_size[1] - 1)];
-                        tile_level.clamped(q[0], q[1])[0]
-                    });
-                    let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-                    let level_coc = mix(mix(c[0], c[1], f[0]), mix(c[2], c[3], f[0]), f[1]);
-                    let behind = ((coc_here - level_coc) / scale).clamp(0.0, 1.0);
-                    if behind > 0.0 {
-                        bg = mix4(&bg, &at(pc.level as u32), behind);
-                    }
-                }
                 let mut base = bg;
                 if blurred < 1.0 {
                     let fg_radius = radii[tile_count + t];
@@ -198,9 +155,9 @@ pub fn record(
 ) -> GpuResult<()> {
     let blurred = push.list as u32 >= LIST_BLURRED_LEVEL1;
     rec.begin_pass(&format!("{NAME}_{}{}", push.level, if blurred { "_blurred" } else { "" }));
-    // bg_level1-4, fg/fg_big_level: written by the level gathers (read-after-write).
+    // bg/fg/fg_big_level: written by the level gather (read-after-write).
     // color (the input colour less the sprites' energy): written in place by dof_sprite_excess.
-    // coc_level1-4: written by the pyramid passes.
+    // coc_level: written by the pyramid passes.
     // output: the full-resolution tile passes and the other composites (the other levels', and
     //   the level's other list) wrote other tiles of it; the write-after-write dependency keeps
     //   sync validation (which tracks whole images) and any driver honest.
@@ -209,14 +166,8 @@ pub fn record(
     //   list, other words; sync validation tracks whole buffers).
     rec.image_barriers(&[
         after_compute_write(b.color),
-        after_compute_write(b.coc_level1),
-        after_compute_write(b.coc_level2),
-        after_compute_write(b.coc_level3),
-        after_compute_write(b.coc_level4),
-        after_compute_write(b.bg_level1),
-        after_compute_write(b.bg_level2),
-        after_compute_write(b.bg_level3),
-        after_compute_write(b.bg_level4),
+        after_compute_write(b.coc_level),
+        after_compute_write(b.bg_level),
         after_compute_write(b.fg_level),
         after_compute_write(b.fg_big_level),
         after_compute_write(b.coverage_level),

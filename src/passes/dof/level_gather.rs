@@ -3,7 +3,7 @@
 
 use super::aperture::{gather_reach, tap_disc_rows, tap_weight_at_reach, ApertureConstants, ApertureData};
 use super::classify::tiles_per_group;
-use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1, LEVELS, LEVEL_RADIUS};
+use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1};
 use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::passes::barriers::{after_compute_write, overwrite};
 use crate::passes::twin::floats;
@@ -41,12 +41,9 @@ crate::shader_bindings! {
     }
 }
 
-/// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile `tc` (the tile itself at bit 4)
-/// reads level `level`: with `fg`, it is of the level's class (its composite takes the
-/// foreground there); otherwise the level is in its mask (its pixels' backgrounds too). `radii`
-/// is the tile radius buffer (the class in its third part, the mask in its fourth).
-pub fn level_neighbours(radii: &[f32], tiles: [i32; 2], tc: [i32; 2], level: i32, fg: bool) -> u32 {
-    let tile_count = (tiles[0] * tiles[1]) as usize;
+/// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile `tc` (the tile itself at bit 4) is
+/// of level `level`'s class; `class` holds every tile's class (the tile radius buffer's third part).
+pub fn level_neighbours(class: &[f32], tiles: [i32; 2], tc: [i32; 2], level: i32) -> u32 {
     let mut near = 0;
     for dy in -1..=1 {
         for dx in -1..=1 {
@@ -54,13 +51,7 @@ pub fn level_neighbours(radii: &[f32], tiles: [i32; 2], tc: [i32; 2], level: i32
             if n[0] < 0 || n[1] < 0 || n[0] >= tiles[0] || n[1] >= tiles[1] {
                 continue;
             }
-            let at = (n[1] * tiles[0] + n[0]) as usize;
-            let reads = if fg {
-                radii[2 * tile_count + at] as i32 == (CLASS_LEVEL1 as i32) + level - 1
-            } else {
-                (radii[3 * tile_count + at] as u32) & (1 << (level - 1)) != 0
-            };
-            if reads {
+            if class[(n[1] * tiles[0] + n[0]) as usize] as i32 == (CLASS_LEVEL1 as i32) + level - 1 {
                 near |= 1 << ((dy + 1) * 3 + dx + 1);
             }
         }
@@ -98,6 +89,7 @@ impl Twin for LevelGatherShader {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
         let (lists, radii) = (b[4].words().to_vec(), floats(b[5].words()));
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
+        let class = &radii[2 * tile_count..3 * tile_count];
         let data = ApertureData::from_bindings(&b[6], &b[9], pc.aperture.shape_radius);
         let count = b[8].words()[(ARGS_LEVEL_TILES_BASE + pc.level as u32 - 1) as usize] as usize;
         let side = (crate::passes::TILE_SIZE >> pc.level) as i32;
@@ -110,8 +102,7 @@ impl Twin for LevelGatherShader {
             let t = lists[(pc.level as usize - 1) * tile_count + slot] as usize;
             let tc = [(t % pc.tiles[0] as usize) as i32, (t / pc.tiles[0] as usize) as i32];
             let origin = [tc[0] * side, tc[1] * side];
-            let near = level_neighbours(&radii, pc.tiles, tc, pc.level, false);
-            let near_fg = level_neighbours(&radii, pc.tiles, tc, pc.level, true);
+            let near = level_neighbours(class, pc.tiles, tc, pc.level);
             for texel in 0..side * side {
                 let xy = [texel % side, texel / side];
                 let p = [origin[0] + xy[0], origin[1] + xy[1]];
@@ -126,12 +117,7 @@ impl Twin for LevelGatherShader {
                     continue;
                 }
                 let coc_p = coc.clamped(p[0], p[1])[0] * to_level;
-                // The background of pixels of this level only: no sample reaches farther than
-                // LEVEL_RADIUS + 1 texels.
-                let radius = radii[t] * to_level;
-                let background_radius =
-                    if (pc.level as u32) < LEVELS { radius.min((LEVEL_RADIUS + 1) as f32) } else { radius };
-                let tap_disc = data.tap_disc_px(if texel_read(xy, side, near_fg) { radius } else { background_radius });
+                let tap_disc = data.tap_disc_px(radii[t] * to_level);
                 let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
                 let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
                 for (dy, half_width) in tap_disc_rows(tap_disc) {
@@ -216,40 +202,31 @@ pub fn record(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::shaders::dof_tiles::CLASS_COUNT;
+    use crate::gpu::shaders::dof_tiles::{CLASS_COUNT, LEVELS};
     use crate::passes::TILE_SIZE;
 
-    /// The rule's premise: every level texel that a tile's composite reads (the bilinear taps h0
-    /// and h0 + 1 of each of its pixels, clamped to the level, as dof_composite.comp takes them,
-    /// for each level in the tile's mask) lies in a tile of the level's list (the tile or a
-    /// neighbour of one whose mask holds the level) and is one the gather computes. Random
-    /// classes and masks (the class's level and random others) on a grid with partial tiles.
+    /// The rule's premise: every level texel that a level tile's composite reads (the bilinear
+    /// taps h0 and h0 + 1 of each of its pixels, clamped to the level, as dof_composite.comp
+    /// takes them) lies in a tile of the level's list (the tile or a neighbour of a level tile)
+    /// and is one the gather computes. Random classes on a grid with partial tiles.
     #[test]
     fn the_level_gather_computes_every_texel_a_composite_reads() {
         let size = [5 * TILE_SIZE + 7, 4 * TILE_SIZE + 3];
         let tiles = size.map(|v| v.div_ceil(TILE_SIZE) as i32);
-        let tile_count = (tiles[0] * tiles[1]) as usize;
         let size = size.map(|v| v as i32);
         let mut seed = 12345u32;
-        let mut random = move || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            seed >> 24
-        };
         for _ in 0..20 {
-            let mut radii = vec![0.0f32; 4 * tile_count];
-            for t in 0..tile_count {
-                let class = random() % CLASS_COUNT;
-                radii[2 * tile_count + t] = class as f32;
-                if class >= CLASS_LEVEL1 {
-                    let mask = (1 << (class - CLASS_LEVEL1)) | (random() % (1 << LEVELS));
-                    radii[3 * tile_count + t] = mask as f32;
-                }
-            }
+            let class: Vec<f32> = (0..tiles[0] * tiles[1])
+                .map(|_| {
+                    seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    ((seed >> 24) % CLASS_COUNT) as f32
+                })
+                .collect();
             for level in 1..=LEVELS as i32 {
                 let (side, scale) = (TILE_SIZE as i32 >> level, (1 << level) as f32);
                 let level_size = size.map(|v| (v as u32).div_ceil(1 << level) as i32);
                 for t in 0..tiles[0] * tiles[1] {
-                    if radii[3 * tile_count + t as usize] as u32 & (1 << (level - 1)) == 0 {
+                    if class[t as usize] as i32 != CLASS_LEVEL1 as i32 + level - 1 {
                         continue;
                     }
                     let origin = [(t % tiles[0]) * TILE_SIZE as i32, (t / tiles[0]) * TILE_SIZE as i32];
@@ -262,7 +239,7 @@ mod tests {
                         for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                             let q = [(h0[0] + i).clamp(0, level_size[0] - 1), (h0[1] + j).clamp(0, level_size[1] - 1)];
                             let tq = [q[0] / side, q[1] / side];
-                            let near = level_neighbours(&radii, tiles, tq, level, false);
+                            let near = level_neighbours(&class, tiles, tq, level);
                             let xy = [q[0] - tq[0] * side, q[1] - tq[1] * side];
                             assert!(near != 0, "level {level}: texel {q:?} of a tile not in the list");
                             assert!(texel_read(xy, side, near), "level {level}: texel {q:?} read but not gathered");

@@ -1,9 +1,8 @@
-//! Tiled depth of field: the tiles each pyramid level gathers, those whose composite reads it
-//! (the mask of dof_classify) and their neighbours (so the composite's upsampling finds every
-//! texel it reads). Shader: glsl/dof/dof_level_lists.comp.
+//! Tiled depth of field: the tiles each pyramid level gathers, its own and their neighbours (so
+//! the composite's upsampling finds every texel it reads). Shader: glsl/dof/dof_level_lists.comp.
 
 use super::classify::{level_gather_args_words, tiles_per_group};
-use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, LEVELS};
+use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1, LEVELS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::twin::floats;
 
@@ -30,7 +29,7 @@ impl Shader for LevelListsShader {
 impl Twin for LevelListsShader {
     fn cpu(tiles: &[i32; 2], _groups: [u32; 3], b: &mut [HostData]) {
         let tile_count = (tiles[0] * tiles[1]) as usize;
-        let masks = floats(&b[1].words()[3 * tile_count..4 * tile_count]);
+        let class = floats(&b[1].words()[2 * tile_count..3 * tile_count]);
         let mut lists = vec![Vec::new(); LEVELS as usize];
         for t in 0..tile_count {
             let (tx, ty) = ((t as i32) % tiles[0], (t as i32) / tiles[0]);
@@ -41,7 +40,10 @@ impl Twin for LevelListsShader {
                     if nx < 0 || ny < 0 || nx >= tiles[0] || ny >= tiles[1] {
                         continue;
                     }
-                    levels |= masks[(ny * tiles[0] + nx) as usize] as u32;
+                    let c = class[(ny * tiles[0] + nx) as usize] as u32;
+                    if c >= CLASS_LEVEL1 {
+                        levels |= 1 << (c - CLASS_LEVEL1);
+                    }
                 }
             }
             for level in 1..=LEVELS {

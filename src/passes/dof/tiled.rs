@@ -300,9 +300,8 @@ impl Run {
         let tile_coc = rec.create_buffer("dof tile CoC range", tile_count * 8, storage)?;
         let tile_lists = rec.create_buffer("dof tile lists", tile_count * 4 * LIST_COUNT as u64, storage)?;
         let level_lists = rec.create_buffer("dof level gather lists", tile_count * 4 * LEVELS as u64, storage)?;
-        // Per tile: the gather radius, the largest foreground radius reaching it, the class, the
-        // levels its composite reads.
-        let tile_radius = rec.create_buffer("dof tile radius, class and levels", tile_count * 4 * 4, storage)?;
+        // Per tile: the gather radius, the largest foreground radius reaching it, the class.
+        let tile_radius = rec.create_buffer("dof tile radius and class", tile_count * 4 * 3, storage)?;
         let sprites = rec.create_buffer("dof sprites", sprite_buffer_bytes(p.sprite_capacity), storage)?;
         let [half_w, half_h] = p.level_size(1);
         let candidates = rec.create_buffer(
@@ -552,22 +551,16 @@ impl TiledDof {
                     // The exact gather of nearly sharp pixels reads the colour less the sprites' energy.
                     color: &r.color,
                     coc: &r.coc,
-                    bg_level1: &r.levels[0].bg,
+                    bg_level: &l.bg,
                     fg_level: &l.fg,
                     output: &r.output,
                     tile_lists: &r.tile_lists,
                     aperture_mask: &r.aperture_mask,
-                    coc_level1: &r.levels[0].coc,
+                    coc_level: &l.coc,
                     fg_big_level: &l.fg_big,
                     tile_radius: &r.tile_radius,
                     aperture_shape: &r.aperture_shape,
                     coverage_level: &l.coverage,
-                    bg_level2: &r.levels[1].bg,
-                    bg_level3: &r.levels[2].bg,
-                    bg_level4: &r.levels[3].bg,
-                    coc_level2: &r.levels[1].coc,
-                    coc_level3: &r.levels[2].coc,
-                    coc_level4: &r.levels[3].coc,
                 };
                 composite::record(&self.composite, &constants[..], rec, &b, &r.args, &push)?;
             }
