@@ -2640,3 +2640,115 @@ fn compare_measures_the_highlights_discs_and_names_a_bad_description() {
     assert_eq!(run.code, Some(2), "{}", run.describe());
     assert_contains(&run.stderr, "--fstop");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Issue 34: reliability, round 3
+// ---------------------------------------------------------------------------------------------
+
+/// The bytes of the files `names` of `dir`.
+fn snapshot(dir: &TestDir, names: &[&str]) -> Vec<Vec<u8>> {
+    names.iter().map(|n| std::fs::read(dir.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"))).collect()
+}
+
+/// `args` with the value after `flag` replaced by `value`.
+fn with_value(args: &[String], flag: &str, value: &str) -> Vec<String> {
+    let mut args = args.to_vec();
+    let at = args.iter().position(|a| a == flag).unwrap_or_else(|| panic!("no {flag} in {args:?}"));
+    args[at + 1] = value.to_string();
+    args
+}
+
+/// Issue 34, 1: a long exposure's outputs are checked against every frame it reads, not the
+/// `####` pattern; a sequence's outputs of every frame against every frame's inputs.
+#[test]
+fn outputs_that_are_frames_of_the_run_are_refused_before_any_work() {
+    let dir = TestDir::new("output_is_a_frame");
+    let base = sequence_args(&dir);
+    let frames = ["c.1002.exr", "d.1003.exr", "c.1001.exr"];
+    let before = snapshot(&dir, &frames);
+    let mut args = with_value(&base, "-o", &dir.arg("c.1002.exr"));
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure"]));
+    let err = render(&dir, &args).failure();
+    let c2 = dir.arg("c.1002.exr");
+    assert_contains(
+        &err,
+        &format!("error: output \"{c2}\": it is the input color pass \"{c2}\"; realcam never writes over its inputs (--output)"),
+    );
+    assert!(!err.contains("frame 1001"), "work started:\n{err}");
+    let mut args = with_value(&base, "-o", &dir.arg("exposure.exr"));
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--png", &dir.arg("d.1003.exr")]));
+    let d3 = dir.arg("d.1003.exr");
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!(
+            "error: png \"{d3}\": it is the input depth pass \"{d3}\"; realcam never writes over its inputs (--png)"
+        ),
+    );
+    // A sequence whose frame 1's output is frame 1001's colour pass.
+    let mut args = with_value(&base, "-o", &dir.arg("c.100#.exr"));
+    args.extend(s(&["--frames", "1,1001-1003"]));
+    let c1 = dir.arg("c.1001.exr");
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: output \"{c1}\": it is the input color pass \"{c1}\""),
+    );
+    assert_eq!(snapshot(&dir, &frames), before);
+    assert!(!dir.join("exposure.exr").exists());
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+/// Issue 34, 2: the OpenColorIO config (--config or $OCIO) is an input no output may replace.
+#[test]
+fn the_colour_config_is_an_input_no_output_may_replace() {
+    let dir = TestDir::new("config_is_input");
+    let base = small_scene(&dir);
+    let config = dir.arg("cfg.ocio");
+    std::fs::write(&config, b"ocio_profile_version: 2\n").unwrap();
+    let mut args = with_value(&base, "-o", &config);
+    args.extend(s(&["--config", &config]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: output \"{config}\": it is the input OpenColorIO config \"{config}\"; realcam never writes over its inputs (--output)"),
+    );
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--png", &config]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: png \"{config}\": it is the input OpenColorIO config"),
+    );
+    let mut all = s(&["render", "--validate"]);
+    all.extend(base.iter().cloned());
+    all.extend(s(&["--trace", &config]));
+    let err = realcam_env(&dir, all, &[("OCIO", &config)]).failure();
+    assert_contains(
+        &err,
+        &format!("error: trace \"{config}\": it is the input OpenColorIO config of $OCIO \"{config}\""),
+    );
+    assert_eq!(std::fs::read(&config).unwrap(), b"ocio_profile_version: 2\n");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "cfg.ocio"]);
+}
+
+/// Issue 34, 13: --state is neither an output nor a frame of the exposure.
+#[test]
+fn a_state_file_that_is_an_output_or_an_input_is_refused() {
+    let dir = TestDir::new("state_is_output");
+    let base = sequence_args(&dir);
+    let out = dir.arg("exposure.exr");
+    let mut args = with_value(&base, "-o", &out);
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &out]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: state \"{out}\": the output \"{out}\" is the same file (--state)"),
+    );
+    assert!(!dir.join("exposure.exr").exists());
+    let c1 = dir.arg("c.1001.exr");
+    let before = snapshot(&dir, &["c.1001.exr"]);
+    let mut args = with_value(&base, "-o", &out);
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &c1]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: state \"{c1}\": it is the input color pass \"{c1}\""),
+    );
+    assert_eq!(snapshot(&dir, &["c.1001.exr"]), before);
+    assert!(!dir.join("exposure.exr").exists());
+}

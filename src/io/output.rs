@@ -127,15 +127,92 @@ fn resolved(path: &Path, dir: &Path, name: &OsStr) -> PathBuf {
     std::fs::canonicalize(dir).map(|d| d.join(name)).unwrap_or_else(|_| path.to_path_buf())
 }
 
-/// Same file: the same real path, or (both existing) the same device and inode.
-fn same_file(a: &Path, a_resolved: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    if std::fs::canonicalize(b).is_ok_and(|b| b == a_resolved) {
-        return true;
+/// The files a run reads, each with what it is (`color pass`, `lens file`, ...), indexed so that
+/// an output can be looked up among the thousands of files of a sequence: by real path (the
+/// folder's real path and the name, or the whole real path of a symbolic link) and, for the
+/// files that exist, by device and inode (hard links).
+#[derive(Default)]
+pub struct InputFiles {
+    files: Vec<(&'static str, PathBuf)>,
+    by_path: std::collections::HashMap<PathBuf, usize>,
+    by_inode: std::collections::HashMap<(u64, u64), usize>,
+    /// Real paths of the folders seen (None: the folder does not resolve).
+    folders: std::collections::HashMap<PathBuf, Option<PathBuf>>,
+}
+
+impl InputFiles {
+    /// The files of `inputs`, (what each is, its path).
+    pub fn new(inputs: impl IntoIterator<Item = (&'static str, PathBuf)>) -> InputFiles {
+        let mut set = InputFiles::default();
+        for (what, path) in inputs {
+            set.add(what, path);
+        }
+        set
     }
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
-        _ => false,
+
+    /// Adds the file `path`, which is `what`.
+    pub fn add(&mut self, what: &'static str, path: PathBuf) {
+        use std::os::unix::fs::MetadataExt;
+        let index = self.files.len();
+        let real = self.real_path(&path);
+        self.by_path.entry(real).or_insert(index);
+        if let Ok(m) = std::fs::metadata(&path) {
+            self.by_inode.entry((m.dev(), m.ino())).or_insert(index);
+        }
+        self.files.push((what, path));
+    }
+
+    /// How many files.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// The real path of `path` (which need not exist): its folder's real path and its name, or
+    /// for a symbolic link the real path of what it points to (the path as it is when
+    /// neither resolves).
+    pub fn real_path(&mut self, path: &Path) -> PathBuf {
+        self.resolve(path).unwrap_or_else(|| path.to_path_buf())
+    }
+
+    fn resolve(&mut self, path: &Path) -> Option<PathBuf> {
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+            return std::fs::canonicalize(path).ok();
+        }
+        let name = path.file_name()?;
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let real_dir = self.folders.entry(dir.to_path_buf()).or_insert_with(|| std::fs::canonicalize(dir).ok());
+        real_dir.as_ref().map(|d| d.join(name))
+    }
+
+    /// The input (what it is, its path) that `path`, whose real path is `real`, is, if any.
+    fn find(&self, path: &Path, real: &Path) -> Option<&(&'static str, PathBuf)> {
+        use std::os::unix::fs::MetadataExt;
+        let by_inode = || {
+            let m = std::fs::metadata(path).ok()?;
+            self.by_inode.get(&(m.dev(), m.ino())).copied()
+        };
+        self.by_path.get(real).copied().or_else(by_inode).map(|i| &self.files[i])
+    }
+
+    /// Refuses `path` as the output named by `field` when it is one of these files.
+    pub fn check_output(&mut self, field: &'static str, path: &Path) -> Result<(), IoError> {
+        let real = self.real_path(path);
+        match self.find(path, &real) {
+            Some((what, input)) => Err(IoError::Output {
+                field,
+                path: path.to_path_buf(),
+                reason: format!("it is the input {what} \"{}\"; realcam never writes over its inputs", input.display()),
+            }),
+            None => Ok(()),
+        }
     }
 }
 
@@ -144,6 +221,12 @@ impl Outputs {
     /// against `inputs` (field, path), removes stale temporaries from their folders and
     /// reserves a temporary beside each. Nothing existing is touched.
     pub fn new(outputs: &[(&'static str, &Path)], inputs: &[(&'static str, &Path)]) -> Result<Outputs, IoError> {
+        let mut inputs = InputFiles::new(inputs.iter().map(|&(what, p)| (what, p.to_path_buf())));
+        Self::new_beside(outputs, &mut inputs)
+    }
+
+    /// [`Outputs::new`] with the inputs already gathered (a sequence's every frame).
+    pub fn new_beside(outputs: &[(&'static str, &Path)], inputs: &mut InputFiles) -> Result<Outputs, IoError> {
         let mut checked: Vec<(&'static str, &Path, PathBuf, PathBuf)> = Vec::new();
         for &(field, path) in outputs {
             let refuse = |reason: String| IoError::Output { field, path: path.to_path_buf(), reason };
@@ -166,15 +249,7 @@ impl Outputs {
                 }
             }
             let real = resolved(path, dir, name);
-            for &(input_field, input) in inputs {
-                if same_file(path, &real, input) {
-                    return Err(refuse(format!(
-                        "it is the input {} \"{}\"; realcam never writes over its inputs",
-                        input_field,
-                        input.display()
-                    )));
-                }
-            }
+            inputs.check_output(field, path)?;
             if let Some((other, other_path, ..)) = checked.iter().find(|c| c.2 == real) {
                 return Err(refuse(format!("the {other} \"{}\" is the same file", other_path.display())));
             }

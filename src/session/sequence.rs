@@ -29,7 +29,9 @@ pub fn render_sequence(
         return long_exposure::render(settings, sequence, &patterns, camera, report);
     }
     let range = &sequence.range;
-    // The first frame's outputs are checked (folders, inputs, each other) before any work.
+    // Every frame's outputs are checked against every file the run reads and each other, and
+    // the first frame's reserved (folders), before any work.
+    patterns.check_outputs(settings, range, &[])?;
     if let Some(&first) = range.frames.first() {
         drop(patterns.at_frame(settings, first).outputs()?);
     }
