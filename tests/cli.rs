@@ -1645,15 +1645,18 @@ fn skip_existing_skips_exactly_the_frames_whose_outputs_all_exist() {
     let dir = TestDir::new("sequence_skip");
     let mut args = sequence_args(&dir);
     args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("p.####.png"), "--skip-existing"]));
-    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png", "o.1003.exr"] {
-        std::fs::write(dir.join(name), b"kept").unwrap();
+    // Complete outputs (an EXR and a PNG that read back whole) are kept.
+    for name in ["o.1002.exr", "o.1005.exr", "o.1003.exr"] {
+        write_exr_rgba(&dir.join(name), &rgba(2, 2, [1.0; 3]), &float_opts()).unwrap();
     }
+    for name in ["p.1002.png", "p.1005.png"] {
+        realcam::io::png::write_png(&dir.join(name), &rgba(2, 2, [1.0; 3])).unwrap();
+    }
+    let kept = snapshot(&dir, &["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"]);
     let run = render(&dir, &args).success();
     assert_contains(&run.stderr, "frames: 4 done, 2 skipped, 0 failed of 6 in ");
     assert_contains(&run.stderr, &format!("frame 1002: skipped, {} exists", dir.arg("o.1002.exr")));
-    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"] {
-        assert_eq!(std::fs::read(dir.join(name)).unwrap(), b"kept", "{name}");
-    }
+    assert_eq!(snapshot(&dir, &["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"]), kept);
     // Frame 1003 had its EXR but not its PNG: rendered again, both written.
     for frame in [1001, 1003, 1004, 1006] {
         let image = read_exr_rgba(&dir.join(&format!("o.{frame}.exr"))).unwrap();
@@ -2751,4 +2754,40 @@ fn a_state_file_that_is_an_output_or_an_input_is_refused() {
     );
     assert_eq!(snapshot(&dir, &["c.1001.exr"]), before);
     assert!(!dir.join("exposure.exr").exists());
+}
+
+/// Issue 34, 9: --skip-existing keeps only outputs that read back whole; an empty or truncated
+/// EXR is rendered again (and said), a folder in an output's place fails that frame by name.
+#[test]
+fn skip_existing_renders_incomplete_outputs_again() {
+    let dir = TestDir::new("skip_incomplete");
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1004", "--skip-existing"]));
+    render(&dir, &with_value(&args, "--frames", "1001")).success();
+    let whole = std::fs::read(dir.join("o.1001.exr")).unwrap();
+    std::fs::write(dir.join("o.1002.exr"), b"").unwrap();
+    std::fs::write(dir.join("o.1003.exr"), &whole[..whole.len() / 2]).unwrap();
+    std::fs::create_dir(dir.join("o.1004.exr")).unwrap();
+    let run = render(&dir, &args);
+    let err = run.failure();
+    assert_contains(&err, &format!("frame 1001: skipped, {} exists", dir.arg("o.1001.exr")));
+    assert_contains(
+        &err,
+        &format!(
+            "frame 1002: {} is not a complete output, it is empty (0 bytes); rendering it again",
+            dir.arg("o.1002.exr")
+        ),
+    );
+    assert_contains(
+        &err,
+        &format!("frame 1003: {} is not a complete output, it does not read back whole", dir.arg("o.1003.exr")),
+    );
+    assert_contains(&err, &format!("frame 1004: {} is not a complete output, it is a folder", dir.arg("o.1004.exr")));
+    assert_contains(&err, "frames: 2 done, 1 skipped, 1 failed of 4 in ");
+    assert_contains(&err, "1 of 4 frames failed: 1004");
+    for frame in [1002, 1003] {
+        let image = read_exr_rgba(&dir.join(&format!("o.{frame}.exr"))).unwrap();
+        assert_eq!((image.width, image.height), (24, 16));
+    }
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }

@@ -342,6 +342,41 @@ impl Drop for Outputs {
     }
 }
 
+/// Why the existing output `path`, named by `field`, is not complete (what `--skip-existing`
+/// may keep); None when it is: a regular file that reads back whole as what `field` writes (the
+/// EXR's header, offset tables and every chunk; the PNG decoded; the trace parsed as JSON).
+pub fn incomplete_output(field: &str, path: &Path) -> Option<String> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) => return Some(format!("it cannot be read: {e}")),
+    };
+    if !meta.file_type().is_file() {
+        return Some(format!("it is {}", file_kind(meta.file_type())));
+    }
+    if meta.len() == 0 {
+        return Some("it is empty (0 bytes)".into());
+    }
+    let whole = || -> Result<(), String> {
+        match field {
+            "output" => {
+                let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+                let reader = exr::block::reader::Reader::read_from_buffered(std::io::BufReader::new(file), true)
+                    .map_err(|e| e.to_string())?;
+                for chunk in reader.all_chunks(true).map_err(|e| e.to_string())? {
+                    chunk.map_err(|e| e.to_string())?;
+                }
+                Ok(())
+            }
+            "png" => image::open(path).map(|_| ()).map_err(|e| e.to_string()),
+            _ => {
+                let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+                serde_json::from_slice::<serde::de::IgnoredAny>(&bytes).map(|_| ()).map_err(|e| e.to_string())
+            }
+        }
+    };
+    whole().err().map(|e| format!("it does not read back whole ({} bytes): {e}", meta.len()))
+}
+
 /// Writes `bytes` to `path` through a temporary (the checks of [`Outputs::new`], `field`
 /// naming the setting that chose the path).
 pub fn write_file(field: &'static str, path: &Path, bytes: &[u8]) -> Result<(), IoError> {
