@@ -2791,3 +2791,19 @@ fn skip_existing_renders_incomplete_outputs_again() {
     }
     assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }
+
+/// Issue 34, 10: an output name of 236-255 bytes is written (its temporary's name is cut short
+/// to fit the 255-byte limit, in the same folder) and leaves no temporary.
+#[test]
+fn output_names_up_to_255_bytes_are_written() {
+    let dir = TestDir::new("long_name");
+    let base = small_scene(&dir);
+    let name = format!("{}.exr", "o".repeat(251));
+    assert_eq!(name.len(), 255);
+    let png = format!("{}.png", "p".repeat(236));
+    let mut args = with_value(&base, "-o", &dir.arg(&name));
+    args.extend(s(&["--png", &dir.arg(&png)]));
+    render(&dir, &args).success();
+    assert_eq!(read_exr_rgba(&dir.join(&name)).unwrap().width, 16);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", &name, &png]);
+}

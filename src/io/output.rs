@@ -37,16 +37,25 @@ fn host_name() -> String {
     raw.trim().chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect()
 }
 
-/// `.NAME.realcam-HOST-PID-N.tmp` beside `target`.
+/// The longest file name Linux's file systems take, in bytes.
+const NAME_MAX_BYTES: usize = 255;
+
+/// `.NAME.realcam-HOST-PID-N.tmp` beside `target`, NAME cut short (at a character) so that the
+/// whole stays within [`NAME_MAX_BYTES`]: the process id and counter keep it unique.
 fn temporary_name(name: &OsStr) -> String {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    format!(
-        ".{}{TMP_TAG}{}-{}-{}{TMP_SUFFIX}",
-        name.to_string_lossy(),
+    let owner = format!(
+        "{TMP_TAG}{}-{}-{}{TMP_SUFFIX}",
         host_name(),
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
-    )
+    );
+    let name = name.to_string_lossy();
+    let mut keep = NAME_MAX_BYTES.saturating_sub(1 + owner.len()).min(name.len());
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    format!(".{}{owner}", &name[..keep])
 }
 
 /// The host and process id of a temporary's name, if it is one of realcam's.
@@ -442,6 +451,11 @@ mod tests {
         assert!(name.starts_with(".out-1.exr.realcam-") && name.ends_with(".tmp"), "{name}");
         assert_eq!(temporary_owner(&name), Some((host_name().as_str(), std::process::id())));
         assert_eq!(temporary_owner(".a.exr.realcam-my-host.lan-123-7.tmp"), Some(("my-host.lan", 123)));
+        // A 255-byte name: the temporary's name stays within 255 bytes and is still one of realcam's.
+        let long = format!("{}.exr", "é".repeat(125));
+        let name = temporary_name(OsStr::new(&long));
+        assert!(name.len() <= NAME_MAX_BYTES && name.starts_with(".éé"), "{} bytes: {name}", name.len());
+        assert_eq!(temporary_owner(&name), Some((host_name().as_str(), std::process::id())));
         for other in ["a.exr", ".a.exr.tmp", ".a.realcam-h-x-1.tmp", "realcam-h-1-2.tmp"] {
             assert_eq!(temporary_owner(other), None, "{other}");
         }
