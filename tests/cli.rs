@@ -2807,3 +2807,37 @@ fn output_names_up_to_255_bytes_are_written() {
     assert_eq!(read_exr_rgba(&dir.join(&name)).unwrap().width, 16);
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", &name, &png]);
 }
+
+/// Issue 34, 12: a state file with sums that are not finite, a frame listed more than once, an
+/// empty size or one whose values overflow is refused, the file and the line named.
+#[test]
+fn a_state_file_is_validated_before_it_is_resumed() {
+    let dir = TestDir::new("state_validated");
+    let mut args = with_value(&sequence_args(&dir), "-o", &dir.arg("exposure.exr"));
+    let state = dir.arg("exposure.state");
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &state]));
+    let sums = |first: f64| {
+        let mut v = first.to_le_bytes().to_vec();
+        v.extend(vec![0u8; (24 * 16 * 4 - 1) * 8]);
+        v
+    };
+    let header = |size: &str, frames: &str| format!("realcam-long-exposure 1\n{size}\n{frames}\n").into_bytes();
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        ([header("24 16 4", "1001"), sums(f64::NAN)].concat(), "the sum of pixel (0, 0) channel 0 is NaN"),
+        ([header("24 16 4", "1001"), sums(f64::INFINITY)].concat(), "the sum of pixel (0, 0) channel 0 is inf"),
+        ([header("24 16 4", "1001"), sums(1e300)].concat(), "the sum of pixel (0, 0) channel 0 is 1e300"),
+        ([header("24 16 4", "1001,1002,1001"), sums(1.0)].concat(), "the frames line lists frame 1001 more than once"),
+        (header("0 0 0", "1001"), "the size line \"0 0 0\" is an empty image, but the frames line lists 1 frame(s)"),
+        (
+            header("4294967295 4294967295 4294967295", "1001"),
+            "the size line \"4294967295 4294967295 4294967295\" holds more values than memory can",
+        ),
+    ];
+    for (bytes, reason) in cases {
+        std::fs::write(&state, &bytes).unwrap();
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, &format!("error: --state \"{state}\": not a long-exposure state of realcam: {reason}"));
+        assert_eq!(std::fs::read(&state).unwrap(), bytes);
+        assert!(!dir.join("exposure.exr").exists());
+    }
+}
