@@ -2841,3 +2841,30 @@ fn a_state_file_is_validated_before_it_is_resumed() {
         assert!(!dir.join("exposure.exr").exists());
     }
 }
+
+/// Issue 34, 6: a 4x4 patch of 1e37 (finite) with the flare on and no exposure gives a finite
+/// frame: the flare's sums no longer overflow into Inf and then NaN.
+#[test]
+fn a_finite_highlight_gives_a_finite_frame_through_the_flare() {
+    let dir = TestDir::new("flare_huge_patch");
+    let (w, h) = (64u32, 48u32);
+    let mut color = rgba(w, h, [0.2, 0.3, 0.4]);
+    for y in 20..24 {
+        for x in 30..34 {
+            for c in 0..3 {
+                color.set(x, y, c, 1e37);
+            }
+        }
+    }
+    write_exr_rgba(&dir.join("c.exr"), &color, &float_opts()).unwrap();
+    write_depth(&dir.join("d.exr"), w, h, &vec![3.0; (w * h) as usize]);
+    let args = s(&["--color", &dir.arg("c.exr"), "--depth", &dir.arg("d.exr"), "-o", &dir.arg("o.exr")]);
+    let mut args = args;
+    args.extend(s(&["--flare", "--no-exposure", "--float", "--film", "linear"]));
+    render(&dir, &args).success();
+    let out = read_exr_rgba(&dir.join("o.exr")).unwrap();
+    let bad = out.data.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{bad} of {} values are not finite", out.data.len());
+    // The light is still there, and a flare around it.
+    assert!(out.get(31, 21, 0) > 1e30, "{}", out.get(31, 21, 0));
+}
