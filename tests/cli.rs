@@ -2868,3 +2868,43 @@ fn a_finite_highlight_gives_a_finite_frame_through_the_flare() {
     // The light is still there, and a flare around it.
     assert!(out.get(31, 21, 0) > 1e30, "{}", out.get(31, 21, 0));
 }
+
+/// Issue 34, 7: exposure settings whose gain (or grain whose spread) overflows are refused
+/// before any work, the flag and the bound named, instead of writing +Inf everywhere.
+#[test]
+fn exposure_settings_that_overflow_are_refused_with_the_flag_and_the_bound() {
+    let dir = TestDir::new("exposure_overflow");
+    let base = small_scene(&dir);
+    let cases: [(&[&str], &str, &str); 5] = [
+        (
+            &["--iso", "1e300"],
+            "error: ISO 1e300 makes the exposure's gain (scene value to sensor value) ",
+            "at most ISO ",
+        ),
+        (&["--shutter", "1e308"], "error: shutter time 1e308 s makes the exposure's gain ", "at most shutter time "),
+        (
+            &["--nits-per-unit", "1e308"],
+            "error: nits per unit 1e308 makes the exposure's gain ",
+            "at most nits per unit ",
+        ),
+        (&["--fstop", "1e-308", "--force"], "error: f/1e-308 makes the exposure's gain ", "at least f/"),
+        (
+            &["--grain", "1e308"],
+            "error: grain 1e308 makes the grain's spread at sensor value 1 1e308, more than 1e30",
+            "at most grain ",
+        ),
+    ];
+    let flags = ["(--iso)", "(--shutter)", "(--nits-per-unit)", "(--fstop)", "(--grain)"];
+    for ((extra, start, bound), flag) in cases.into_iter().zip(flags) {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, start);
+        assert_contains(
+            &err,
+            &format!("the output cannot be finite; with the other settings as they are, it must be {bound}"),
+        );
+        assert_contains(&err, flag);
+    }
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
+}
