@@ -642,9 +642,10 @@ fn outputs_that_are_inputs_are_refused() {
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "color_link.exr", "depth_hard.exr"]);
 }
 
-/// Every output of a run is renamed into place only when all were written: a write that
-/// fails after the render (a lens name an EXR attribute cannot hold) leaves the existing EXR,
-/// PNG and trace as they were, and a missing PNG folder fails before the render.
+/// Every output of a run is renamed into place only when all were written (a write failing
+/// after the render: `output::tests::outputs_are_renamed_together_or_not_at_all`); a lens name
+/// an EXR attribute cannot hold is refused when the lens file is read (issue 34, 8), and a
+/// missing PNG folder, before the render; the existing EXR, PNG and trace stay as they were.
 #[test]
 fn outputs_are_replaced_all_together_or_not_at_all() {
     let dir = TestDir::new("all_or_nothing");
@@ -659,8 +660,14 @@ fn outputs_are_replaced_all_together_or_not_at_all() {
     let mut failing = args.clone();
     failing.extend(s(&["--png", &dir.arg("out.png"), "--trace", &dir.arg("trace.json"), "--lens", &lens]));
     let err = render(&dir, &failing).failure();
-    assert_contains(&err, "attribute value");
-    assert_contains(&err, "device:");
+    assert_contains(
+        &err,
+        &format!(
+            "error: lens file {lens}: name = \"\u{30ec}\u{30f3}\u{30ba}\" has the character '\u{30ec}' (U+30EC), \
+             outside Latin-1, which EXR headers (lensModel) cannot hold"
+        ),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened before the lens file was checked:\n{err}");
     for (name, bytes) in old {
         assert_eq!(std::fs::read(dir.join(name)).unwrap(), bytes, "{name} was replaced");
     }

@@ -11,6 +11,14 @@ impl LensFile {
         if let Some(t) = &self.tables {
             self.validate_tables(t, path, text)?;
         }
+        // The name goes into every output's EXR header (lensModel), whose text is Latin-1.
+        if let Some(c) = self.name.chars().find(|&c| u32::from(c) > 0xff) {
+            return bad(format!(
+                "name = {:?} has the character {c:?} (U+{:04X}), outside Latin-1, which EXR headers (lensModel) cannot hold",
+                self.name,
+                u32::from(c)
+            ));
+        }
         let positive = [
             ("focal_length_mm", self.focal_length_mm),
             ("f_number_min", self.f_number_min),
