@@ -2915,3 +2915,56 @@ fn exposure_settings_that_overflow_are_refused_with_the_flag_and_the_bound() {
     }
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
 }
+
+/// Issue 34, 15: messages that said the wrong thing: a thin aperture image is not "empty", an
+/// output path ending in "/" is refused before the render, a seed out of range says the range.
+#[test]
+fn thin_apertures_folder_paths_and_big_seeds_are_named_exactly() {
+    let dir = TestDir::new("misleading_messages");
+    let base = small_scene(&dir);
+    let iris = dir.arg("iris.png");
+    realcam::io::png::write_png(Path::new(&iris), &rgba(1000, 1, [1.0; 3])).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--aperture-image", &iris]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: aperture image {iris}: its open part (values above 0) is too thin or small to show in the 64x64 mask made of its 1000x1 px"),
+    );
+    assert!(!err.contains("empty"), "{err}");
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let folder = format!("{}/new.exr/", dir.arg("out"));
+    let err = render(&dir, &with_value(&base, "-o", &folder)).failure();
+    assert_contains(
+        &err,
+        &format!("error: output \"{folder}\": the path ends with \"/\": it names a folder, not a file (--output)"),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened before the output was checked:\n{err}");
+    let mut args = base.clone();
+    args.extend(s(&["--seed", "18446744073709551615"]));
+    let run = render(&dir, &args);
+    assert_ne!(run.code, Some(0), "{}", run.describe());
+    assert_contains(&run.stderr, "the seed is a whole number from 0 to 4294967295");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "iris.png", "out"]);
+}
+
+/// Issue 34, 15: a finite lens-file value beyond any lens (1e308) is refused naming the file and
+/// the key, not later by the optics without the file.
+#[test]
+fn huge_lens_file_values_name_the_file() {
+    let dir = TestDir::new("lens_1e308");
+    let mut args = small_scene(&dir);
+    let lens = dir.arg("lens.toml");
+    let aperture = "[aperture]\nblades = 9\n";
+    std::fs::write(&lens, VALID_LENS.replace("focal_length_mm = 50", "focal_length_mm = 1e308") + aperture).unwrap();
+    args.extend(s(&["--lens", &lens]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: lens file {lens}: focal_length_mm = 1e308 must be at most 1000000 (1 km)"),
+    );
+    std::fs::write(&lens, VALID_LENS.replace("focus_min_m = 0.45", "focus_min_m = 1e308") + aperture).unwrap();
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: lens file {lens}: focus_min_m = 1e308 must be at most 1000000 (1000 km)"),
+    );
+}

@@ -239,6 +239,9 @@ impl Outputs {
         let mut checked: Vec<(&'static str, &Path, PathBuf, PathBuf)> = Vec::new();
         for &(field, path) in outputs {
             let refuse = |reason: String| IoError::Output { field, path: path.to_path_buf(), reason };
+            if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
+                return Err(refuse("the path ends with \"/\": it names a folder, not a file".into()));
+            }
             let name = path.file_name().ok_or_else(|| refuse("the path does not name a file".into()))?;
             let dir = match path.parent() {
                 Some(p) if !p.as_os_str().is_empty() => p,

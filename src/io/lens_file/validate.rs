@@ -31,6 +31,15 @@ impl LensFile {
                 return bad(format!("{key} = {} must be a positive number", Num(value)));
             }
         }
+        // Finite but beyond any lens: refused here, where the file is named, not later by the
+        // optics with no file (issue 34: focal_length_mm = 1e308).
+        let at_most =
+            [("focal_length_mm", self.focal_length_mm, 1e6, "1 km"), ("focus_min_m", self.focus_min_m, 1e6, "1000 km")];
+        for (key, value, limit, words) in at_most {
+            if value > limit {
+                return bad(format!("{key} = {} must be at most {} ({words})", Num(value), Num(limit)));
+            }
+        }
         if self.f_number_max < self.f_number_min {
             return bad(format!(
                 "f_number_max = {} is below f_number_min = {}",
