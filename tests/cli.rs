@@ -2916,6 +2916,41 @@ fn exposure_settings_that_overflow_are_refused_with_the_flag_and_the_bound() {
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
 }
 
+/// Issue 34, 3 and 4: a flare-lights file of 30,000 nested lists and an OpenColorIO config
+/// whose aliases expand a billion-fold are refused with the file named: no stack overflow, no
+/// unbounded memory, no temporary left.
+#[test]
+fn deeply_nested_lights_and_alias_bombs_are_refused() {
+    let dir = TestDir::new("nesting_bombs");
+    let base = small_scene(&dir);
+    let lights = dir.arg("lights.json");
+    std::fs::write(&lights, format!("{}{}", "[".repeat(30_000), "]".repeat(30_000))).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--flare-lights", &lights]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: flare lights {lights}, line 1: lists and objects nested more than 64 deep (a list of lights needs 3)"),
+    );
+    let config = dir.arg("bomb.ocio");
+    let mut yaml = String::from("ocio_profile_version: 2\nl0: &l0 [x, x, x, x, x, x, x, x, x, x]\n");
+    for i in 1..10 {
+        yaml += &format!("l{i}: &l{i} [{}]\n", vec![format!("*l{}", i - 1); 10].join(", "));
+    }
+    std::fs::write(&config, &yaml).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--colorspace", "ACEScg"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "OpenColorIO config \"{config}\": cannot read it: its YAML holds more than 10000000 nodes with its aliases \
+             expanded (nested aliases, a \"billion laughs\")"
+        ),
+    );
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "lights.json", "bomb.ocio"]);
+}
+
 /// Issue 34, 15: messages that said the wrong thing: a thin aperture image is not "empty", an
 /// output path ending in "/" is refused before the render, a seed out of range says the range.
 #[test]
