@@ -168,7 +168,7 @@ impl LongExposure {
         let sum: Vec<f64> = data.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]))).collect();
         // The exposure is the sums over the frames as f32: each must stay finite there.
         let limit = f64::from(f32::MAX) * done.len().max(1) as f64;
-        if let Some((i, v)) = sum.iter().enumerate().find(|(_, v)| !(v.abs() <= limit)) {
+        if let Some((i, v)) = sum.iter().enumerate().find(|(_, v)| v.is_nan() || v.abs() > limit) {
             let (pixel, channel) = (i / c as usize, i % c as usize);
             return Err(refuse(format!(
                 "the sum of pixel ({}, {}) channel {channel} is {}, not a finite value the average of {} frame(s) can hold",

@@ -240,7 +240,7 @@ const MAX_NOISE_SIGMA: f64 = 1e30;
 fn check_overflow(c: &Camera) -> Result<(), CameraError> {
     use crate::optics::exposure::exposure_gain;
     let gain = c.exposure_gain();
-    if c.exposure && !(gain <= MAX_EXPOSURE_GAIN) {
+    if c.exposure && (gain.is_nan() || gain > MAX_EXPOSURE_GAIN) {
         let settings = [
             (CameraField::Iso, c.iso, c.iso / 100.0),
             (CameraField::ShutterS, c.shutter_s, c.shutter_s * 50.0),
@@ -278,7 +278,7 @@ fn check_overflow(c: &Camera) -> Result<(), CameraError> {
         });
     }
     let sigma = c.noise_sigma();
-    if !(sigma <= MAX_NOISE_SIGMA) {
+    if sigma.is_nan() || sigma > MAX_NOISE_SIGMA {
         let bound = MAX_NOISE_SIGMA / (c.iso / 100.0).sqrt();
         return Err(CameraError::Overflow {
             field: CameraField::Grain,
