@@ -3003,3 +3003,28 @@ fn huge_lens_file_values_name_the_file() {
         &format!("error: lens file {lens}: focus_min_m = 1e308 must be at most 1000000 (1000 km)"),
     );
 }
+
+/// Issue 34, 2: a LUT an OpenColorIO config names (a file transform's `src` along its
+/// `search_path`) is an input too.
+#[test]
+fn a_lut_the_colour_config_names_is_an_input_too() {
+    let dir = TestDir::new("config_lut_is_input");
+    let base = small_scene(&dir);
+    let config = dir.arg("cfg.ocio");
+    std::fs::write(
+        &config,
+        "ocio_profile_version: 2\nsearch_path: luts\ncolorspaces:\n  - !<ColorSpace>\n    name: log\n    \
+         to_scene_reference: !<FileTransform> {src: curve.spi1d, interpolation: linear}\n",
+    )
+    .unwrap();
+    std::fs::create_dir(dir.join("luts")).unwrap();
+    let lut = dir.arg("luts/curve.spi1d");
+    std::fs::write(&lut, b"Version 1\n").unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--png", &lut]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: png \"{lut}\": it is the input LUT of the OpenColorIO config \"{lut}\"; realcam never writes over its inputs (--png)"),
+    );
+    assert_eq!(std::fs::read(&lut).unwrap(), b"Version 1\n");
+}

@@ -103,6 +103,85 @@ fn check_yaml_size(text: &str) -> Result<(), String> {
     }
 }
 
+/// The files a config file names as the `src` of its file transforms (LUTs), found along its
+/// `search_path` (relative to the config's folder; absolute `src` as it is), where they exist:
+/// inputs no output may replace. Best effort: a config that does not parse names none (its
+/// own error comes when it is loaded), and context variables (`$SHOT`) are not expanded.
+pub fn config_lut_files(config: &std::path::Path) -> Vec<std::path::PathBuf> {
+    use yaml_rust2::parser::{Event, Parser};
+    let Ok(text) = std::fs::read_to_string(config) else { return Vec::new() };
+    // Per open collection: a mapping's last key and whether a key comes next; a sequence's key
+    // in the mapping around it.
+    let mut open: Vec<(bool, String, bool)> = Vec::new();
+    let (mut sources, mut search) = (Vec::new(), Vec::new());
+    let mut parser = Parser::new_from_str(&text);
+    let mut events = 0u64;
+    while let Ok((event, _)) = parser.next_token() {
+        events += 1;
+        if events > MAX_YAML_NODES {
+            break;
+        }
+        // The key a value or collection starting now belongs to (None: not a mapping's value).
+        fn value_key(open: &mut [(bool, String, bool)]) -> Option<String> {
+            match open.last_mut() {
+                Some((true, key, key_next)) => {
+                    let was_key = *key_next;
+                    *key_next = !*key_next;
+                    (!was_key).then(|| key.clone())
+                }
+                Some((false, key, _)) => Some(key.clone()),
+                None => None,
+            }
+        }
+        match event {
+            Event::Scalar(value, ..) => {
+                let is_key = matches!(open.last(), Some((true, _, true)));
+                match value_key(&mut open) {
+                    Some(key) if key == "src" => sources.push(value),
+                    Some(key) if key == "search_path" => search.extend(value.split(':').map(str::to_string)),
+                    _ if is_key => {
+                        if let Some((_, key, _)) = open.last_mut() {
+                            *key = value;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            Event::MappingStart(..) => {
+                value_key(&mut open);
+                open.push((true, String::new(), true));
+            }
+            Event::SequenceStart(..) => {
+                let key = value_key(&mut open).unwrap_or_default();
+                open.push((false, key, false));
+            }
+            Event::MappingEnd | Event::SequenceEnd => {
+                open.pop();
+            }
+            Event::Alias(_) => {
+                value_key(&mut open);
+            }
+            Event::StreamEnd => break,
+            _ => {}
+        }
+    }
+    let folder = config.parent().unwrap_or(std::path::Path::new("."));
+    if search.is_empty() {
+        search.push(".".into());
+    }
+    let mut files = Vec::new();
+    for src in sources {
+        let src = std::path::Path::new(&src);
+        let candidates: Vec<std::path::PathBuf> = if src.is_absolute() {
+            vec![src.to_path_buf()]
+        } else {
+            search.iter().map(|d| folder.join(d).join(src)).collect()
+        };
+        files.extend(candidates.into_iter().filter(|c| c.is_file()));
+    }
+    files
+}
+
 /// A display and view of a config and the processor from a working space to its display
 /// values (encoded for the display: an sRGB display's values carry the sRGB curve).
 pub struct DisplayView {

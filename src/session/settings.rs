@@ -98,7 +98,9 @@ impl RenderSettings {
             None => std::env::var("OCIO").ok().map(|c| ("OpenColorIO config of $OCIO", c)),
         };
         if let Some((what, config)) = config.filter(|(_, c)| !c.is_empty() && !c.starts_with("ocio://")) {
+            let luts = crate::io::colour_config::config_lut_files(Path::new(&config));
             inputs.push((what, PathBuf::from(config)));
+            inputs.extend(luts.into_iter().map(|lut| ("LUT of the OpenColorIO config", lut)));
         }
         inputs
     }
