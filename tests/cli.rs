@@ -3004,6 +3004,33 @@ fn huge_lens_file_values_name_the_file() {
     );
 }
 
+/// Issue 34, 11: a sequence pattern with bytes that are not UTF-8 reads and writes those very
+/// bytes (no U+FFFD in their place).
+#[test]
+fn patterns_that_are_not_utf8_keep_their_bytes() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = TestDir::new("non_utf8_pattern");
+    let args = sequence_args(&dir);
+    let raw =
+        |prefix: &[u8], rest: &str| dir.path.join(std::ffi::OsStr::from_bytes(&[prefix, rest.as_bytes()].concat()));
+    for frame in [1001, 1002] {
+        std::fs::copy(dir.join(&format!("c.{frame}.exr")), raw(b"c\xfe.", &format!("{frame}.exr"))).unwrap();
+    }
+    let mut all: Vec<std::ffi::OsString> = s(&["render", "--validate"]).into_iter().map(Into::into).collect();
+    all.extend(args.into_iter().map(std::ffi::OsString::from));
+    let at = all.iter().position(|a| a == "--color").unwrap();
+    all[at + 1] = raw(b"c\xfe.", "####.exr").into_os_string();
+    let at = all.iter().position(|a| a == "-o").unwrap();
+    all[at + 1] = raw(b"q\xfe.", "####.exr").into_os_string();
+    all.extend(["--frames", "1001-1002"].map(std::ffi::OsString::from));
+    realcam(&dir, all).success();
+    for frame in [1001, 1002] {
+        let written = raw(b"q\xfe.", &format!("{frame}.exr"));
+        assert!(written.is_file(), "{} was not written", written.display());
+        assert!(!raw("q\u{fffd}.".as_bytes(), &format!("{frame}.exr")).exists(), "the byte became U+FFFD");
+    }
+}
+
 /// Issue 34, 2: a LUT an OpenColorIO config names (a file transform's `src` along its
 /// `search_path`) is an input too.
 #[test]
