@@ -161,12 +161,11 @@ impl InputFiles {
 
     /// Adds the file `path`, which is `what`.
     pub fn add(&mut self, what: &'static str, path: PathBuf) {
-        use std::os::unix::fs::MetadataExt;
         let index = self.files.len();
-        let real = self.real_path(&path);
+        let (real, id) = self.identify(&path);
         self.by_path.entry(real).or_insert(index);
-        if let Ok(m) = std::fs::metadata(&path) {
-            self.by_inode.entry((m.dev(), m.ino())).or_insert(index);
+        if let Some(id) = id {
+            self.by_inode.entry(id).or_insert(index);
         }
         self.files.push((what, path));
     }
@@ -181,46 +180,51 @@ impl InputFiles {
         self.files.is_empty()
     }
 
-    /// The real path of `path` (which need not exist): its folder's real path and its name, or
-    /// for a symbolic link the real path of what it points to (the path as it is when
-    /// neither resolves).
-    pub fn real_path(&mut self, path: &Path) -> PathBuf {
-        self.resolve(path).unwrap_or_else(|| path.to_path_buf())
+    /// The real path of `path` (which need not exist: its folder's real path and its name; a
+    /// symbolic link: the real path of what it points to; the path as it is when neither
+    /// resolves) and, when it exists, its device and inode. One lstat for a file that is not
+    /// a link, so that a sequence's thousands of frames are quick.
+    fn identify(&mut self, path: &Path) -> (PathBuf, Option<(u64, u64)>) {
+        use std::os::unix::fs::MetadataExt;
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let real = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+                (real, std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino())))
+            }
+            found => {
+                let real = self.in_real_folder(path).unwrap_or_else(|| path.to_path_buf());
+                (real, found.ok().map(|m| (m.dev(), m.ino())))
+            }
+        }
     }
 
-    fn resolve(&mut self, path: &Path) -> Option<PathBuf> {
-        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
-            return std::fs::canonicalize(path).ok();
-        }
+    /// `path`'s name in its folder's real path (each folder resolved once).
+    fn in_real_folder(&mut self, path: &Path) -> Option<PathBuf> {
         let name = path.file_name()?;
         let dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        let real_dir = self.folders.entry(dir.to_path_buf()).or_insert_with(|| std::fs::canonicalize(dir).ok());
-        real_dir.as_ref().map(|d| d.join(name))
+        if let Some(real) = self.folders.get(dir) {
+            return real.as_ref().map(|d| d.join(name));
+        }
+        let real = std::fs::canonicalize(dir).ok();
+        self.folders.insert(dir.to_path_buf(), real.clone());
+        real.map(|d| d.join(name))
     }
 
-    /// The input (what it is, its path) that `path`, whose real path is `real`, is, if any.
-    fn find(&self, path: &Path, real: &Path) -> Option<&(&'static str, PathBuf)> {
-        use std::os::unix::fs::MetadataExt;
-        let by_inode = || {
-            let m = std::fs::metadata(path).ok()?;
-            self.by_inode.get(&(m.dev(), m.ino())).copied()
-        };
-        self.by_path.get(real).copied().or_else(by_inode).map(|i| &self.files[i])
-    }
-
-    /// Refuses `path` as the output named by `field` when it is one of these files.
-    pub fn check_output(&mut self, field: &'static str, path: &Path) -> Result<(), IoError> {
-        let real = self.real_path(path);
-        match self.find(path, &real) {
+    /// Refuses `path` as the output named by `field` when it is one of these files; else its
+    /// real path.
+    pub fn check_output(&mut self, field: &'static str, path: &Path) -> Result<PathBuf, IoError> {
+        let (real, id) = self.identify(path);
+        let found = self.by_path.get(&real).or_else(|| id.and_then(|id| self.by_inode.get(&id)));
+        match found.map(|&i| &self.files[i]) {
             Some((what, input)) => Err(IoError::Output {
                 field,
                 path: path.to_path_buf(),
                 reason: format!("it is the input {what} \"{}\"; realcam never writes over its inputs", input.display()),
             }),
-            None => Ok(()),
+            None => Ok(real),
         }
     }
 }

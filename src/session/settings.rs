@@ -191,16 +191,23 @@ impl Patterns {
         let mut inputs = self.input_files(settings, range);
         // A long exposure's outputs have no frame number: one set for every frame.
         let frames = if self.output.is_none() { &range.frames[..range.frames.len().min(1)] } else { &range.frames[..] };
+        let outputs = [
+            ("output", &self.output, Some(&settings.output)),
+            ("png", &self.png, settings.png.as_ref()),
+            ("trace", &self.trace, settings.trace.as_ref()),
+        ];
         for &frame in frames {
-            let one = self.at_frame(settings, frame);
-            let mut seen: Vec<(&'static str, &Path, PathBuf)> = Vec::new();
-            for (field, path) in one.output_fields().into_iter().chain(extra.iter().copied()) {
-                inputs.check_output(field, path).name_flags()?;
-                let real = inputs.real_path(path);
+            let mut seen: Vec<(&'static str, PathBuf, PathBuf)> = Vec::new();
+            let paths = outputs.iter().filter_map(|&(field, pattern, path)| {
+                Some((field, pattern.as_ref().map_or_else(|| path.cloned(), |p| Some(p.path(frame)))?))
+            });
+            let extra = extra.iter().map(|&(field, path)| (field, path.to_path_buf()));
+            for (field, path) in paths.chain(extra) {
+                let real = inputs.check_output(field, &path).name_flags()?;
                 if let Some((other, other_path, _)) = seen.iter().find(|s| s.2 == real) {
                     return Err(crate::io::IoError::Output {
                         field,
-                        path: path.to_path_buf(),
+                        path: path.clone(),
                         reason: format!("the {other} \"{}\" is the same file", other_path.display()),
                     })
                     .name_flags();
