@@ -642,9 +642,10 @@ fn outputs_that_are_inputs_are_refused() {
     assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "color_link.exr", "depth_hard.exr"]);
 }
 
-/// Every output of a run is renamed into place only when all were written: a write that
-/// fails after the render (a lens name an EXR attribute cannot hold) leaves the existing EXR,
-/// PNG and trace as they were, and a missing PNG folder fails before the render.
+/// Every output of a run is renamed into place only when all were written (a write failing
+/// after the render: `output::tests::outputs_are_renamed_together_or_not_at_all`); a lens name
+/// an EXR attribute cannot hold is refused when the lens file is read (issue 34, 8), and a
+/// missing PNG folder, before the render; the existing EXR, PNG and trace stay as they were.
 #[test]
 fn outputs_are_replaced_all_together_or_not_at_all() {
     let dir = TestDir::new("all_or_nothing");
@@ -659,8 +660,14 @@ fn outputs_are_replaced_all_together_or_not_at_all() {
     let mut failing = args.clone();
     failing.extend(s(&["--png", &dir.arg("out.png"), "--trace", &dir.arg("trace.json"), "--lens", &lens]));
     let err = render(&dir, &failing).failure();
-    assert_contains(&err, "attribute value");
-    assert_contains(&err, "device:");
+    assert_contains(
+        &err,
+        &format!(
+            "error: lens file {lens}: name = \"\u{30ec}\u{30f3}\u{30ba}\" has the character '\u{30ec}' (U+30EC), \
+             outside Latin-1, which EXR headers (lensModel) cannot hold"
+        ),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened before the lens file was checked:\n{err}");
     for (name, bytes) in old {
         assert_eq!(std::fs::read(dir.join(name)).unwrap(), bytes, "{name} was replaced");
     }
@@ -1645,15 +1652,18 @@ fn skip_existing_skips_exactly_the_frames_whose_outputs_all_exist() {
     let dir = TestDir::new("sequence_skip");
     let mut args = sequence_args(&dir);
     args.extend(s(&["--frames", "1001-1006", "--png", &dir.arg("p.####.png"), "--skip-existing"]));
-    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png", "o.1003.exr"] {
-        std::fs::write(dir.join(name), b"kept").unwrap();
+    // Complete outputs (an EXR and a PNG that read back whole) are kept.
+    for name in ["o.1002.exr", "o.1005.exr", "o.1003.exr"] {
+        write_exr_rgba(&dir.join(name), &rgba(2, 2, [1.0; 3]), &float_opts()).unwrap();
     }
+    for name in ["p.1002.png", "p.1005.png"] {
+        realcam::io::png::write_png(&dir.join(name), &rgba(2, 2, [1.0; 3])).unwrap();
+    }
+    let kept = snapshot(&dir, &["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"]);
     let run = render(&dir, &args).success();
     assert_contains(&run.stderr, "frames: 4 done, 2 skipped, 0 failed of 6 in ");
     assert_contains(&run.stderr, &format!("frame 1002: skipped, {} exists", dir.arg("o.1002.exr")));
-    for name in ["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"] {
-        assert_eq!(std::fs::read(dir.join(name)).unwrap(), b"kept", "{name}");
-    }
+    assert_eq!(snapshot(&dir, &["o.1002.exr", "p.1002.png", "o.1005.exr", "p.1005.png"]), kept);
     // Frame 1003 had its EXR but not its PNG: rendered again, both written.
     for frame in [1001, 1003, 1004, 1006] {
         let image = read_exr_rgba(&dir.join(&format!("o.{frame}.exr"))).unwrap();
@@ -2639,4 +2649,409 @@ fn compare_measures_the_highlights_discs_and_names_a_bad_description() {
     let run = realcam(&dir, s(&["compare", "test.exr", "reference.exr", "--highlights", "camera.json"]));
     assert_eq!(run.code, Some(2), "{}", run.describe());
     assert_contains(&run.stderr, "--fstop");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 34: reliability, round 3
+// ---------------------------------------------------------------------------------------------
+
+/// The bytes of the files `names` of `dir`.
+fn snapshot(dir: &TestDir, names: &[&str]) -> Vec<Vec<u8>> {
+    names.iter().map(|n| std::fs::read(dir.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"))).collect()
+}
+
+/// `args` with the value after `flag` replaced by `value`.
+fn with_value(args: &[String], flag: &str, value: &str) -> Vec<String> {
+    let mut args = args.to_vec();
+    let at = args.iter().position(|a| a == flag).unwrap_or_else(|| panic!("no {flag} in {args:?}"));
+    args[at + 1] = value.to_string();
+    args
+}
+
+/// Issue 34, 1: a long exposure's outputs are checked against every frame it reads, not the
+/// `####` pattern; a sequence's outputs of every frame against every frame's inputs.
+#[test]
+fn outputs_that_are_frames_of_the_run_are_refused_before_any_work() {
+    let dir = TestDir::new("output_is_a_frame");
+    let base = sequence_args(&dir);
+    let frames = ["c.1002.exr", "d.1003.exr", "c.1001.exr"];
+    let before = snapshot(&dir, &frames);
+    let mut args = with_value(&base, "-o", &dir.arg("c.1002.exr"));
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure"]));
+    let err = render(&dir, &args).failure();
+    let c2 = dir.arg("c.1002.exr");
+    assert_contains(
+        &err,
+        &format!("error: output \"{c2}\": it is the input color pass \"{c2}\"; realcam never writes over its inputs (--output)"),
+    );
+    assert!(!err.contains("frame 1001"), "work started:\n{err}");
+    let mut args = with_value(&base, "-o", &dir.arg("exposure.exr"));
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--png", &dir.arg("d.1003.exr")]));
+    let d3 = dir.arg("d.1003.exr");
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!(
+            "error: png \"{d3}\": it is the input depth pass \"{d3}\"; realcam never writes over its inputs (--png)"
+        ),
+    );
+    // A sequence whose frame 1's output is frame 1001's colour pass.
+    let mut args = with_value(&base, "-o", &dir.arg("c.100#.exr"));
+    args.extend(s(&["--frames", "1,1001-1003"]));
+    let c1 = dir.arg("c.1001.exr");
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: output \"{c1}\": it is the input color pass \"{c1}\""),
+    );
+    assert_eq!(snapshot(&dir, &frames), before);
+    assert!(!dir.join("exposure.exr").exists());
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+/// Issue 34, 2: the OpenColorIO config (--config or $OCIO) is an input no output may replace.
+#[test]
+fn the_colour_config_is_an_input_no_output_may_replace() {
+    let dir = TestDir::new("config_is_input");
+    let base = small_scene(&dir);
+    let config = dir.arg("cfg.ocio");
+    std::fs::write(&config, b"ocio_profile_version: 2\n").unwrap();
+    let mut args = with_value(&base, "-o", &config);
+    args.extend(s(&["--config", &config]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: output \"{config}\": it is the input OpenColorIO config \"{config}\"; realcam never writes over its inputs (--output)"),
+    );
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--png", &config]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: png \"{config}\": it is the input OpenColorIO config"),
+    );
+    let mut all = s(&["render", "--validate"]);
+    all.extend(base.iter().cloned());
+    all.extend(s(&["--trace", &config]));
+    let err = realcam_env(&dir, all, &[("OCIO", &config)]).failure();
+    assert_contains(
+        &err,
+        &format!("error: trace \"{config}\": it is the input OpenColorIO config of $OCIO \"{config}\""),
+    );
+    assert_eq!(std::fs::read(&config).unwrap(), b"ocio_profile_version: 2\n");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "cfg.ocio"]);
+}
+
+/// Issue 34, 13: --state is neither an output nor a frame of the exposure.
+#[test]
+fn a_state_file_that_is_an_output_or_an_input_is_refused() {
+    let dir = TestDir::new("state_is_output");
+    let base = sequence_args(&dir);
+    let out = dir.arg("exposure.exr");
+    let mut args = with_value(&base, "-o", &out);
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &out]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: state \"{out}\": the output \"{out}\" is the same file (--state)"),
+    );
+    assert!(!dir.join("exposure.exr").exists());
+    let c1 = dir.arg("c.1001.exr");
+    let before = snapshot(&dir, &["c.1001.exr"]);
+    let mut args = with_value(&base, "-o", &out);
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &c1]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: state \"{c1}\": it is the input color pass \"{c1}\""),
+    );
+    assert_eq!(snapshot(&dir, &["c.1001.exr"]), before);
+    assert!(!dir.join("exposure.exr").exists());
+}
+
+/// Issue 34, 9: --skip-existing keeps only outputs that read back whole; an empty or truncated
+/// EXR is rendered again (and said), a folder in an output's place fails that frame by name.
+#[test]
+fn skip_existing_renders_incomplete_outputs_again() {
+    let dir = TestDir::new("skip_incomplete");
+    let mut args = sequence_args(&dir);
+    args.extend(s(&["--frames", "1001-1004", "--skip-existing"]));
+    render(&dir, &with_value(&args, "--frames", "1001")).success();
+    let whole = std::fs::read(dir.join("o.1001.exr")).unwrap();
+    std::fs::write(dir.join("o.1002.exr"), b"").unwrap();
+    std::fs::write(dir.join("o.1003.exr"), &whole[..whole.len() / 2]).unwrap();
+    std::fs::create_dir(dir.join("o.1004.exr")).unwrap();
+    let run = render(&dir, &args);
+    let err = run.failure();
+    assert_contains(&err, &format!("frame 1001: skipped, {} exists", dir.arg("o.1001.exr")));
+    assert_contains(
+        &err,
+        &format!(
+            "frame 1002: {} is not a complete output, it is empty (0 bytes); rendering it again",
+            dir.arg("o.1002.exr")
+        ),
+    );
+    assert_contains(
+        &err,
+        &format!("frame 1003: {} is not a complete output, it does not read back whole", dir.arg("o.1003.exr")),
+    );
+    assert_contains(&err, &format!("frame 1004: {} is not a complete output, it is a folder", dir.arg("o.1004.exr")));
+    assert_contains(&err, "frames: 2 done, 1 skipped, 1 failed of 4 in ");
+    assert_contains(&err, "1 of 4 frames failed: 1004");
+    for frame in [1002, 1003] {
+        let image = read_exr_rgba(&dir.join(&format!("o.{frame}.exr"))).unwrap();
+        assert_eq!((image.width, image.height), (24, 16));
+    }
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+/// Issue 34, 10: an output name of 236-255 bytes is written (its temporary's name is cut short
+/// to fit the 255-byte limit, in the same folder) and leaves no temporary.
+#[test]
+fn output_names_up_to_255_bytes_are_written() {
+    let dir = TestDir::new("long_name");
+    let base = small_scene(&dir);
+    let name = format!("{}.exr", "o".repeat(251));
+    assert_eq!(name.len(), 255);
+    let png = format!("{}.png", "p".repeat(236));
+    let mut args = with_value(&base, "-o", &dir.arg(&name));
+    args.extend(s(&["--png", &dir.arg(&png)]));
+    render(&dir, &args).success();
+    assert_eq!(read_exr_rgba(&dir.join(&name)).unwrap().width, 16);
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", &name, &png]);
+}
+
+/// Issue 34, 12: a state file with sums that are not finite, a frame listed more than once, an
+/// empty size or one whose values overflow is refused, the file and the line named.
+#[test]
+fn a_state_file_is_validated_before_it_is_resumed() {
+    let dir = TestDir::new("state_validated");
+    let mut args = with_value(&sequence_args(&dir), "-o", &dir.arg("exposure.exr"));
+    let state = dir.arg("exposure.state");
+    args.extend(s(&["--frames", "1001-1003", "--long-exposure", "--state", &state]));
+    let sums = |first: f64| {
+        let mut v = first.to_le_bytes().to_vec();
+        v.extend(vec![0u8; (24 * 16 * 4 - 1) * 8]);
+        v
+    };
+    let header = |size: &str, frames: &str| format!("realcam-long-exposure 1\n{size}\n{frames}\n").into_bytes();
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        ([header("24 16 4", "1001"), sums(f64::NAN)].concat(), "the sum of pixel (0, 0) channel 0 is NaN"),
+        ([header("24 16 4", "1001"), sums(f64::INFINITY)].concat(), "the sum of pixel (0, 0) channel 0 is inf"),
+        ([header("24 16 4", "1001"), sums(1e300)].concat(), "the sum of pixel (0, 0) channel 0 is 1e300"),
+        ([header("24 16 4", "1001,1002,1001"), sums(1.0)].concat(), "the frames line lists frame 1001 more than once"),
+        (header("0 0 0", "1001"), "the size line \"0 0 0\" is an empty image, but the frames line lists 1 frame(s)"),
+        (
+            header("4294967295 4294967295 4294967295", "1001"),
+            "the size line \"4294967295 4294967295 4294967295\" holds more values than memory can",
+        ),
+    ];
+    for (bytes, reason) in cases {
+        std::fs::write(&state, &bytes).unwrap();
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, &format!("error: --state \"{state}\": not a long-exposure state of realcam: {reason}"));
+        assert_eq!(std::fs::read(&state).unwrap(), bytes);
+        assert!(!dir.join("exposure.exr").exists());
+    }
+}
+
+/// Issue 34, 6: a 4x4 patch of 1e37 (finite) with the flare on and no exposure gives a finite
+/// frame: the flare's sums no longer overflow into Inf and then NaN.
+#[test]
+fn a_finite_highlight_gives_a_finite_frame_through_the_flare() {
+    let dir = TestDir::new("flare_huge_patch");
+    let (w, h) = (64u32, 48u32);
+    let mut color = rgba(w, h, [0.2, 0.3, 0.4]);
+    for y in 20..24 {
+        for x in 30..34 {
+            for c in 0..3 {
+                color.set(x, y, c, 1e37);
+            }
+        }
+    }
+    write_exr_rgba(&dir.join("c.exr"), &color, &float_opts()).unwrap();
+    write_depth(&dir.join("d.exr"), w, h, &vec![3.0; (w * h) as usize]);
+    let args = s(&["--color", &dir.arg("c.exr"), "--depth", &dir.arg("d.exr"), "-o", &dir.arg("o.exr")]);
+    let mut args = args;
+    args.extend(s(&["--flare", "--no-exposure", "--float", "--film", "linear"]));
+    render(&dir, &args).success();
+    let out = read_exr_rgba(&dir.join("o.exr")).unwrap();
+    let bad = out.data.iter().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{bad} of {} values are not finite", out.data.len());
+    // The light is still there, and a flare around it.
+    assert!(out.get(31, 21, 0) > 1e30, "{}", out.get(31, 21, 0));
+}
+
+/// Issue 34, 7: exposure settings whose gain (or grain whose spread) overflows are refused
+/// before any work, the flag and the bound named, instead of writing +Inf everywhere.
+#[test]
+fn exposure_settings_that_overflow_are_refused_with_the_flag_and_the_bound() {
+    let dir = TestDir::new("exposure_overflow");
+    let base = small_scene(&dir);
+    let cases: [(&[&str], &str, &str); 5] = [
+        (
+            &["--iso", "1e300"],
+            "error: ISO 1e300 makes the exposure's gain (scene value to sensor value) ",
+            "at most ISO ",
+        ),
+        (&["--shutter", "1e308"], "error: shutter time 1e308 s makes the exposure's gain ", "at most shutter time "),
+        (
+            &["--nits-per-unit", "1e308"],
+            "error: nits per unit 1e308 makes the exposure's gain ",
+            "at most nits per unit ",
+        ),
+        (&["--fstop", "1e-308", "--force"], "error: f/1e-308 makes the exposure's gain ", "at least f/"),
+        (
+            &["--grain", "1e308"],
+            "error: grain 1e308 makes the grain's spread at sensor value 1 1e308, more than 1e30",
+            "at most grain ",
+        ),
+    ];
+    let flags = ["(--iso)", "(--shutter)", "(--nits-per-unit)", "(--fstop)", "(--grain)"];
+    for ((extra, start, bound), flag) in cases.into_iter().zip(flags) {
+        let mut args = base.clone();
+        args.extend(s(extra));
+        let err = render(&dir, &args).failure();
+        assert_contains(&err, start);
+        assert_contains(
+            &err,
+            &format!("the output cannot be finite; with the other settings as they are, it must be {bound}"),
+        );
+        assert_contains(&err, flag);
+    }
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr"]);
+}
+
+/// Issue 34, 3 and 4: a flare-lights file of 30,000 nested lists and an OpenColorIO config
+/// whose aliases expand a billion-fold are refused with the file named: no stack overflow, no
+/// unbounded memory, no temporary left.
+#[test]
+fn deeply_nested_lights_and_alias_bombs_are_refused() {
+    let dir = TestDir::new("nesting_bombs");
+    let base = small_scene(&dir);
+    let lights = dir.arg("lights.json");
+    std::fs::write(&lights, format!("{}{}", "[".repeat(30_000), "]".repeat(30_000))).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--flare-lights", &lights]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: flare lights {lights}, line 1: lists and objects nested more than 64 deep (a list of lights needs 3)"),
+    );
+    let config = dir.arg("bomb.ocio");
+    let mut yaml = String::from("ocio_profile_version: 2\nl0: &l0 [x, x, x, x, x, x, x, x, x, x]\n");
+    for i in 1..10 {
+        yaml += &format!("l{i}: &l{i} [{}]\n", vec![format!("*l{}", i - 1); 10].join(", "));
+    }
+    std::fs::write(&config, &yaml).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--colorspace", "ACEScg"]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!(
+            "OpenColorIO config \"{config}\": cannot read it: its YAML holds more than 10000000 nodes with its aliases \
+             expanded (nested aliases, a \"billion laughs\")"
+        ),
+    );
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "lights.json", "bomb.ocio"]);
+}
+
+/// Issue 34, 15: messages that said the wrong thing: a thin aperture image is not "empty", an
+/// output path ending in "/" is refused before the render, a seed out of range says the range.
+#[test]
+fn thin_apertures_folder_paths_and_big_seeds_are_named_exactly() {
+    let dir = TestDir::new("misleading_messages");
+    let base = small_scene(&dir);
+    let iris = dir.arg("iris.png");
+    realcam::io::png::write_png(Path::new(&iris), &rgba(1000, 1, [1.0; 3])).unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--aperture-image", &iris]));
+    let err = render(&dir, &args).failure();
+    assert_contains(
+        &err,
+        &format!("error: aperture image {iris}: its open part (values above 0) is too thin or small to show in the 64x64 mask made of its 1000x1 px"),
+    );
+    assert!(!err.contains("empty"), "{err}");
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let folder = format!("{}/new.exr/", dir.arg("out"));
+    let err = render(&dir, &with_value(&base, "-o", &folder)).failure();
+    assert_contains(
+        &err,
+        &format!("error: output \"{folder}\": the path ends with \"/\": it names a folder, not a file (--output)"),
+    );
+    assert!(!err.contains("device:"), "the GPU was opened before the output was checked:\n{err}");
+    let mut args = base.clone();
+    args.extend(s(&["--seed", "18446744073709551615"]));
+    let run = render(&dir, &args);
+    assert_ne!(run.code, Some(0), "{}", run.describe());
+    assert_contains(&run.stderr, "the seed is a whole number from 0 to 4294967295");
+    assert_listing(&dir, &["scene_color.exr", "scene_depth.exr", "iris.png", "out"]);
+}
+
+/// Issue 34, 15: a finite lens-file value beyond any lens (1e308) is refused naming the file and
+/// the key, not later by the optics without the file.
+#[test]
+fn huge_lens_file_values_name_the_file() {
+    let dir = TestDir::new("lens_1e308");
+    let mut args = small_scene(&dir);
+    let lens = dir.arg("lens.toml");
+    let aperture = "[aperture]\nblades = 9\n";
+    std::fs::write(&lens, VALID_LENS.replace("focal_length_mm = 50", "focal_length_mm = 1e308") + aperture).unwrap();
+    args.extend(s(&["--lens", &lens]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: lens file {lens}: focal_length_mm = 1e308 must be at most 1000000 (1 km)"),
+    );
+    std::fs::write(&lens, VALID_LENS.replace("focus_min_m = 0.45", "focus_min_m = 1e308") + aperture).unwrap();
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: lens file {lens}: focus_min_m = 1e308 must be at most 1000000 (1000 km)"),
+    );
+}
+
+/// Issue 34, 11: a sequence pattern with bytes that are not UTF-8 reads and writes those very
+/// bytes (no U+FFFD in their place).
+#[test]
+fn patterns_that_are_not_utf8_keep_their_bytes() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = TestDir::new("non_utf8_pattern");
+    let args = sequence_args(&dir);
+    let raw =
+        |prefix: &[u8], rest: &str| dir.path.join(std::ffi::OsStr::from_bytes(&[prefix, rest.as_bytes()].concat()));
+    for frame in [1001, 1002] {
+        std::fs::copy(dir.join(&format!("c.{frame}.exr")), raw(b"c\xfe.", &format!("{frame}.exr"))).unwrap();
+    }
+    let mut all: Vec<std::ffi::OsString> = s(&["render", "--validate"]).into_iter().map(Into::into).collect();
+    all.extend(args.into_iter().map(std::ffi::OsString::from));
+    let at = all.iter().position(|a| a == "--color").unwrap();
+    all[at + 1] = raw(b"c\xfe.", "####.exr").into_os_string();
+    let at = all.iter().position(|a| a == "-o").unwrap();
+    all[at + 1] = raw(b"q\xfe.", "####.exr").into_os_string();
+    all.extend(["--frames", "1001-1002"].map(std::ffi::OsString::from));
+    realcam(&dir, all).success();
+    for frame in [1001, 1002] {
+        let written = raw(b"q\xfe.", &format!("{frame}.exr"));
+        assert!(written.is_file(), "{} was not written", written.display());
+        assert!(!raw("q\u{fffd}.".as_bytes(), &format!("{frame}.exr")).exists(), "the byte became U+FFFD");
+    }
+}
+
+/// Issue 34, 2: a LUT an OpenColorIO config names (a file transform's `src` along its
+/// `search_path`) is an input too.
+#[test]
+fn a_lut_the_colour_config_names_is_an_input_too() {
+    let dir = TestDir::new("config_lut_is_input");
+    let base = small_scene(&dir);
+    let config = dir.arg("cfg.ocio");
+    std::fs::write(
+        &config,
+        "ocio_profile_version: 2\nsearch_path: luts\ncolorspaces:\n  - !<ColorSpace>\n    name: log\n    \
+         to_scene_reference: !<FileTransform> {src: curve.spi1d, interpolation: linear}\n",
+    )
+    .unwrap();
+    std::fs::create_dir(dir.join("luts")).unwrap();
+    let lut = dir.arg("luts/curve.spi1d");
+    std::fs::write(&lut, b"Version 1\n").unwrap();
+    let mut args = base.clone();
+    args.extend(s(&["--config", &config, "--png", &lut]));
+    assert_contains(
+        &render(&dir, &args).failure(),
+        &format!("error: png \"{lut}\": it is the input LUT of the OpenColorIO config \"{lut}\"; realcam never writes over its inputs (--png)"),
+    );
+    assert_eq!(std::fs::read(&lut).unwrap(), b"Version 1\n");
 }

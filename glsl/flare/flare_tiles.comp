@@ -16,6 +16,9 @@ layout(push_constant) uniform Push { ivec2 size; } pc;
 
 #define SUMS 7
 #define GROUP (TILE_SIZE * TILE_SIZE)
+// A light pixel's channels count at most this much in the sums (tiles.rs FLARE_MAX_VALUE): the
+// sums over a tile, and over the tiles of a light, of a frame of finite values stay finite.
+#define FLARE_MAX_VALUE 1e20
 // The tile's light pixels lie in s_first .. s_end - 1 (none: s_end 0).
 shared uint s_first;
 shared uint s_end;
@@ -29,6 +32,7 @@ float[SUMS] light_sums(ivec2 p, out bool lit) {
         vec3 c = imageLoad(color_in, p).rgb;
         bool finite = !any(isnan(c)) && !any(isinf(c));
         if (finite && max(c.r, max(c.g, c.b)) >= fc.threshold) {
+            c = clamp(c, vec3(-FLARE_MAX_VALUE), vec3(FLARE_MAX_VALUE));
             float w = max(c.r + c.g + c.b, 0.0);
             v = float[SUMS](c.r, c.g, c.b, w * (float(p.x) + 0.5), w * (float(p.y) + 0.5), w, 1.0);
             lit = true;

@@ -194,7 +194,7 @@ pub struct RenderArgs {
     grain: f64,
     /// Seed of the sensor noise: the same seed and frame give the same noise; each frame of a
     /// sequence mixes its frame number in, so neighbouring frames' grain is independent.
-    #[arg(long, default_value_t = CameraRequest::default().seed)]
+    #[arg(long, default_value_t = CameraRequest::default().seed, value_parser = parse_seed)]
     seed: u32,
     /// Do not apply the exposure gain (ISO, shutter, f-number): sensor value = scene value.
     #[arg(long = "no-exposure")]
@@ -285,6 +285,11 @@ pub struct FlareArgs {
     /// Lights given explicitly as a JSON list: [{"x": .., "y": .., "energy": .. | "rgb": [r, g, b], "area_px": ..}].
     #[arg(long = "flare-lights", value_name = "FILE")]
     flare_lights: Option<PathBuf>,
+}
+
+/// `--seed`: a whole number the seed's 32 bits hold, else the range in the message.
+fn parse_seed(text: &str) -> Result<u32, String> {
+    text.trim().parse::<u32>().map_err(|_| format!("the seed is a whole number from 0 to {}", u32::MAX))
 }
 
 impl FlareArgs {

@@ -34,6 +34,154 @@ pub enum ColourConfigError {
     UnknownView { config: String, display: String, view: String, space: String, known: String },
 }
 
+/// The most YAML nodes a config may hold with its aliases expanded (the largest built-in
+/// configs hold under 100,000).
+const MAX_YAML_NODES: u64 = 10_000_000;
+
+/// Counts the nodes of YAML `text` as a reader that copies every alias sees them, without
+/// copying: Err naming the bound when they pass [`MAX_YAML_NODES`] (a "billion laughs" of
+/// nested aliases), or the YAML error.
+fn check_yaml_size(text: &str) -> Result<(), String> {
+    use yaml_rust2::parser::{Event, MarkedEventReceiver, Parser};
+    use yaml_rust2::scanner::Marker;
+    #[derive(Default)]
+    struct Count {
+        /// The nodes of each collection open (its anchor, its nodes so far).
+        open: Vec<(usize, u64)>,
+        /// The nodes of each anchored node.
+        anchored: std::collections::HashMap<usize, u64>,
+        total: u64,
+    }
+    impl Count {
+        fn add(&mut self, anchor: usize, nodes: u64) {
+            if anchor > 0 {
+                self.anchored.insert(anchor, nodes);
+            }
+            match self.open.last_mut() {
+                Some((_, n)) => *n = n.saturating_add(nodes),
+                None => self.total = self.total.saturating_add(nodes),
+            }
+        }
+        fn largest(&self) -> u64 {
+            self.open.iter().fold(self.total, |m, (_, n)| m.saturating_add(*n))
+        }
+    }
+    impl MarkedEventReceiver for Count {
+        fn on_event(&mut self, event: Event, _mark: Marker) {
+            match event {
+                Event::Scalar(_, _, anchor, _) => self.add(anchor, 1),
+                Event::SequenceStart(anchor, _) | Event::MappingStart(anchor, _) => self.open.push((anchor, 1)),
+                Event::SequenceEnd | Event::MappingEnd => {
+                    if let Some((anchor, n)) = self.open.pop() {
+                        self.add(anchor, n);
+                    }
+                }
+                Event::Alias(id) => {
+                    let n = self.anchored.get(&id).copied().unwrap_or(1);
+                    self.add(0, n);
+                }
+                _ => {}
+            }
+        }
+    }
+    let mut count = Count::default();
+    let mut parser = Parser::new_from_str(text);
+    let mut events = 0u64;
+    loop {
+        let (event, mark) = parser.next_token().map_err(|e| e.to_string())?;
+        let end = matches!(event, Event::StreamEnd);
+        count.on_event(event, mark);
+        events += 1;
+        if count.largest() > MAX_YAML_NODES || events > MAX_YAML_NODES {
+            return Err(format!(
+                "its YAML holds more than {MAX_YAML_NODES} nodes with its aliases expanded (nested aliases, a \"billion laughs\")"
+            ));
+        }
+        if end {
+            return Ok(());
+        }
+    }
+}
+
+/// The files a config file names as the `src` of its file transforms (LUTs), found along its
+/// `search_path` (relative to the config's folder; absolute `src` as it is), where they exist:
+/// inputs no output may replace. Best effort: a config that does not parse names none (its
+/// own error comes when it is loaded), and context variables (`$SHOT`) are not expanded.
+pub fn config_lut_files(config: &std::path::Path) -> Vec<std::path::PathBuf> {
+    use yaml_rust2::parser::{Event, Parser};
+    let Ok(text) = std::fs::read_to_string(config) else { return Vec::new() };
+    // Per open collection: a mapping's last key and whether a key comes next; a sequence's key
+    // in the mapping around it.
+    let mut open: Vec<(bool, String, bool)> = Vec::new();
+    let (mut sources, mut search) = (Vec::new(), Vec::new());
+    let mut parser = Parser::new_from_str(&text);
+    let mut events = 0u64;
+    while let Ok((event, _)) = parser.next_token() {
+        events += 1;
+        if events > MAX_YAML_NODES {
+            break;
+        }
+        // The key a value or collection starting now belongs to (None: not a mapping's value).
+        fn value_key(open: &mut [(bool, String, bool)]) -> Option<String> {
+            match open.last_mut() {
+                Some((true, key, key_next)) => {
+                    let was_key = *key_next;
+                    *key_next = !*key_next;
+                    (!was_key).then(|| key.clone())
+                }
+                Some((false, key, _)) => Some(key.clone()),
+                None => None,
+            }
+        }
+        match event {
+            Event::Scalar(value, ..) => {
+                let is_key = matches!(open.last(), Some((true, _, true)));
+                match value_key(&mut open) {
+                    Some(key) if key == "src" => sources.push(value),
+                    Some(key) if key == "search_path" => search.extend(value.split(':').map(str::to_string)),
+                    _ if is_key => {
+                        if let Some((_, key, _)) = open.last_mut() {
+                            *key = value;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            Event::MappingStart(..) => {
+                value_key(&mut open);
+                open.push((true, String::new(), true));
+            }
+            Event::SequenceStart(..) => {
+                let key = value_key(&mut open).unwrap_or_default();
+                open.push((false, key, false));
+            }
+            Event::MappingEnd | Event::SequenceEnd => {
+                open.pop();
+            }
+            Event::Alias(_) => {
+                value_key(&mut open);
+            }
+            Event::StreamEnd => break,
+            _ => {}
+        }
+    }
+    let folder = config.parent().unwrap_or(std::path::Path::new("."));
+    if search.is_empty() {
+        search.push(".".into());
+    }
+    let mut files = Vec::new();
+    for src in sources {
+        let src = std::path::Path::new(&src);
+        let candidates: Vec<std::path::PathBuf> = if src.is_absolute() {
+            vec![src.to_path_buf()]
+        } else {
+            search.iter().map(|d| folder.join(d).join(src)).collect()
+        };
+        files.extend(candidates.into_iter().filter(|c| c.is_file()));
+    }
+    files
+}
+
 /// A display and view of a config and the processor from a working space to its display
 /// values (encoded for the display: an sRGB display's values carry the sRGB curve).
 pub struct DisplayView {
@@ -55,6 +203,13 @@ impl ColourConfig {
     pub fn load(path_or_uri: &str) -> Result<Self, ColourConfigError> {
         let name =
             if path_or_uri.starts_with("ocio://") { path_or_uri.to_string() } else { format!("\"{path_or_uri}\"") };
+        if !path_or_uri.starts_with("ocio://") {
+            // A text config (not an .ocioz archive) whose aliases would expand past the bound
+            // is refused before the ocio crate, which copies every alias, reads it.
+            if let Ok(text) = std::fs::read_to_string(path_or_uri) {
+                check_yaml_size(&text).map_err(|message| ColourConfigError::Load { config: name.clone(), message })?;
+            }
+        }
         let config = ocio::Config::create_from_file(path_or_uri)
             .map_err(|e| ColourConfigError::Load { config: name.clone(), message: e.to_string() })?;
         Ok(ColourConfig { config, name })

@@ -36,10 +36,16 @@ enum Json {
     Object(Vec<(String, usize, Json)>),
 }
 
+/// The deepest nesting of lists and objects read (a list of lights needs 3): deeper input is
+/// refused before the recursion could overflow the stack (issue 34: 30,000 nested lists).
+const MAX_DEPTH: usize = 64;
+
 struct Reader<'a> {
     text: &'a [u8],
     at: usize,
     line: usize,
+    /// Lists and objects open around the value being read.
+    depth: usize,
 }
 
 impl Reader<'_> {
@@ -70,6 +76,12 @@ impl Reader<'_> {
         self.skip_space();
         let line = self.line;
         let Some(&c) = self.text.get(self.at) else { return Err("expected a value, found the end of the file".into()) };
+        if matches!(c, b'[' | b'{') {
+            if self.depth >= MAX_DEPTH {
+                return Err(format!("lists and objects nested more than {MAX_DEPTH} deep (a list of lights needs 3)"));
+            }
+            self.depth += 1;
+        }
         let value = match c {
             b'[' => {
                 self.at += 1;
@@ -91,6 +103,7 @@ impl Reader<'_> {
                         }
                     }
                 }
+                self.depth -= 1;
                 Json::List(items)
             }
             b'{' => {
@@ -117,6 +130,7 @@ impl Reader<'_> {
                         }
                     }
                 }
+                self.depth -= 1;
                 Json::Object(fields)
             }
             b'"' => {
@@ -174,7 +188,7 @@ impl Reader<'_> {
 
 /// The lights of `text` (`path` names the file in messages).
 pub fn parse_flare_lights(text: &str, path: &Path) -> Result<Vec<FlareLight>, FlareLightsError> {
-    let mut reader = Reader { text: text.as_bytes(), at: 0, line: 1 };
+    let mut reader = Reader { text: text.as_bytes(), at: 0, line: 1, depth: 0 };
     let syntax = |line: usize, message: String| FlareLightsError::Syntax { path: path.to_path_buf(), line, message };
     let parsed = reader.value();
     let (line, value) = parsed.map_err(|m| syntax(reader.line, m))?;

@@ -37,16 +37,25 @@ fn host_name() -> String {
     raw.trim().chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect()
 }
 
-/// `.NAME.realcam-HOST-PID-N.tmp` beside `target`.
+/// The longest file name Linux's file systems take, in bytes.
+const NAME_MAX_BYTES: usize = 255;
+
+/// `.NAME.realcam-HOST-PID-N.tmp` beside `target`, NAME cut short (at a character) so that the
+/// whole stays within [`NAME_MAX_BYTES`]: the process id and counter keep it unique.
 fn temporary_name(name: &OsStr) -> String {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    format!(
-        ".{}{TMP_TAG}{}-{}-{}{TMP_SUFFIX}",
-        name.to_string_lossy(),
+    let owner = format!(
+        "{TMP_TAG}{}-{}-{}{TMP_SUFFIX}",
         host_name(),
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
-    )
+    );
+    let name = name.to_string_lossy();
+    let mut keep = NAME_MAX_BYTES.saturating_sub(1 + owner.len()).min(name.len());
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    format!(".{}{owner}", &name[..keep])
 }
 
 /// The host and process id of a temporary's name, if it is one of realcam's.
@@ -127,15 +136,96 @@ fn resolved(path: &Path, dir: &Path, name: &OsStr) -> PathBuf {
     std::fs::canonicalize(dir).map(|d| d.join(name)).unwrap_or_else(|_| path.to_path_buf())
 }
 
-/// Same file: the same real path, or (both existing) the same device and inode.
-fn same_file(a: &Path, a_resolved: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    if std::fs::canonicalize(b).is_ok_and(|b| b == a_resolved) {
-        return true;
+/// The files a run reads, each with what it is (`color pass`, `lens file`, ...), indexed so that
+/// an output can be looked up among the thousands of files of a sequence: by real path (the
+/// folder's real path and the name, or the whole real path of a symbolic link) and, for the
+/// files that exist, by device and inode (hard links).
+#[derive(Default)]
+pub struct InputFiles {
+    files: Vec<(&'static str, PathBuf)>,
+    by_path: std::collections::HashMap<PathBuf, usize>,
+    by_inode: std::collections::HashMap<(u64, u64), usize>,
+    /// Real paths of the folders seen (None: the folder does not resolve).
+    folders: std::collections::HashMap<PathBuf, Option<PathBuf>>,
+}
+
+impl InputFiles {
+    /// The files of `inputs`, (what each is, its path).
+    pub fn new(inputs: impl IntoIterator<Item = (&'static str, PathBuf)>) -> InputFiles {
+        let mut set = InputFiles::default();
+        for (what, path) in inputs {
+            set.add(what, path);
+        }
+        set
     }
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
-        _ => false,
+
+    /// Adds the file `path`, which is `what`.
+    pub fn add(&mut self, what: &'static str, path: PathBuf) {
+        let index = self.files.len();
+        let (real, id) = self.identify(&path);
+        self.by_path.entry(real).or_insert(index);
+        if let Some(id) = id {
+            self.by_inode.entry(id).or_insert(index);
+        }
+        self.files.push((what, path));
+    }
+
+    /// How many files.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// The real path of `path` (which need not exist: its folder's real path and its name; a
+    /// symbolic link: the real path of what it points to; the path as it is when neither
+    /// resolves) and, when it exists, its device and inode. One lstat for a file that is not
+    /// a link, so that a sequence's thousands of frames are quick.
+    fn identify(&mut self, path: &Path) -> (PathBuf, Option<(u64, u64)>) {
+        use std::os::unix::fs::MetadataExt;
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let real = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+                (real, std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino())))
+            }
+            found => {
+                let real = self.in_real_folder(path).unwrap_or_else(|| path.to_path_buf());
+                (real, found.ok().map(|m| (m.dev(), m.ino())))
+            }
+        }
+    }
+
+    /// `path`'s name in its folder's real path (each folder resolved once).
+    fn in_real_folder(&mut self, path: &Path) -> Option<PathBuf> {
+        let name = path.file_name()?;
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if let Some(real) = self.folders.get(dir) {
+            return real.as_ref().map(|d| d.join(name));
+        }
+        let real = std::fs::canonicalize(dir).ok();
+        self.folders.insert(dir.to_path_buf(), real.clone());
+        real.map(|d| d.join(name))
+    }
+
+    /// Refuses `path` as the output named by `field` when it is one of these files; else its
+    /// real path.
+    pub fn check_output(&mut self, field: &'static str, path: &Path) -> Result<PathBuf, IoError> {
+        let (real, id) = self.identify(path);
+        let found = self.by_path.get(&real).or_else(|| id.and_then(|id| self.by_inode.get(&id)));
+        match found.map(|&i| &self.files[i]) {
+            Some((what, input)) => Err(IoError::Output {
+                field,
+                path: path.to_path_buf(),
+                reason: format!("it is the input {what} \"{}\"; realcam never writes over its inputs", input.display()),
+            }),
+            None => Ok(real),
+        }
     }
 }
 
@@ -144,9 +234,18 @@ impl Outputs {
     /// against `inputs` (field, path), removes stale temporaries from their folders and
     /// reserves a temporary beside each. Nothing existing is touched.
     pub fn new(outputs: &[(&'static str, &Path)], inputs: &[(&'static str, &Path)]) -> Result<Outputs, IoError> {
+        let mut inputs = InputFiles::new(inputs.iter().map(|&(what, p)| (what, p.to_path_buf())));
+        Self::new_beside(outputs, &mut inputs)
+    }
+
+    /// [`Outputs::new`] with the inputs already gathered (a sequence's every frame).
+    pub fn new_beside(outputs: &[(&'static str, &Path)], inputs: &mut InputFiles) -> Result<Outputs, IoError> {
         let mut checked: Vec<(&'static str, &Path, PathBuf, PathBuf)> = Vec::new();
         for &(field, path) in outputs {
             let refuse = |reason: String| IoError::Output { field, path: path.to_path_buf(), reason };
+            if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
+                return Err(refuse("the path ends with \"/\": it names a folder, not a file".into()));
+            }
             let name = path.file_name().ok_or_else(|| refuse("the path does not name a file".into()))?;
             let dir = match path.parent() {
                 Some(p) if !p.as_os_str().is_empty() => p,
@@ -166,15 +265,7 @@ impl Outputs {
                 }
             }
             let real = resolved(path, dir, name);
-            for &(input_field, input) in inputs {
-                if same_file(path, &real, input) {
-                    return Err(refuse(format!(
-                        "it is the input {} \"{}\"; realcam never writes over its inputs",
-                        input_field,
-                        input.display()
-                    )));
-                }
-            }
+            inputs.check_output(field, path)?;
             if let Some((other, other_path, ..)) = checked.iter().find(|c| c.2 == real) {
                 return Err(refuse(format!("the {other} \"{}\" is the same file", other_path.display())));
             }
@@ -267,6 +358,41 @@ impl Drop for Outputs {
     }
 }
 
+/// Why the existing output `path`, named by `field`, is not complete (what `--skip-existing`
+/// may keep); None when it is: a regular file that reads back whole as what `field` writes (the
+/// EXR's header, offset tables and every chunk; the PNG decoded; the trace parsed as JSON).
+pub fn incomplete_output(field: &str, path: &Path) -> Option<String> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) => return Some(format!("it cannot be read: {e}")),
+    };
+    if !meta.file_type().is_file() {
+        return Some(format!("it is {}", file_kind(meta.file_type())));
+    }
+    if meta.len() == 0 {
+        return Some("it is empty (0 bytes)".into());
+    }
+    let whole = || -> Result<(), String> {
+        match field {
+            "output" => {
+                let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+                let reader = exr::block::reader::Reader::read_from_buffered(std::io::BufReader::new(file), true)
+                    .map_err(|e| e.to_string())?;
+                for chunk in reader.all_chunks(true).map_err(|e| e.to_string())? {
+                    chunk.map_err(|e| e.to_string())?;
+                }
+                Ok(())
+            }
+            "png" => image::open(path).map(|_| ()).map_err(|e| e.to_string()),
+            _ => {
+                let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+                serde_json::from_slice::<serde::de::IgnoredAny>(&bytes).map(|_| ()).map_err(|e| e.to_string())
+            }
+        }
+    };
+    whole().err().map(|e| format!("it does not read back whole ({} bytes): {e}", meta.len()))
+}
+
 /// Writes `bytes` to `path` through a temporary (the checks of [`Outputs::new`], `field`
 /// naming the setting that chose the path).
 pub fn write_file(field: &'static str, path: &Path, bytes: &[u8]) -> Result<(), IoError> {
@@ -332,6 +458,11 @@ mod tests {
         assert!(name.starts_with(".out-1.exr.realcam-") && name.ends_with(".tmp"), "{name}");
         assert_eq!(temporary_owner(&name), Some((host_name().as_str(), std::process::id())));
         assert_eq!(temporary_owner(".a.exr.realcam-my-host.lan-123-7.tmp"), Some(("my-host.lan", 123)));
+        // A 255-byte name: the temporary's name stays within 255 bytes and is still one of realcam's.
+        let long = format!("{}.exr", "é".repeat(125));
+        let name = temporary_name(OsStr::new(&long));
+        assert!(name.len() <= NAME_MAX_BYTES && name.starts_with(".éé"), "{} bytes: {name}", name.len());
+        assert_eq!(temporary_owner(&name), Some((host_name().as_str(), std::process::id())));
         for other in ["a.exr", ".a.exr.tmp", ".a.realcam-h-x-1.tmp", "realcam-h-1-2.tmp"] {
             assert_eq!(temporary_owner(other), None, "{other}");
         }

@@ -28,13 +28,14 @@ pub enum SequenceError {
     Chunk { range: String, index: u64, size: usize, reason: String },
 }
 
-/// A path with one frame-number token; see the module docs.
+/// A path with one frame-number token; see the module docs. The text around the token is kept
+/// as the path's bytes: a name that is not UTF-8 is written and read as it is (issue 34).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct FramePattern {
-    /// The text before the token.
-    prefix: String,
-    /// The text after the token.
-    suffix: String,
+    /// The bytes before the token.
+    prefix: Vec<u8>,
+    /// The bytes after the token.
+    suffix: Vec<u8>,
     /// Width of the number including its sign (printf's `%0Nd`); 0 or 1: no padding.
     padding: usize,
 }
@@ -44,27 +45,29 @@ impl FramePattern {
     /// A path with two tokens, a `%` that is not `%d`/`%0Nd` or a padding wider than 20 digits
     /// is an error.
     pub fn parse(path: &Path) -> Result<Option<FramePattern>, SequenceError> {
+        use std::os::unix::ffi::OsStrExt;
+        let bytes = path.as_os_str().as_bytes();
+        // Messages show the path as text (bytes that are not UTF-8 as U+FFFD).
         let text = path.to_string_lossy().into_owned();
         let refuse = |reason: String| SequenceError::Pattern { pattern: text.clone(), reason };
-        let chars: Vec<(usize, char)> = text.char_indices().collect();
+        let shown = |range: std::ops::Range<usize>| String::from_utf8_lossy(&bytes[range]).into_owned();
         let mut found: Option<(usize, usize, usize)> = None; // byte start, byte end, padding
         let mut i = 0;
-        while i < chars.len() {
-            let (start, c) = chars[i];
+        while i < bytes.len() {
+            let c = bytes[i];
             let token = match c {
-                '#' | '@' => {
-                    let run = chars[i..].iter().take_while(|(_, d)| *d == c).count();
+                b'#' | b'@' => {
+                    let run = bytes[i..].iter().take_while(|&&d| d == c).count();
                     i += run;
-                    Some((start, byte_end(&chars, i, &text), run))
+                    Some((i - run, i, run))
                 }
-                '%' => {
-                    let digits: String =
-                        chars[i + 1..].iter().map(|(_, d)| *d).take_while(char::is_ascii_digit).collect();
+                b'%' => {
+                    let digits = shown(i + 1..i + 1 + bytes[i + 1..].iter().take_while(|d| d.is_ascii_digit()).count());
                     let after = i + 1 + digits.len();
-                    if chars.get(after).map(|(_, d)| *d) != Some('d') {
+                    if bytes.get(after) != Some(&b'd') {
                         return Err(refuse(format!(
                             "\"%\" at character {} is not a frame number (%d or %0Nd, e.g. %04d)",
-                            i + 1
+                            shown(0..i).chars().count() + 1
                         )));
                     }
                     if !digits.is_empty() && !digits.starts_with('0') {
@@ -77,8 +80,9 @@ impl FramePattern {
                     } else {
                         digits.parse::<usize>().map_err(|_| refuse(format!("\"%{digits}d\": width too large")))?
                     };
+                    let start = i;
                     i = after + 1;
-                    Some((start, byte_end(&chars, i, &text), padding))
+                    Some((start, i, padding))
                 }
                 _ => {
                     i += 1;
@@ -89,8 +93,8 @@ impl FramePattern {
                 if let Some(first) = found {
                     return Err(refuse(format!(
                         "two frame numbers (\"{}\" and \"{}\"); a pattern has one",
-                        &text[first.0..first.1],
-                        &text[token.0..token.1]
+                        shown(first.0..first.1),
+                        shown(token.0..token.1)
                     )));
                 }
                 found = Some(token);
@@ -100,18 +104,16 @@ impl FramePattern {
         if padding > MAX_PADDING {
             return Err(refuse(format!("a padding of {padding} digits; at most {MAX_PADDING}")));
         }
-        Ok(Some(FramePattern { prefix: text[..start].to_string(), suffix: text[end..].to_string(), padding }))
+        Ok(Some(FramePattern { prefix: bytes[..start].to_vec(), suffix: bytes[end..].to_vec(), padding }))
     }
 
     /// The path of `frame`.
     pub fn path(&self, frame: i64) -> PathBuf {
-        PathBuf::from(format!("{}{:0width$}{}", self.prefix, frame, self.suffix, width = self.padding))
+        use std::os::unix::ffi::OsStringExt;
+        let number = format!("{:0width$}", frame, width = self.padding);
+        let bytes = [self.prefix.as_slice(), number.as_bytes(), self.suffix.as_slice()].concat();
+        PathBuf::from(std::ffi::OsString::from_vec(bytes))
     }
-}
-
-/// The byte offset in `text` of character `i` (its length past the end).
-fn byte_end(chars: &[(usize, char)], i: usize, text: &str) -> usize {
-    chars.get(i).map_or(text.len(), |(b, _)| *b)
 }
 
 /// The frames of a range, in the order given; see the module docs.
@@ -310,6 +312,14 @@ mod tests {
         assert_eq!(pattern("b.%d.exr").path(-12), Path::new("b.-12.exr"));
         assert_eq!(pattern("b.####.exr").path(-1234), Path::new("b.-1234.exr"));
         assert_eq!(pattern("b.####.exr").path(0), Path::new("b.0000.exr"));
+    }
+
+    #[test]
+    fn bytes_that_are_not_utf8_are_kept() {
+        use std::os::unix::ffi::OsStrExt;
+        let raw = Path::new(std::ffi::OsStr::from_bytes(b"q\xfe.####.exr"));
+        let p = FramePattern::parse(raw).unwrap().unwrap();
+        assert_eq!(p.path(1).as_os_str().as_bytes(), b"q\xfe.0001.exr");
     }
 
     #[test]

@@ -62,6 +62,9 @@ pub enum ApertureMaskError {
     TooLarge(crate::io::IoError),
     #[error("aperture image {path}: the mask is empty (every value is 0 or below)")]
     Empty { path: PathBuf },
+    /// Open somewhere, but too thin or small for any of the mask's samples to fall on it.
+    #[error("aperture image {path}: its open part (values above 0) is too thin or small to show in the {size}x{size} mask made of its {width}x{height} px, centred in a square of its longer side; draw the aperture to fill a square image")]
+    TooThin { path: PathBuf, width: u32, height: u32, size: u32 },
 }
 
 impl ApertureMaskError {
@@ -121,7 +124,14 @@ impl ApertureMask {
             let grey: Vec<f32> = img.pixels().map(|p| p.0[0] * p.0[1]).collect();
             (img.width(), img.height(), grey)
         };
-        Self::from_grey(w, h, &grey).ok_or_else(|| ApertureMaskError::Empty { path: path.to_path_buf() })
+        Self::from_grey(w, h, &grey).ok_or_else(|| {
+            let path = path.to_path_buf();
+            if grey.iter().any(|&v| v > 0.0 && v.is_finite()) {
+                ApertureMaskError::TooThin { path, width: w, height: h, size: MASK_SIZE }
+            } else {
+                ApertureMaskError::Empty { path }
+            }
+        })
     }
 
     /// Resample a grey image (values clamped to 0..1) into the square grid, each cell the mean

@@ -144,8 +144,20 @@ impl LongExposure {
                 .map(|f| f.parse::<i64>().map_err(|_| refuse(format!("the frame \"{f}\" is not a frame number"))))
                 .collect::<Result<Vec<i64>, _>>()?
         };
+        if let Some(twice) = done.iter().enumerate().find(|(i, f)| done[..*i].contains(f)).map(|(_, f)| f) {
+            return Err(refuse(format!("the frames line lists frame {twice} more than once")));
+        }
+        let values = [w, h, c].iter().try_fold(1usize, |n, &v| n.checked_mul(v as usize));
+        let Some(values) = values.filter(|v| v.checked_mul(8).is_some()) else {
+            return Err(refuse(format!("the size line \"{size_line}\" holds more values than memory can")));
+        };
+        if !done.is_empty() && values == 0 {
+            return Err(refuse(format!(
+                "the size line \"{size_line}\" is an empty image, but the frames line lists {} frame(s)",
+                done.len()
+            )));
+        }
         let data = lines.next().unwrap_or_default();
-        let values = w as usize * h as usize * c as usize;
         if data.len() != values * 8 {
             return Err(refuse(format!(
                 "{} bytes of sums, expected {} ({w}x{h} px, {c} channel(s), 8 bytes each)",
@@ -154,6 +166,18 @@ impl LongExposure {
             )));
         }
         let sum: Vec<f64> = data.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8]))).collect();
+        // The exposure is the sums over the frames as f32: each must stay finite there.
+        let limit = f64::from(f32::MAX) * done.len().max(1) as f64;
+        if let Some((i, v)) = sum.iter().enumerate().find(|(_, v)| v.is_nan() || v.abs() > limit) {
+            let (pixel, channel) = (i / c as usize, i % c as usize);
+            return Err(refuse(format!(
+                "the sum of pixel ({}, {}) channel {channel} is {}, not a finite value the average of {} frame(s) can hold",
+                pixel % w as usize,
+                pixel / w as usize,
+                crate::optics::Num(*v),
+                done.len()
+            )));
+        }
         let shape = (values > 0).then_some((w, h, c));
         Ok(LongExposure { shape, done, sum, settings })
     }

@@ -8,7 +8,7 @@ use crate::model::camera::{CameraError, CameraField};
 use anyhow::anyhow;
 
 /// The flag that sets each field a library error can name.
-pub const FLAGS: [(&str, &str); 35] = [
+pub const FLAGS: [(&str, &str); 36] = [
     ("focal_length_mm", "--focal-length"),
     ("f_number", "--fstop"),
     ("focus_distance_m", "--focus"),
@@ -34,6 +34,7 @@ pub const FLAGS: [(&str, &str); 35] = [
     ("out", "--out"),
     ("png", "--png"),
     ("trace", "--trace"),
+    ("state", "--state"),
     ("max_pixels", "--max-pixels"),
     ("blade_rotation_deg", "--blade-rotation"),
     ("fps", "--fps"),

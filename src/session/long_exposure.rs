@@ -28,8 +28,11 @@ pub(super) fn render(
         bail!("--trace: GPU times are per frame; --long-exposure writes no trace");
     }
     let range = &sequence.range;
-    let outputs = settings.outputs()?;
     let state = sequence.state.as_deref();
+    // The outputs and the state against every frame the exposure reads and each other.
+    let state_output: Vec<(&'static str, &std::path::Path)> = state.map(|p| ("state", p)).into_iter().collect();
+    patterns.check_outputs(settings, range, &state_output)?;
+    let outputs = settings.outputs()?;
     // The frames are rendered up to the sensor and averaged; the film comes once, after.
     let sensor = crate::pipeline::planner::sensor_camera(camera);
     // Every setting of the camera, so a resumed exposure is refused other settings.

@@ -29,7 +29,9 @@ pub fn render_sequence(
         return long_exposure::render(settings, sequence, &patterns, camera, report);
     }
     let range = &sequence.range;
-    // The first frame's outputs are checked (folders, inputs, each other) before any work.
+    // Every frame's outputs are checked against every file the run reads and each other, and
+    // the first frame's reserved (folders), before any work.
+    patterns.check_outputs(settings, range, &[])?;
     if let Some(&first) = range.frames.first() {
         drop(patterns.at_frame(settings, first).outputs()?);
     }
@@ -40,7 +42,7 @@ pub fn render_sequence(
         .iter()
         .map(|&frame| {
             let one = patterns.at_frame(settings, frame);
-            let skip = sequence.skip_existing && one.output_paths().iter().all(|p| p.exists());
+            let skip = sequence.skip_existing && complete_outputs(&one, frame, &*report);
             (frame, one, skip)
         })
         .collect();
@@ -91,6 +93,26 @@ pub fn render_sequence(
         bail!("{} of {total} frames failed: {}", tally.failed.len(), list.join(", "));
     }
     Ok(())
+}
+
+/// Whether every output of `one` (frame `frame`) exists and reads back whole, for
+/// `--skip-existing`; an output that exists but does not is said, and the frame rendered again.
+fn complete_outputs(one: &RenderSettings, frame: i64, report: &dyn Report) -> bool {
+    one.output_fields().into_iter().all(|(field, path)| {
+        if std::fs::symlink_metadata(path).is_err() {
+            return false;
+        }
+        match crate::io::output::incomplete_output(field, path) {
+            None => true,
+            Some(why) => {
+                report.say(&format!(
+                    "frame {frame}: {} is not a complete output, {why}; rendering it again",
+                    path.display()
+                ));
+                false
+            }
+        }
+    })
 }
 
 /// The summary line: frames done, skipped, failed and not run (`why`), wall time, frames per second.

@@ -4,7 +4,7 @@
 
 use super::errors::NameFlags;
 use crate::gpu::GpuOptions;
-use crate::io::output::Outputs;
+use crate::io::output::{InputFiles, Outputs};
 use crate::io::sequence::{FramePattern, FrameRange};
 use crate::io::{DepthKind, ExrCompression, PassSources};
 use anyhow::{bail, Context, Result};
@@ -70,19 +70,45 @@ impl RenderSettings {
         [Some(self.output.as_path()), self.png.as_deref(), self.trace.as_deref()].into_iter().flatten().collect()
     }
 
-    /// The outputs, checked against each other and the inputs and reserved, before any work.
-    pub fn outputs(&self) -> Result<Outputs> {
+    /// The outputs (the field that names each, its path): the EXR, then the PNG and the trace
+    /// if asked for.
+    pub fn output_fields(&self) -> Vec<(&'static str, &Path)> {
         let mut outputs: Vec<(&'static str, &Path)> = vec![("output", &self.output)];
         outputs.extend(self.png.as_deref().map(|p| ("png", p)));
         outputs.extend(self.trace.as_deref().map(|p| ("trace", p)));
+        outputs
+    }
+
+    /// The passes this render reads (what each is, its path).
+    fn pass_inputs(&self) -> Vec<(&'static str, PathBuf)> {
         let passes = [
-            ("color pass", Some(self.sources.color_path.as_path())),
-            ("depth pass", self.sources.depth_path.as_deref()),
-            ("velocity pass", self.sources.velocity_path.as_deref()),
+            ("color pass", Some(&self.sources.color_path)),
+            ("depth pass", self.sources.depth_path.as_ref()),
+            ("velocity pass", self.sources.velocity_path.as_ref()),
         ];
-        let mut inputs: Vec<(&'static str, &Path)> = passes.into_iter().filter_map(|(w, p)| Some((w, p?))).collect();
-        inputs.extend(self.other_inputs.iter().map(|(what, p)| (*what, p.as_path())));
-        Outputs::new(&outputs, &inputs).name_flags()
+        passes.into_iter().filter_map(|(w, p)| Some((w, p?.clone()))).collect()
+    }
+
+    /// The files this render reads besides its passes: `other_inputs` and the OpenColorIO
+    /// config file (--config, else `$OCIO`; a built-in `ocio://` config is no file).
+    pub fn other_input_files(&self) -> Vec<(&'static str, PathBuf)> {
+        let mut inputs = self.other_inputs.clone();
+        let config = match &self.colour.config {
+            Some(config) => Some(("OpenColorIO config", config.clone())),
+            None => std::env::var("OCIO").ok().map(|c| ("OpenColorIO config of $OCIO", c)),
+        };
+        if let Some((what, config)) = config.filter(|(_, c)| !c.is_empty() && !c.starts_with("ocio://")) {
+            let luts = crate::io::colour_config::config_lut_files(Path::new(&config));
+            inputs.push((what, PathBuf::from(config)));
+            inputs.extend(luts.into_iter().map(|lut| ("LUT of the OpenColorIO config", lut)));
+        }
+        inputs
+    }
+
+    /// The outputs, checked against each other and the inputs and reserved, before any work.
+    pub fn outputs(&self) -> Result<Outputs> {
+        let mut inputs = InputFiles::new(self.pass_inputs().into_iter().chain(self.other_input_files()));
+        Outputs::new_beside(&self.output_fields(), &mut inputs).name_flags()
     }
 }
 
@@ -132,6 +158,64 @@ impl Patterns {
             png: output("--png", settings.png.as_deref())?,
             trace: output("--trace", settings.trace.as_deref())?,
         })
+    }
+
+    /// Every file the frames of `range` read: each frame's passes, and the files all share.
+    pub(super) fn input_files(&self, settings: &RenderSettings, range: &FrameRange) -> InputFiles {
+        let mut inputs = InputFiles::new(settings.other_input_files());
+        let sources = &settings.sources;
+        let passes = [
+            ("color pass", &self.color, Some(&sources.color_path)),
+            ("depth pass", &self.depth, sources.depth_path.as_ref()),
+            ("velocity pass", &self.velocity, sources.velocity_path.as_ref()),
+        ];
+        for (what, pattern, path) in passes {
+            match (pattern, path) {
+                (Some(pattern), _) => range.frames.iter().for_each(|&f| inputs.add(what, pattern.path(f))),
+                (None, Some(path)) => inputs.add(what, path.clone()),
+                (None, None) => {}
+            }
+        }
+        inputs
+    }
+
+    /// Checks every output of every frame of `range` (and `extra`, such as the long exposure's
+    /// state) against every file the run reads and against the frame's other outputs, before
+    /// any work.
+    pub(super) fn check_outputs(
+        &self,
+        settings: &RenderSettings,
+        range: &FrameRange,
+        extra: &[(&'static str, &Path)],
+    ) -> Result<()> {
+        let mut inputs = self.input_files(settings, range);
+        // A long exposure's outputs have no frame number: one set for every frame.
+        let frames = if self.output.is_none() { &range.frames[..range.frames.len().min(1)] } else { &range.frames[..] };
+        let outputs = [
+            ("output", &self.output, Some(&settings.output)),
+            ("png", &self.png, settings.png.as_ref()),
+            ("trace", &self.trace, settings.trace.as_ref()),
+        ];
+        for &frame in frames {
+            let mut seen: Vec<(&'static str, PathBuf, PathBuf)> = Vec::new();
+            let paths = outputs.iter().filter_map(|&(field, pattern, path)| {
+                Some((field, pattern.as_ref().map_or_else(|| path.cloned(), |p| Some(p.path(frame)))?))
+            });
+            let extra = extra.iter().map(|&(field, path)| (field, path.to_path_buf()));
+            for (field, path) in paths.chain(extra) {
+                let real = inputs.check_output(field, &path).name_flags()?;
+                if let Some((other, other_path, _)) = seen.iter().find(|s| s.2 == real) {
+                    return Err(crate::io::IoError::Output {
+                        field,
+                        path: path.clone(),
+                        reason: format!("the {other} \"{}\" is the same file", other_path.display()),
+                    })
+                    .name_flags();
+                }
+                seen.push((field, path, real));
+            }
+        }
+        Ok(())
     }
 
     /// `settings` with the paths of `frame`.

@@ -11,6 +11,14 @@ impl LensFile {
         if let Some(t) = &self.tables {
             self.validate_tables(t, path, text)?;
         }
+        // The name goes into every output's EXR header (lensModel), whose text is Latin-1.
+        if let Some(c) = self.name.chars().find(|&c| u32::from(c) > 0xff) {
+            return bad(format!(
+                "name = {:?} has the character {c:?} (U+{:04X}), outside Latin-1, which EXR headers (lensModel) cannot hold",
+                self.name,
+                u32::from(c)
+            ));
+        }
         let positive = [
             ("focal_length_mm", self.focal_length_mm),
             ("f_number_min", self.f_number_min),
@@ -21,6 +29,15 @@ impl LensFile {
         for (key, value) in positive {
             if !(value.is_finite() && value > 0.0) {
                 return bad(format!("{key} = {} must be a positive number", Num(value)));
+            }
+        }
+        // Finite but beyond any lens: refused here, where the file is named, not later by the
+        // optics with no file (issue 34: focal_length_mm = 1e308).
+        let at_most =
+            [("focal_length_mm", self.focal_length_mm, 1e6, "1 km"), ("focus_min_m", self.focus_min_m, 1e6, "1000 km")];
+        for (key, value, limit, words) in at_most {
+            if value > limit {
+                return bad(format!("{key} = {} must be at most {} ({words})", Num(value), Num(limit)));
             }
         }
         if self.f_number_max < self.f_number_min {

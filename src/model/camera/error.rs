@@ -15,6 +15,19 @@ pub enum CameraError {
     /// A setting no camera takes.
     #[error("{} must be {allowed}, got {}", .field.label(), Num(*.value))]
     Invalid { field: CameraField, value: f64, allowed: &'static str },
+    /// A setting whose result (the exposure's gain, the grain's spread) no 32-bit float holds
+    /// within `limit`: the output could not be finite.
+    #[error("{} makes the {what} {}, more than {}: the output cannot be finite; with the other settings as they are, it must be {} {}",
+        .field.quantity(*.value), Num(*.result), Num(*.limit), .bound_word, .field.quantity(*.bound))]
+    Overflow {
+        field: CameraField,
+        value: f64,
+        what: &'static str,
+        result: f64,
+        limit: f64,
+        bound_word: &'static str,
+        bound: f64,
+    },
 }
 
 impl CameraError {
@@ -22,7 +35,9 @@ impl CameraError {
     pub fn field(&self) -> Option<CameraField> {
         match self {
             CameraError::Optics(_) => None,
-            CameraError::OutOfRange { field, .. } | CameraError::Invalid { field, .. } => Some(*field),
+            CameraError::OutOfRange { field, .. }
+            | CameraError::Invalid { field, .. }
+            | CameraError::Overflow { field, .. } => Some(*field),
         }
     }
 }

@@ -183,7 +183,7 @@ impl Camera {
         let sensor = Sensor::parse(req.sensor.as_deref().unwrap_or("full-frame"))?;
         let (fps, shutter_s, timing) = check_shutter(req)?;
         let blades = check_image_settings(lens_file, req)?;
-        Ok(Camera {
+        let camera = Camera {
             lens_name: lens_file.name.clone(),
             lens_file_focal_length_mm: lens_file.focal_length_mm,
             lens_is_ideal: lens_file.ideal,
@@ -224,6 +224,71 @@ impl Camera {
                 max_blur_px: req.max_blur_px,
             },
             flare: flare_settings(lens_file, req),
-        })
+        };
+        check_overflow(&camera)?;
+        Ok(camera)
     }
+}
+
+/// The largest gain from scene value to sensor value, and the largest spread of the grain at
+/// sensor value 1: beyond them the frame's 32-bit values become Inf (issue 34).
+const MAX_EXPOSURE_GAIN: f64 = 1e30;
+const MAX_NOISE_SIGMA: f64 = 1e30;
+
+/// Refuses an exposure whose gain, or grain whose spread, cannot be finite: the setting that
+/// brightens it most (in stops from its default) is named, with the bound that would do.
+fn check_overflow(c: &Camera) -> Result<(), CameraError> {
+    use crate::optics::exposure::exposure_gain;
+    let gain = c.exposure_gain();
+    if c.exposure && (gain.is_nan() || gain > MAX_EXPOSURE_GAIN) {
+        let settings = [
+            (CameraField::Iso, c.iso, c.iso / 100.0),
+            (CameraField::ShutterS, c.shutter_s, c.shutter_s * 50.0),
+            (CameraField::NitsPerUnit, c.nits_per_unit, c.nits_per_unit / 160.0),
+            (CameraField::FNumber, c.lens.f_number, (2.8 / c.lens.f_number).powi(2)),
+        ];
+        let (field, value, _) = settings.into_iter().fold(settings[0], |a, b| if b.2 > a.2 { b } else { a });
+        // The gain is linear in ISO, time and nits per unit and goes as 1 / N^2: the gain with
+        // the setting at 1, then the bound.
+        let lens_at_1 = ThinLens { f_number: 1.0, ..c.lens };
+        let (bound_word, bound) = match field {
+            CameraField::Iso => {
+                ("at most", MAX_EXPOSURE_GAIN / exposure_gain(&c.lens, c.shutter_s, 1.0, c.nits_per_unit))
+            }
+            CameraField::ShutterS => {
+                ("at most", MAX_EXPOSURE_GAIN / exposure_gain(&c.lens, 1.0, c.iso, c.nits_per_unit))
+            }
+            CameraField::NitsPerUnit => {
+                ("at most", MAX_EXPOSURE_GAIN / exposure_gain(&c.lens, c.shutter_s, c.iso, 1.0))
+            }
+            _ => (
+                "at least",
+                (exposure_gain(&lens_at_1, c.shutter_s, c.iso, c.nits_per_unit) / MAX_EXPOSURE_GAIN).sqrt(),
+            ),
+        };
+        let what = "exposure's gain (scene value to sensor value)";
+        return Err(CameraError::Overflow {
+            field,
+            value,
+            what,
+            result: gain,
+            limit: MAX_EXPOSURE_GAIN,
+            bound_word,
+            bound,
+        });
+    }
+    let sigma = c.noise_sigma();
+    if sigma.is_nan() || sigma > MAX_NOISE_SIGMA {
+        let bound = MAX_NOISE_SIGMA / (c.iso / 100.0).sqrt();
+        return Err(CameraError::Overflow {
+            field: CameraField::Grain,
+            value: c.grain,
+            what: "grain's spread at sensor value 1",
+            result: sigma,
+            limit: MAX_NOISE_SIGMA,
+            bound_word: "at most",
+            bound,
+        });
+    }
+    Ok(())
 }

@@ -27,6 +27,12 @@ impl Shader for FlareTilesShader {
     type Push = [i32; 2];
 }
 
+/// A light pixel's channels count at most this much in the sums (the shader's
+/// `FLARE_MAX_VALUE`): the sums over a tile (x 256 pixels x 65536 px of position) and over the
+/// tiles of a light (x 4096^2 tiles) of a frame of finite values stay within f32 (issue 34: a
+/// 4x4 patch of 1e37 made them Inf, then every pixel NaN).
+pub const FLARE_MAX_VALUE: f32 = 1e20;
+
 /// Whether the pixel value `rgb` belongs to a light at `threshold` (finite, a channel at or
 /// over it), and then its weight R + G + B.
 pub fn light_weight(rgb: &[f32], threshold: f32) -> Option<f32> {
@@ -46,7 +52,9 @@ impl Twin for FlareTilesShader {
                 for y in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(size[1] as u32) {
                     for x in tx * TILE_SIZE..((tx + 1) * TILE_SIZE).min(size[0] as u32) {
                         let c = &image.clamped(x as i32, y as i32)[..3];
-                        if let Some(w) = light_weight(c, fc.threshold) {
+                        if light_weight(c, fc.threshold).is_some() {
+                            let c = [c[0], c[1], c[2]].map(|v| v.clamp(-FLARE_MAX_VALUE, FLARE_MAX_VALUE));
+                            let w = (c[0] + c[1] + c[2]).max(0.0);
                             let values = [c[0], c[1], c[2], w * (x as f32 + 0.5), w * (y as f32 + 0.5), w, 1.0];
                             sums.iter_mut().zip(values).for_each(|(s, v)| *s += v);
                         }
