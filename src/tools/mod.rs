@@ -17,3 +17,4 @@ pub mod highlight_discs;
 pub mod layered_scene;
 pub mod metrics;
 pub mod synth;
+pub mod warm_up;

@@ -15,6 +15,7 @@ mod flare_predict;
 mod lens;
 mod render;
 mod synth;
+mod warm_up;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -59,6 +60,10 @@ enum Command {
     /// GPU time per pass of the depth-of-field methods against the CoC radius (whole frame
     /// defocused), with the fast path's error against the reference.
     Bench(bench::BenchArgs),
+    /// Compile the pipelines a render uses into the driver's and realcam's caches, so the first
+    /// render on a fresh machine (a farm node, a container, CI) runs at warm speed: run once when
+    /// the machine or the farm's image is built.
+    WarmUp(warm_up::WarmUpArgs),
     /// Error of an image against a reference (RMSE, PSNR, energy), e.g. against a ray-traced
     /// ground truth.
     Compare {
@@ -126,6 +131,7 @@ fn main() {
             compare::run(&test, &reference, highlights.as_deref().zip(fstop))
         }
         Command::Synth { out, layered, size, motion } => synth::run(&out, layered, &size, motion),
+        Command::WarmUp(args) => warm_up::run(&args),
     };
     if let Err(e) = result {
         realcam::session::report::say_on_stderr(&format!("error: {}", error_text(&e)));
