@@ -46,18 +46,21 @@ void main() {
     float z_raw = imageLoad(depth_m, p).r;
     imageStore(velocity_out, p, v_raw);
     imageStore(depth_out, p, vec4(z_raw, 0.0, 0.0, 0.0));
-    vec4 v_p = clamped_velocity(v_raw);
+    // The depths first: most pixels lie within one layer and read no neighbour's velocity.
     float w_near = layer_key(z_raw), w_far = w_near;
-    float motion = 0.0;
     for (int i = 0; i < 9; ++i) {
-        ivec2 q = clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1);
-        float w = layer_key(imageLoad(depth_m, q).r);
-        vec4 v = clamped_velocity(imageLoad(velocity, q));
+        float w = layer_key(imageLoad(depth_m, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1)).r);
         w_near = max(w_near, w);
         w_far = min(w_far, w);
+    }
+    if (!(w_near > w_far * 1.0717735)) return;
+    vec4 v_p = clamped_velocity(v_raw);
+    float motion = 0.0;
+    for (int i = 0; i < 9; ++i) {
+        vec4 v = clamped_velocity(imageLoad(velocity, clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), pc.size - 1)));
         motion = max(motion, max(length(v.xy - v_p.xy) * pc.t_fwd, length(v.zw - v_p.zw) * pc.t_back));
     }
-    if (w_near > w_far * 1.0717735 && motion > 0.5) {
+    if (motion > 0.5) {
         uint slot = atomicAdd(args[MB_EDGE_ARGS_COUNT], 1u);
         edge_pixels[slot] = mb_pack_pixel(p);
         if (slot % uint(MB_EDGE_GROUP_SIZE) == 0u) atomicAdd(args[MB_EDGE_ARGS_DISPATCH], 1u);

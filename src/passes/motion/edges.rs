@@ -148,8 +148,7 @@ pub fn candidate(input: &EdgeInputs, pc: &MbEdgesPush, x: i32, y: i32) -> bool {
     let w_p = layer_key(input.depth[i_p]);
     let (w_near, w_far) =
         (0..9).map(|i| layer_key(input.depth[at(i)])).fold((w_p, w_p), |(n, f), v| (n.max(v), f.min(v)));
-    // The depths first (most pixels lie within one layer), then the motions: the shader's one
-    // loop, in another order (max and min are exact).
+    // The depths first (most pixels lie within one layer), then the motions, as the shader.
     // Not "greater" includes NaN, as in the shader.
     if w_near.partial_cmp(&(w_far * LAYER_RATIO)) != Some(std::cmp::Ordering::Greater) {
         return false;
