@@ -574,3 +574,42 @@ fn a_static_highlight_keeps_its_anti_aliased_fringe_in_front_of_a_moving_plane()
         );
     }
 }
+
+#[test]
+fn the_background_a_mover_uncovers_is_the_background_nearest_its_edge_not_the_mover() {
+    // Issue 30 item 2. A red bar (columns 48..80) at 2 m moves right 32 px per frame over a
+    // still background at 8 m, the shutter 0.5 frame centred: each edge sweeps 8 px either way.
+    // The background is green in the 3 columns beside each edge and blue beyond. The bar's
+    // trailing columns 48 + k (k < 8) lie over the background they hid for (8 - k) / 16 of the
+    // shutter: that background is not in the input, and the nearest visible background (green,
+    // continuous with the hidden strip) is the plausible fill (McGuire et al. 2012 sec 3: the
+    // farther sample the pixel's own blur reaches first weighs most), not the average of every
+    // farther texel the lines reach (5 of their 8 px are blue). The bar's own light there is its
+    // share of the shutter, (8 + k) / 16: the fill is background, not the mover's colour.
+    let (w, h, bar, v_px, shutter_frames) = (128u32, 24u32, (48u32, 80u32), 32.0f32, 0.5f64);
+    let green_band = |x: u32| (45..48).contains(&x) || (80..83).contains(&x);
+    let background = |x: u32, _y: u32| if green_band(x) { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+    let frame = moving_bar_frame(w, h, bar, [1.0, 0.0, 0.0], (2.0, 8.0), [v_px, 0.0], None, background);
+    let gpu = gpu();
+    let (rgba, _, _) = render(&gpu, &frame, &with_mode(motion_camera(24.0, shutter_frames), MotionBlurMode::Fast));
+    let mean = |x: u32, c: usize| (4..h - 4).map(|y| at(&rgba, w, x, y, c) as f64).sum::<f64>() / (h - 8) as f64;
+    for k in 0..3u32 {
+        let x = bar.0 + k;
+        let uncovered = (8.0 - k as f64) / 16.0;
+        let (red, green, blue) = (mean(x, 0), mean(x, 1), mean(x, 2));
+        assert!(
+            (red - (1.0 - uncovered)).abs() < 0.1,
+            "column {x}: the bar's light {red:.3}, its shutter share {:.3}",
+            1.0 - uncovered
+        );
+        assert!(
+            green > blue,
+            "column {x}: the uncovered background is {green:.3} green, {blue:.3} blue (nearest is green)"
+        );
+        assert!(
+            (green + blue - uncovered).abs() < 0.1,
+            "column {x}: background {:.3}, uncovered {uncovered:.3}",
+            green + blue
+        );
+    }
+}

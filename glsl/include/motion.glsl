@@ -9,6 +9,21 @@
 #ifndef REALCAM_MOTION_GLSL
 #define REALCAM_MOTION_GLSL
 
+// The edge resolve's args buffer (glsl/motion/mb_edge_list.comp lists the candidate pixels,
+// glsl/motion/mb_edges.comp resolves them): its indirect dispatch (x, y, z: MB_EDGE_GROUP_SIZE
+// listed pixels per workgroup), the count of listed pixels, the count of pixels it changed. The
+// integer defines are Rust constants too (realcam::gpu::shaders::motion, made by build.rs).
+#define MB_EDGE_ARGS_DISPATCH 0
+#define MB_EDGE_ARGS_COUNT 3
+#define MB_EDGE_ARGS_CHANGED 4
+#define MB_EDGE_ARGS_WORDS 5
+// Invocations per workgroup of the resolve (glsl/motion/mb_edges.comp).
+#define MB_EDGE_GROUP_SIZE 64
+
+// A pixel of the edge list: x | y << 16 (as the depth of field's, glsl/include/coc.glsl).
+uint mb_pack_pixel(ivec2 p) { return uint(p.x) | (uint(p.y) << 16); }
+ivec2 mb_unpack_pixel(uint v) { return ivec2(int(v & 0xffffu), int(v >> 16)); }
+
 // The open shutter of the reference line (the whole frame for a global shutter), its trapezoid
 // ramp, and the rolling shutter's time offset of the line through a pixel centre q:
 // roll_x q.x + roll_y q.y + roll_c (frames).

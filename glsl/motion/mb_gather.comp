@@ -10,7 +10,8 @@
 //   F: nearer surfaces whose paths cross X, over everything (coverage aF <= 1);
 //   S: X's own surface (the centre texel and samples at its depth), visible where F is not;
 //   B: where neither covers X, what lies behind X's moving surface: farther samples whose paths
-//      cross X, else the farther texels near X (the pinhole image hides the rest).
+//      cross X, else the farther texels near X, the nearest weighing most (the pinhole image
+//      hides the rest: issue 30 item 2).
 // Result = F + (1 - aF) (S + (1 - aS) B). A static background stays sharp behind a moving
 // object (its own S is the texel, aS = 1), and a moving object's silhouette spreads over it
 // (F). Tiles whose neighbourhood moves less than half a pixel are copied.
@@ -71,8 +72,13 @@ void sample_line(inout Layers l, ivec2 p, float z_x, vec2 win, vec2 dir, float r
         l.own_a += cls.y * w;
         l.behind += cls.z * w * c;
         l.behind_a += cls.z * w;
-        l.guess += cls.z * share * c;
-        l.guess_n += cls.z * share;
+        // The hidden background's estimate: farther texels weighted by their nearness to X, a
+        // linear fall-off over the line's reach (McGuire et al. 2012 sec 3, the background case of
+        // the per-sample weight, b cone(X, Y, v(X)): the farther texel that the pixel's own blur
+        // reaches first is the likeliest to be what the pixel's own surface hid at the frame time).
+        float near = 1.0 - r / (reach + 0.5);
+        l.guess += cls.z * share * near * c;
+        l.guess_n += cls.z * share * near;
     }
 }
 

@@ -7,7 +7,7 @@
 //! long as its motion over the open time; the passes turn the renderer's per-frame velocity into
 //! that with the frame rate and the shutter (src/optics/shutter.rs).
 
-use super::edges::{changed_pixels, EdgeInputs, MbEdgesPush, MbEdgesShader};
+use super::edges::{changed_pixels, EdgeInputs, EdgeKernels, MbEdgesPush};
 use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
 use super::neighbor::{MbNeighborPush, MbNeighborShader};
 use super::path::{clamped_velocity, ShutterPush};
@@ -156,7 +156,7 @@ pub struct MotionBlurParams {
 
 /// The pipelines of the fast path, one per step.
 pub struct MotionBlur {
-    edges: Kernel<MbEdgesShader>,
+    edges: EdgeKernels,
     tiles: Kernel<MbTilesShader>,
     neighbor: Kernel<MbNeighborShader>,
     gather: Kernel<MbGatherShader>,
@@ -184,7 +184,7 @@ impl Pass for MotionBlur {
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
         Ok(MotionBlur {
-            edges: Kernel::new(gpu)?,
+            edges: EdgeKernels::new(gpu)?,
             tiles: Kernel::new(gpu)?,
             neighbor: Kernel::new(gpu)?,
             gather: Kernel::new(gpu)?,

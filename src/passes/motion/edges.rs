@@ -1,11 +1,19 @@
 //! Motion blur, step 0: the anti-aliased-edge resolve of the velocity and depth (see
 //! glsl/motion/mb_edges.comp for the model; the layer is decided as the depth of field decides
-//! it, by [`edge_layer`]). Both methods (`blur`, `reference`) blur from its output.
-//! Shader: glsl/motion/mb_edges.comp.
+//! it, by [`edge_layer`]). Both methods (`blur`, `reference`) blur from its output. Two
+//! dispatches: glsl/motion/mb_edge_list.comp copies every pixel's velocity and depth and lists
+//! the candidate pixels (two depth layers moving differently around them) with an atomic
+//! counter; glsl/motion/mb_edges.comp, dispatched indirectly over the list, resolves them.
 
 use super::path::clamped_velocity;
-use crate::gpu::{GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
-use crate::passes::barriers::{after_compute_write, buffer_after_fill, overwrite};
+use crate::gpu::shaders::motion::{
+    MB_EDGE_ARGS_CHANGED, MB_EDGE_ARGS_COUNT, MB_EDGE_ARGS_DISPATCH, MB_EDGE_ARGS_WORDS, MB_EDGE_GROUP_SIZE,
+};
+use crate::gpu::{Gpu, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::passes::barriers::{
+    after_compute_write, args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write,
+};
+use crate::passes::dof::coc_edges::{pack_pixel, unpack_pixel};
 use crate::passes::edge_layers::{edge_layer, EDGE_NEAR, EDGE_OWN};
 use crate::passes::groups_for;
 use crate::passes::twin::finite_or_zero;
@@ -13,6 +21,8 @@ use ash::vk;
 use std::sync::Arc;
 
 pub const NAME: &str = "mb_edges";
+/// The candidates' list (glsl/motion/mb_edge_list.comp), its span in `--profile`.
+pub const LIST_NAME: &str = "mb_edge_list";
 
 /// The share of a pixel's light the other layer must bring before the pixel takes that layer's
 /// motion. Below it a textured background's brighter texel next to a bright mover could read as
@@ -50,6 +60,27 @@ impl MbEdgesPush {
 }
 
 crate::shader_bindings! {
+    /// The bindings of glsl/motion/mb_edge_list.comp.
+    pub struct MbEdgeListBindings {
+        depth_m: image(depth_m),
+        velocity: image(velocity),
+        velocity_out: image(velocity_out),
+        depth_out: image(depth_out),
+        args: buffer(Args),
+        edge_pixels: buffer(EdgePixels),
+    }
+}
+
+/// glsl/motion/mb_edge_list.comp: one invocation per pixel.
+pub struct MbEdgeListShader;
+
+impl Shader for MbEdgeListShader {
+    const NAME: &'static str = LIST_NAME;
+    type Bindings<'a> = MbEdgeListBindings<'a>;
+    type Push = MbEdgesPush;
+}
+
+crate::shader_bindings! {
     /// The bindings of glsl/motion/mb_edges.comp.
     pub struct MbEdgesBindings {
         color_in: image(color_in),
@@ -57,17 +88,30 @@ crate::shader_bindings! {
         velocity: image(velocity),
         velocity_out: image(velocity_out),
         depth_out: image(depth_out),
-        changed: buffer(Changed),
+        args: buffer(Args),
+        edge_pixels: buffer(EdgePixels),
     }
 }
 
-/// glsl/motion/mb_edges.comp: one invocation per pixel.
+/// glsl/motion/mb_edges.comp: one invocation per pixel of the edge list (indirect).
 pub struct MbEdgesShader;
 
 impl Shader for MbEdgesShader {
     const NAME: &'static str = NAME;
     type Bindings<'a> = MbEdgesBindings<'a>;
     type Push = MbEdgesPush;
+}
+
+/// The resolve's two pipelines: the list, then the resolve over it.
+pub struct EdgeKernels {
+    list: Kernel<MbEdgeListShader>,
+    resolve: Kernel<MbEdgesShader>,
+}
+
+impl EdgeKernels {
+    pub fn new(gpu: &Gpu) -> GpuResult<EdgeKernels> {
+        Ok(EdgeKernels { list: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
+    }
 }
 
 /// The frame's colour (RGBA), depth (m) and velocity (next.xy, prev.xy) as the resolve reads them.
@@ -95,31 +139,44 @@ fn length(a: f32, b: f32) -> f32 {
     (a * a + b * b).sqrt()
 }
 
-/// The velocity and depth pixel (x, y) takes where the resolve changes it (the shader's `main`),
-/// else None (it keeps its own).
+/// Whether the resolve looks at pixel (x, y): its 3x3 neighbourhood spans two depth layers
+/// ([`LAYER_RATIO`] apart) whose motions differ by more than half a pixel over the open time.
+/// glsl/motion/mb_edge_list.comp's test, which lists such pixels, in the same f32 arithmetic.
+pub fn candidate(input: &EdgeInputs, pc: &MbEdgesPush, x: i32, y: i32) -> bool {
+    let i_p = input.index(x, y);
+    let at = |i: usize| input.index(x + i as i32 % 3 - 1, y + i as i32 / 3 - 1);
+    let w_p = layer_key(input.depth[i_p]);
+    let (w_near, w_far) =
+        (0..9).map(|i| layer_key(input.depth[at(i)])).fold((w_p, w_p), |(n, f), v| (n.max(v), f.min(v)));
+    // The depths first (most pixels lie within one layer), then the motions, as the shader.
+    // Not "greater" includes NaN, as in the shader.
+    if w_near.partial_cmp(&(w_far * LAYER_RATIO)) != Some(std::cmp::Ordering::Greater) {
+        return false;
+    }
+    let velocity = |i: usize| clamped_velocity(&input.velocity[4 * i..4 * i + 4], pc.max_speed_px);
+    let v_p = velocity(i_p);
+    let motion = (0..9).map(|i| velocity(at(i))).fold(0.0f32, |m, v| {
+        let next = length(v[0] - v_p[0], v[1] - v_p[1]) * pc.t_fwd;
+        let prev = length(v[2] - v_p[2], v[3] - v_p[3]) * pc.t_back;
+        m.max(next.max(prev))
+    });
+    motion.partial_cmp(&0.5) == Some(std::cmp::Ordering::Greater)
+}
+
+/// The velocity and depth pixel (x, y) takes where the resolve changes it (a [`candidate`]
+/// whose light is mostly the other layer's: glsl/motion/mb_edges.comp's `main`), else None (it
+/// keeps its own).
 pub fn resolve_pixel(input: &EdgeInputs, pc: &MbEdgesPush, x: i32, y: i32) -> Option<([f32; 4], f32)> {
+    if !candidate(input, pc, x, y) {
+        return None;
+    }
     let i_p = input.index(x, y);
     let at = |i: usize| input.index(x + i as i32 % 3 - 1, y + i as i32 / 3 - 1);
     let w: [f32; 9] = std::array::from_fn(|i| layer_key(input.depth[at(i)]));
     let w_p = layer_key(input.depth[i_p]);
     let (w_near, w_far) = w.iter().fold((w_p, w_p), |(n, f), &v| (n.max(v), f.min(v)));
-    // The depths first (most pixels lie within one layer), then the motions: the shader's one
-    // loop, in another order (max and min are exact).
-    // Not "greater" includes NaN, as in the shader.
-    if w_near.partial_cmp(&(w_far * LAYER_RATIO)) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
-    let velocity = |i: usize| clamped_velocity(&input.velocity[4 * i..4 * i + 4], pc.max_speed_px);
-    let v_p = velocity(i_p);
-    let v9: [[f32; 4]; 9] = std::array::from_fn(|i| velocity(at(i)));
-    let motion = v9.iter().fold(0.0f32, |m, v| {
-        let next = length(v[0] - v_p[0], v[1] - v_p[1]) * pc.t_fwd;
-        let prev = length(v[2] - v_p[2], v[3] - v_p[3]) * pc.t_back;
-        m.max(next.max(prev))
-    });
-    if motion.partial_cmp(&0.5) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
+    let v9: [[f32; 4]; 9] =
+        std::array::from_fn(|i| clamped_velocity(&input.velocity[4 * at(i)..4 * at(i) + 4], pc.max_speed_px));
     let c9: [[f32; 3]; 9] =
         std::array::from_fn(|i| std::array::from_fn(|k| finite_or_zero(input.color[4 * at(i) + k])));
     let layer = edge_layer(&w, &c9, c9[4], w_near, w_far, pc.min_share);
@@ -146,54 +203,82 @@ pub fn changed_pixels(input: &EdgeInputs, pc: &MbEdgesPush) -> usize {
         .count()
 }
 
-impl Twin for MbEdgesShader {
+fn edge_inputs<'a>(pc: &MbEdgesPush, color: &'a [f32], depth: &'a [f32], velocity: &'a [f32]) -> EdgeInputs<'a> {
+    EdgeInputs { width: pc.size[0] as u32, height: pc.size[1] as u32, color, depth, velocity }
+}
+
+impl Twin for MbEdgeListShader {
     fn cpu(pc: &MbEdgesPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let (color, depth, velocity) = (b[0].image().clone(), b[1].image().clone(), b[2].image().clone());
-        let input = EdgeInputs {
-            width: pc.size[0] as u32,
-            height: pc.size[1] as u32,
-            color: &color.texels,
-            depth: &depth.texels,
-            velocity: &velocity.texels,
-        };
-        let mut changed = 0u32;
+        let (depth, velocity) = (b[0].image().clone(), b[1].image().clone());
+        // The list's test reads no colour.
+        let input = edge_inputs(pc, &[], &depth.texels, &velocity.texels);
+        let mut listed = Vec::new();
         for y in 0..pc.size[1] {
             for x in 0..pc.size[0] {
                 let i = input.index(x, y);
-                let (v, z) = match resolve_pixel(&input, pc, x, y) {
-                    Some(r) => {
-                        changed += 1;
-                        r
-                    }
-                    None => (std::array::from_fn(|k| velocity.texels[4 * i + k]), depth.texels[i]),
-                };
+                b[2].image_mut().texel_mut(x as u32, y as u32).copy_from_slice(&velocity.texels[4 * i..4 * i + 4]);
+                b[3].image_mut().texel_mut(x as u32, y as u32)[0] = depth.texels[i];
+                if candidate(&input, pc, x, y) {
+                    listed.push(pack_pixel(x, y));
+                }
+            }
+        }
+        let args = b[4].words_mut();
+        args[MB_EDGE_ARGS_DISPATCH as usize + 1] = 1;
+        args[MB_EDGE_ARGS_DISPATCH as usize + 2] = 1;
+        let first = args[MB_EDGE_ARGS_COUNT as usize];
+        let groups = (first..first + listed.len() as u32).filter(|slot| slot % MB_EDGE_GROUP_SIZE == 0).count() as u32;
+        args[MB_EDGE_ARGS_COUNT as usize] += listed.len() as u32;
+        args[MB_EDGE_ARGS_DISPATCH as usize] += groups;
+        b[5].words_mut()[first as usize..first as usize + listed.len()].copy_from_slice(&listed);
+    }
+
+    /// Pixels take slots of the edge list with atomics, in any order: sort the list.
+    fn canonical(_pc: &MbEdgesPush, b: &mut [HostData]) {
+        let count = b[4].words()[MB_EDGE_ARGS_COUNT as usize] as usize;
+        let words = b[5].words_mut();
+        let count = count.min(words.len());
+        words[..count].sort_unstable();
+    }
+}
+
+impl Twin for MbEdgesShader {
+    fn cpu(pc: &MbEdgesPush, _groups: [u32; 3], b: &mut [HostData]) {
+        let (color, depth, velocity) = (b[0].image().clone(), b[1].image().clone(), b[2].image().clone());
+        let input = edge_inputs(pc, &color.texels, &depth.texels, &velocity.texels);
+        let count = b[5].words()[MB_EDGE_ARGS_COUNT as usize] as usize;
+        let listed = b[6].words()[..count].to_vec();
+        let mut changed = 0u32;
+        for (x, y) in listed.into_iter().map(unpack_pixel) {
+            if let Some((v, z)) = resolve_pixel(&input, pc, x, y) {
+                changed += 1;
                 b[3].image_mut().texel_mut(x as u32, y as u32).copy_from_slice(&v);
                 b[4].image_mut().texel_mut(x as u32, y as u32)[0] = z;
             }
         }
-        b[5].words_mut()[0] += changed;
+        b[5].words_mut()[MB_EDGE_ARGS_CHANGED as usize] += changed;
     }
 }
 
 /// The frame's colour, and its depth and velocity with the anti-aliased edges resolved when
 /// `push` asks for it (else as stored): the inputs both motion-blur paths start from.
 pub fn inputs(
-    kernel: &Kernel<MbEdgesShader>,
+    kernels: &EdgeKernels,
     rec: &mut Recorder,
     images: &crate::passes::FrameImages,
     push: Option<&MbEdgesPush>,
 ) -> GpuResult<(Arc<GpuImage>, Arc<GpuImage>, Arc<GpuImage>)> {
     let (color, depth, velocity) = (images.color().clone(), images.depth()?.clone(), images.velocity()?.clone());
     let Some(push) = push else { return Ok((color, depth, velocity)) };
-    rec.begin_pass(NAME);
-    let (depth, velocity) = record(kernel, rec, &color, &depth, &velocity, push)?;
+    let (depth, velocity) = record(kernels, rec, &color, &depth, &velocity, push)?;
     Ok((color, depth, velocity))
 }
 
 /// Record the resolve: the colour, depth and velocity in; new depth and velocity images out (in
-/// that order), complete and visible to the compute passes after it.
+/// that order), complete and visible to the compute passes after it. Two spans in `--profile`:
+/// [`LIST_NAME`] and [`NAME`].
 pub fn record(
-    kernel: &Kernel<MbEdgesShader>,
+    kernels: &EdgeKernels,
     rec: &mut Recorder,
     color: &GpuImage,
     depth: &GpuImage,
@@ -201,26 +286,159 @@ pub fn record(
     push: &MbEdgesPush,
 ) -> GpuResult<(Arc<GpuImage>, Arc<GpuImage>)> {
     let (w, h) = (push.size[0] as u32, push.size[1] as u32);
+    rec.begin_pass(LIST_NAME);
     let velocity_out = rec.create_image("velocity (edges resolved)", w, h, vk::Format::R32G32B32A32_SFLOAT)?;
     let depth_out = rec.create_image("depth (edges resolved)", w, h, vk::Format::R32_SFLOAT)?;
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let changed = rec.create_buffer("motion edge resolve count", 4, usage)?;
-    // changed: counted up with atomics from zero. velocity_out, depth_out: written from scratch.
-    // color, depth, velocity: written by the upload (its own barrier) or an earlier compute pass,
-    //   read around each pixel.
-    rec.fill_buffer(&changed, 0);
-    rec.buffer_barriers(&[buffer_after_fill(&changed)]);
-    rec.image_barriers(&[after_compute_write(color), overwrite(&velocity_out), overwrite(&depth_out)]);
-    let bindings = MbEdgesBindings {
+    let args = rec.create_args_buffer("motion edge resolve args (indirect dispatch, counts)", MB_EDGE_ARGS_WORDS)?;
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let edge_pixels = rec.create_buffer("motion edge pixels", (w as u64 * h as u64).max(1) * 4, storage)?;
+    // args: the counts and the dispatch's x start at zero every run (counted up with atomics):
+    //   transfer write -> compute read/write. The edge list is this run's own buffer, written
+    //   by the list first.
+    // velocity_out, depth_out: written from scratch by the list (every pixel's as stored).
+    // depth, velocity: written by the upload (its own barrier; the motion blur is the first
+    //   pass), read around each pixel here and by the resolve.
+    rec.fill_buffer(&args, 0);
+    rec.buffer_barriers(&[buffer_after_fill(&args)]);
+    rec.image_barriers(&[overwrite(&velocity_out), overwrite(&depth_out)]);
+    let list = MbEdgeListBindings {
+        depth_m: depth,
+        velocity,
+        velocity_out: &velocity_out,
+        depth_out: &depth_out,
+        args: &args,
+        edge_pixels: &edge_pixels,
+    };
+    kernels.list.dispatch(rec, &list, push, groups_for(w, h))?;
+    rec.begin_pass(NAME);
+    // args (this dispatch's size, the counts) and the edge list: written by the list with
+    //   atomics; read here as indirect arguments and by the shader (the changed count updated).
+    // velocity_out, depth_out: written by the list; overwritten here at the listed pixels
+    //   (write-after-write).
+    // color: written by the upload (its own barrier) or an earlier compute pass, read around
+    //   each listed pixel.
+    rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&edge_pixels)]);
+    rec.image_barriers(&[after_compute_write(color), write_after_write(&velocity_out), write_after_write(&depth_out)]);
+    let resolve = MbEdgesBindings {
         color_in: color,
         depth_m: depth,
         velocity,
         velocity_out: &velocity_out,
         depth_out: &depth_out,
-        changed: &changed,
+        args: &args,
+        edge_pixels: &edge_pixels,
     };
-    kernel.dispatch(rec, &bindings, push, groups_for(w, h))?;
+    kernels.resolve.dispatch_indirect(rec, &resolve, push, &args, MB_EDGE_ARGS_DISPATCH as u64 * 4)?;
     // The resolved images, complete before the blur's steps read them anywhere.
     rec.image_barriers(&[after_compute_write(&velocity_out), after_compute_write(&depth_out)]);
     Ok((depth_out, velocity_out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::HostImage;
+
+    /// A 12x6 frame: a still background (8 m, colour 0.1) and a bar (2 m, colour 1) in columns
+    /// 4..8 moving `bar_px` px per frame to the right (both vectors: next = bar_px, prev =
+    /// -bar_px); column 8 is the bar's anti-aliased fringe: 70% bar light, background depth and
+    /// vector (one sample per pixel).
+    fn bar_frame(bar_px: f32) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+        let (w, h) = (12usize, 6usize);
+        let (mut color, mut depth, mut velocity) = (Vec::new(), Vec::new(), Vec::new());
+        for _y in 0..h {
+            for x in 0..w {
+                let on_bar = (4..8).contains(&x);
+                let c = if on_bar {
+                    1.0
+                } else if x == 8 {
+                    0.7 + 0.3 * 0.1
+                } else {
+                    0.1
+                };
+                color.extend([c, c, c, 1.0]);
+                depth.push(if on_bar { 2.0 } else { 8.0 });
+                velocity.extend(if on_bar { [bar_px, 0.0, -bar_px, 0.0] } else { [0.0; 4] });
+            }
+        }
+        (color, depth, velocity)
+    }
+
+    /// The resolve's two twins chained as `record` dispatches them: the list (every pixel's
+    /// velocity and depth copied, the candidates listed), then the resolve over the list.
+    /// Returns the velocity, the depth, the sorted list and the changed count.
+    fn two_dispatches(
+        color: &[f32],
+        depth: &[f32],
+        velocity: &[f32],
+        pc: &MbEdgesPush,
+    ) -> (Vec<f32>, Vec<f32>, Vec<u32>, u32) {
+        let (w, h) = (pc.size[0] as u32, pc.size[1] as u32);
+        let image = |channels, texels: Vec<f32>| HostData::Image(HostImage::new(w, h, channels, texels));
+        let n = (w * h) as usize;
+        let mut list = vec![
+            image(1, depth.to_vec()),
+            image(4, velocity.to_vec()),
+            image(4, vec![f32::NAN; 4 * n]),
+            image(1, vec![f32::NAN; n]),
+            HostData::Buffer(vec![0; MB_EDGE_ARGS_WORDS as usize]),
+            HostData::Buffer(vec![u32::MAX; n]),
+        ];
+        MbEdgeListShader::cpu(pc, [1, 1, 1], &mut list);
+        let args = list[4].words().to_vec();
+        let count = args[MB_EDGE_ARGS_COUNT as usize];
+        assert_eq!(args[MB_EDGE_ARGS_DISPATCH as usize], count.div_ceil(MB_EDGE_GROUP_SIZE));
+        assert_eq!(args[1..3], [1, 1]);
+        let mut resolve = vec![
+            image(4, color.to_vec()),
+            list[0].clone(),
+            list[1].clone(),
+            list[2].clone(),
+            list[3].clone(),
+            list[4].clone(),
+            list[5].clone(),
+        ];
+        MbEdgesShader::cpu(pc, [args[MB_EDGE_ARGS_DISPATCH as usize], 1, 1], &mut resolve);
+        let mut listed = list[5].words()[..count as usize].to_vec();
+        listed.sort_unstable();
+        let changed = resolve[5].words()[MB_EDGE_ARGS_CHANGED as usize];
+        (resolve[3].image().texels.clone(), resolve[4].image().texels.clone(), listed, changed)
+    }
+
+    #[test]
+    fn the_resolve_lists_the_pixels_beside_two_layers_moving_apart_and_changes_the_fringe_alone() {
+        // At 16 px per frame and a centred half-frame shutter the bar moves 4 px over the open
+        // time each way: the two columns either side of each of its edges (3, 4 and 7, 8) are
+        // listed, 24 of 72 pixels. The fringe column 8 holds 70% of the bar's light: it alone
+        // takes the bar's velocity and depth, and the count (`--explain`'s) says 6 pixels.
+        let (color, depth, velocity) = bar_frame(16.0);
+        let pc = MbEdgesPush::new([12, 6], (-0.25, 0.25), 512.0);
+        let (v_out, z_out, listed, changed) = two_dispatches(&color, &depth, &velocity, &pc);
+        let expected: Vec<u32> = {
+            let mut e: Vec<u32> = (0..6).flat_map(|y| [3, 4, 7, 8].map(|x| pack_pixel(x, y))).collect();
+            e.sort_unstable();
+            e
+        };
+        assert_eq!(listed, expected);
+        assert_eq!(changed, 6);
+        let input = EdgeInputs { width: 12, height: 6, color: &color, depth: &depth, velocity: &velocity };
+        assert_eq!(changed as usize, changed_pixels(&input, &pc));
+        for y in 0..6 {
+            for x in 0..12 {
+                let i = y * 12 + x;
+                let (v, z) = if x == 8 {
+                    ([16.0, 0.0, -16.0, 0.0], 2.0)
+                } else {
+                    ([velocity[4 * i], 0.0, velocity[4 * i + 2], 0.0], depth[i])
+                };
+                assert_eq!(v_out[4 * i..4 * i + 4], v, "velocity at ({x}, {y})");
+                assert!((z_out[i] - z).abs() < 1e-5 * z, "depth at ({x}, {y}): {} vs {z}", z_out[i]);
+            }
+        }
+        // A bar moving less than half a pixel either way over the open time lists nothing.
+        let (color, depth, velocity) = bar_frame(1.9);
+        let (v_out, z_out, listed, changed) = two_dispatches(&color, &depth, &velocity, &pc);
+        assert!(listed.is_empty() && changed == 0);
+        assert_eq!((v_out, z_out), (velocity, depth));
+    }
 }

@@ -134,8 +134,10 @@ fn sample_line(
         l.own_a += cls[1] * w;
         add(&mut l.behind, cls[2] * w, &c);
         l.behind_a += cls[2] * w;
-        add(&mut l.guess, cls[2] * share, &c);
-        l.guess_n += cls[2] * share;
+        // The hidden background's estimate, by nearness to X (the shader's comment).
+        let near = 1.0 - r / (reach + 0.5);
+        add(&mut l.guess, cls[2] * share * near, &c);
+        l.guess_n += cls[2] * share * near;
     }
 }
 

@@ -8,7 +8,7 @@
 //! mb_ref_resolve.
 
 use super::blur::{plan_motion, MotionPlan, ORDER_NOTE};
-use super::edges::{self, MbEdgesShader};
+use super::edges::{self, EdgeKernels};
 use super::ref_resolve::{MbRefResolveBindings, MbRefResolvePush, MbRefResolveShader};
 use super::ref_splat::{MbRefSplatBindings, MbRefSplatPush, MbRefSplatShader};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
@@ -35,7 +35,7 @@ pub struct MotionReferenceParams {
 }
 
 pub struct MotionReference {
-    edges: Kernel<MbEdgesShader>,
+    edges: EdgeKernels,
     splat: Kernel<MbRefSplatShader>,
     resolve: Kernel<MbRefResolveShader>,
 }
@@ -63,7 +63,7 @@ impl Pass for MotionReference {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(MotionReference { edges: Kernel::new(gpu)?, splat: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
+        Ok(MotionReference { edges: EdgeKernels::new(gpu)?, splat: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
     }
 
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, p: &MotionReferenceParams) -> GpuResult<()> {
