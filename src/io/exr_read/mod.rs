@@ -42,7 +42,14 @@ mod file;
 mod passes;
 mod velocity;
 
-pub use file::DECODER_PANICS;
+pub use file::{DECODER_PANICS, STRUCTURAL_ATTRIBUTES};
+
+/// Whether a header attribute describes channels: Cryptomatte's `cryptomatte/<id>/...` (name,
+/// hash, conversion, manifest) and `multiView` (the views' channel prefixes). They go with
+/// the channels: into an output only with the input's other channels (`--keep-layers`).
+pub fn describes_channels(attribute: &str) -> bool {
+    attribute.starts_with("cryptomatte/") || attribute == "multiView"
+}
 
 /// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
 /// discovery as [`load_passes`]. Values are returned as stored (NaN/Inf kept).
@@ -112,6 +119,12 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         kept_channels,
         render_focal_length_mm: cf.focal_length_mm.clone(),
         chromaticities: cf.chromaticities,
+        header_attributes: cf
+            .header_attributes
+            .iter()
+            .filter(|(name, _)| src.keep_layers || !describes_channels(name))
+            .cloned()
+            .collect(),
     })
 }
 
