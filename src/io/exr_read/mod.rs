@@ -481,4 +481,36 @@ mod tests {
         assert_eq!(v.get(5, 5, 0), 0.0);
         assert_eq!(multi.depth_m.get(5, 5, 0), 1.0e10);
     }
+
+    #[test]
+    fn header_attributes_are_read_as_stored_without_the_layouts_and_cryptomatte_only_when_kept() {
+        use exr::meta::attribute::{AttributeValue, Text};
+        let dir = test_dir("read-header-attributes");
+        let path = dir.join("a.exr");
+        let t = |s: &str| AttributeValue::Text(Text::from(s));
+        let input = vec![
+            ("Frame".to_string(), t("7")),
+            ("cryptomatte/abc/manifest".into(), t("{}")),
+            ("owner".into(), t("studio")),
+            ("samples".into(), AttributeValue::I32(64)),
+        ];
+        let planes = [vec![0.5f32; (W * H) as usize], vec![2.0f32; (W * H) as usize]];
+        let list: Vec<(&str, &[f32])> =
+            vec![("R", &planes[0]), ("G", &planes[0]), ("B", &planes[0]), ("Z", &planes[1])];
+        let opts = ExrWriteOptions { input_attributes: input.clone(), ..Default::default() };
+        write_exr_channels(&path, W, H, &list, &opts).unwrap();
+        let names = |keep_layers: bool| -> Vec<String> {
+            let p = load_passes(&PassSources { keep_layers, ..sources(&path) }).unwrap();
+            for (name, value) in &p.header_attributes {
+                if let Some((_, v)) = input.iter().find(|(n, _)| n == name) {
+                    assert_eq!(value, v, "{name}");
+                }
+            }
+            p.header_attributes.into_iter().map(|(name, _)| name).collect()
+        };
+        let software = crate::io::exr_write::SOFTWARE;
+        assert_eq!(names(true), ["Frame", "cryptomatte/abc/manifest", "owner", "samples", "software"], "{software}");
+        assert_eq!(names(false), ["Frame", "owner", "samples", "software"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
