@@ -169,7 +169,12 @@ fn place_attribute(
             if reserved {
                 return Some(value);
             }
-            layer.other.insert(name, value);
+            // The exr crate keeps these two types among the attributes of all parts.
+            if matches!(value, V::Chromaticities(_) | V::TimeCode(_)) {
+                shared.other.insert(name, value);
+            } else {
+                layer.other.insert(name, value);
+            }
         }
     }
     None
@@ -599,6 +604,12 @@ mod tests {
         let dir = test_dir("write-input-attributes");
         let path = dir.join("a.exr");
         let t = |s: &str| AttributeValue::Text(Text::from(s));
+        let aces = Chromaticities {
+            red: Vec2(0.713, 0.293),
+            green: Vec2(0.165, 0.83),
+            blue: Vec2(0.128, 0.044),
+            white: Vec2(0.32168, 0.33767),
+        };
         let input = vec![
             ("cryptomatte/abc1234/name".to_string(), t("CryptoObject")),
             ("Frame".into(), t("12")),
@@ -612,6 +623,8 @@ mod tests {
             ("realcam/grain".into(), AttributeValue::F32(0.05)),
             ("input/focus".into(), AttributeValue::F32(1.0)),
             ("comments".into(), AttributeValue::I32(3)),
+            ("chromaticities".into(), AttributeValue::Chromaticities(aces)),
+            ("timeCode".into(), AttributeValue::TimeCode(exr::meta::attribute::TimeCode::default())),
         ];
         let opts = ExrWriteOptions {
             attributes: vec![
@@ -640,6 +653,8 @@ mod tests {
         assert_eq!(get("realcam/grain"), None);
         assert_eq!(get("input/realcam/grain"), Some(AttributeValue::F32(0.05)));
         assert_eq!((get("comments"), get("input/comments")), (None, Some(AttributeValue::I32(3))));
+        assert_eq!(get("input/chromaticities"), Some(AttributeValue::Chromaticities(aces)));
+        assert_eq!(get("timeCode"), Some(input[13].1.clone()));
         assert!(SOFTWARE.starts_with("realcam ") && SOFTWARE.ends_with(env!("CARGO_PKG_VERSION")), "{SOFTWARE}");
         let _ = std::fs::remove_dir_all(&dir);
     }
