@@ -420,6 +420,7 @@ fn write_exr_planes_to(
         }
     }
     let mut taken: std::collections::BTreeSet<String> = own.keys().cloned().collect();
+    let data_window = IntegerBounds::new(attrs.layer_position, Vec2(width as usize, height as usize));
     for (k, value) in &opts.input_attributes {
         if own.get(k) == Some(value) {
             continue;
@@ -432,18 +433,27 @@ fn write_exr_planes_to(
             name = format!("input/{name}");
         }
         let mut value = value.clone();
-        // A standard name the input gives another type: kept beside, as a custom attribute.
-        while let Some(refused) =
-            place_attribute(&mut attrs, &mut shared, text(path, "input attribute name", &name, false)?, value)
-        {
+        loop {
+            let text_name = text(path, "input attribute name", &name, false)?;
+            // One the exr crate would refuse (a name of 256 bytes or more, an empty text
+            // vector, ...) is left out rather than the output.
+            let mut long_names = false;
+            let checked = exr::meta::attribute::validate(&text_name, &value, &mut long_names, true, data_window, true);
+            if let Err(e) = checked {
+                log::warn!("\"{}\": the input's attribute {k} is left out of the header: {e}", path.display());
+                break;
+            }
+            // A standard name the input gives another type: kept beside, as a custom attribute.
+            let Some(refused) = place_attribute(&mut attrs, &mut shared, text_name, value) else {
+                taken.insert(name);
+                break;
+            };
             taken.insert(name.clone());
-            name = format!("input/{name}");
             while taken.contains(&name) {
                 name = format!("input/{name}");
             }
             value = refused;
         }
-        taken.insert(name);
     }
     let size = Vec2(width as usize, height as usize);
     let display = match opts.display_window {
@@ -624,6 +634,7 @@ mod tests {
             ("input/focus".into(), AttributeValue::F32(1.0)),
             ("comments".into(), AttributeValue::I32(3)),
             ("chromaticities".into(), AttributeValue::Chromaticities(aces)),
+            (format!("realcam/{}", "x".repeat(245)), AttributeValue::I32(1)),
             ("timeCode".into(), AttributeValue::TimeCode(exr::meta::attribute::TimeCode::default())),
         ];
         let opts = ExrWriteOptions {
@@ -654,7 +665,9 @@ mod tests {
         assert_eq!(get("input/realcam/grain"), Some(AttributeValue::F32(0.05)));
         assert_eq!((get("comments"), get("input/comments")), (None, Some(AttributeValue::I32(3))));
         assert_eq!(get("input/chromaticities"), Some(AttributeValue::Chromaticities(aces)));
-        assert_eq!(get("timeCode"), Some(input[13].1.clone()));
+        assert_eq!(get("timeCode"), Some(input.last().unwrap().1.clone()));
+        // input/realcam/xxx... would be 253 + 6 bytes, over OpenEXR's 255: left out, alone.
+        assert!(!written.keys().any(|k| k.ends_with("xxx")), "{written:?}");
         assert!(SOFTWARE.starts_with("realcam ") && SOFTWARE.ends_with(env!("CARGO_PKG_VERSION")), "{SOFTWARE}");
         let _ = std::fs::remove_dir_all(&dir);
     }
