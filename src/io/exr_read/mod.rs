@@ -45,10 +45,12 @@ mod velocity;
 pub use file::{DECODER_PANICS, STRUCTURAL_ATTRIBUTES};
 
 /// Whether a header attribute describes channels: Cryptomatte's `cryptomatte/<id>/...` (name,
-/// hash, conversion, manifest) and `multiView` (the views' channel prefixes). They go with
-/// the channels: into an output only with the input's other channels (`--keep-layers`).
+/// hash, conversion, manifest), `multiView` (the views' channel prefixes) and Blender's
+/// `BlenderMultiChannel` (which has Blender read the channels as view layers and passes).
+/// They go with the channels: into an output only with the input's other channels
+/// (`--keep-layers`).
 pub fn describes_channels(attribute: &str) -> bool {
-    attribute.starts_with("cryptomatte/") || attribute == "multiView"
+    attribute.starts_with("cryptomatte/") || attribute == "multiView" || attribute == "BlenderMultiChannel"
 }
 
 /// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
