@@ -109,6 +109,7 @@ pub fn scene_passes(
         kept_channels: Vec::new(),
         render_focal_length_mm: None,
         chromaticities: None,
+        header_attributes: Vec::new(),
     })
 }
 

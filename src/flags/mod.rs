@@ -183,6 +183,7 @@ pub struct RenderArgs {
     view: Option<String>,
     /// Keep the input files' other channels (depth, vectors, AOVs, other view layers) in the
     /// output EXR, as stored; a name the output has already gets its pass as prefix (depth.R).
+    /// Cryptomatte's header attributes come with its channels.
     #[arg(long = "keep-layers")]
     keep_layers: bool,
     /// A film file (TOML, see films/): its characteristic curve, parametric or tabled,

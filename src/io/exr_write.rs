@@ -32,7 +32,16 @@ pub struct ExrWriteOptions {
     pub float32_channels: Vec<String>,
     /// The codec of the pixel data.
     pub compression: ExrCompression,
+    /// An input's header attributes, any of OpenEXR's types, written as they are
+    /// ([`ScenePasses::header_attributes`](super::ScenePasses::header_attributes)). One whose
+    /// name realcam writes itself (an entry of `attributes`, `software`, a `realcam/` name)
+    /// is written under `input/<name>` (`input/input/<name>` where that is taken too) unless
+    /// its value is realcam's; so is a standard name of another type than OpenEXR's.
+    pub input_attributes: Vec<(String, AttributeValue)>,
 }
+
+/// The `software` attribute of every output: realcam and its version.
+pub const SOFTWARE: &str = concat!("realcam ", env!("CARGO_PKG_VERSION"));
 
 /// OpenEXR's lossless codecs, as compositors choose them (Nuke's and Blender's names).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -108,6 +117,68 @@ const STANDARD_TYPES: [(&str, &str); 12] = [
     ("sensorPhotositePitch", "float"),
     ("shutterAngle", "float"),
 ];
+
+/// Puts `value` in the header under `name`: in the exr crate's field for OpenEXR's standard
+/// attributes of their standard type, else among the custom ones. Gives the value back where
+/// `name` is reserved (a standard name of another type, or one of the file's structure:
+/// `channels`, `dataWindow`, ...), which the exr crate refuses among the custom ones.
+fn place_attribute(
+    layer: &mut LayerAttributes,
+    shared: &mut ImageAttributes,
+    name: Text,
+    value: AttributeValue,
+) -> Option<AttributeValue> {
+    use AttributeValue as V;
+    match (name.to_string().as_str(), value) {
+        ("whiteLuminance", V::F32(v)) => layer.white_luminance = Some(v),
+        ("adoptedNeutral", V::FloatVec2(v)) => layer.adopted_neutral = Some(v),
+        ("renderingTransform", V::Text(v)) => layer.rendering_transform_name = Some(v),
+        ("lookModTransform", V::Text(v)) => layer.look_modification_transform_name = Some(v),
+        ("xDensity", V::F32(v)) => layer.horizontal_density = Some(v),
+        ("owner", V::Text(v)) => layer.owner = Some(v),
+        ("comments", V::Text(v)) => layer.comments = Some(v),
+        ("capDate", V::Text(v)) => layer.capture_date = Some(v),
+        ("utcOffset", V::F32(v)) => layer.utc_offset = Some(v),
+        ("longitude", V::F32(v)) => layer.longitude = Some(v),
+        ("latitude", V::F32(v)) => layer.latitude = Some(v),
+        ("altitude", V::F32(v)) => layer.altitude = Some(v),
+        ("focus", V::F32(v)) => layer.focus = Some(v),
+        ("expTime", V::F32(v)) => layer.exposure = Some(v),
+        ("aperture", V::F32(v)) => layer.aperture = Some(v),
+        ("isoSpeed", V::F32(v)) => layer.iso_speed = Some(v),
+        ("envmap", V::EnvironmentMap(v)) => layer.environment_map = Some(v),
+        ("keyCode", V::KeyCode(v)) => layer.film_key_code = Some(v),
+        ("wrapmodes", V::Text(v)) => layer.wrap_mode_name = Some(v),
+        ("framesPerSecond", V::Rational(v)) => layer.frames_per_second = Some(v),
+        ("multiView", V::TextVector(v)) => layer.multi_view_names = Some(v),
+        ("worldToCamera", V::Matrix4x4(v)) => layer.world_to_camera = Some(v),
+        ("worldToNDC", V::Matrix4x4(v)) => layer.world_to_normalized_device = Some(v),
+        ("deepImageState", V::Rational(v)) => layer.deep_image_state = Some(v),
+        ("originalDataWindow", V::IntegerBounds(v)) => layer.original_data_window = Some(v),
+        ("preview", V::Preview(v)) => layer.preview = Some(v),
+        ("view", V::Text(v)) => layer.view_name = Some(v),
+        ("software", V::Text(v)) => layer.software_name = Some(v),
+        ("near", V::F32(v)) => layer.near_clip_plane = Some(v),
+        ("far", V::F32(v)) => layer.far_clip_plane = Some(v),
+        ("fieldOfViewHorizontal", V::F32(v)) => layer.horizontal_field_of_view = Some(v),
+        ("fieldOfViewVertical", V::F32(v)) => layer.vertical_field_of_view = Some(v),
+        ("chromaticities", V::Chromaticities(v)) => shared.chromaticities = Some(v),
+        ("timeCode", V::TimeCode(v)) => shared.time_code = Some(v),
+        (_, value) => {
+            let reserved = exr::meta::header::standard_names::ALL.iter().any(|n| *n == name.as_slice());
+            if reserved {
+                return Some(value);
+            }
+            // The exr crate keeps these two types among the attributes of all parts.
+            if matches!(value, V::Chromaticities(_) | V::TimeCode(_)) {
+                shared.other.insert(name, value);
+            } else {
+                layer.other.insert(name, value);
+            }
+        }
+    }
+    None
+}
 
 /// Writes a 4-channel image as channels R, G, B, A.
 pub fn write_exr_rgba(path: &Path, image: &Image, opts: &ExrWriteOptions) -> Result<(), IoError> {
@@ -312,12 +383,14 @@ fn write_exr_planes_to(
             path.display()
         );
     }
-    let mut attrs = LayerAttributes {
-        layer_position: Vec2(opts.data_origin.0, opts.data_origin.1),
-        software_name: Some(Text::from("realcam")),
-        ..LayerAttributes::default()
-    };
-    let mut chromaticities = None;
+    let mut attrs =
+        LayerAttributes { layer_position: Vec2(opts.data_origin.0, opts.data_origin.1), ..LayerAttributes::default() };
+    // Its display window set below.
+    let mut shared = ImageAttributes::new(IntegerBounds::new(Vec2(0, 0), Vec2(1, 1)));
+    // realcam's own, by name: an input's attribute of the same name and another value is
+    // written under input/<name>.
+    let mut own: std::collections::BTreeMap<String, AttributeValue> = std::collections::BTreeMap::new();
+    own.insert("software".into(), AttributeValue::Text(Text::from(SOFTWARE)));
     for (k, v) in &opts.attributes {
         if let Some((_, standard)) = STANDARD_TYPES.iter().find(|(name, _)| name == k) {
             if *standard != v.type_name() {
@@ -330,26 +403,56 @@ fn write_exr_planes_to(
             ExrAttribute::I32(i) => AttributeValue::I32(*i),
             ExrAttribute::V2f([x, y]) => AttributeValue::FloatVec2(Vec2(*x, *y)),
             ExrAttribute::Rational(n, d) => AttributeValue::Rational((*n, *d)),
-            ExrAttribute::Chromaticities([r, g, b, w]) => {
-                chromaticities = Some(Chromaticities {
-                    red: Vec2(r[0], r[1]),
-                    green: Vec2(g[0], g[1]),
-                    blue: Vec2(b[0], b[1]),
-                    white: Vec2(w[0], w[1]),
-                });
-                continue;
-            }
+            ExrAttribute::Chromaticities([r, g, b, w]) => AttributeValue::Chromaticities(Chromaticities {
+                red: Vec2(r[0], r[1]),
+                green: Vec2(g[0], g[1]),
+                blue: Vec2(b[0], b[1]),
+                white: Vec2(w[0], w[1]),
+            }),
         };
-        // The exr crate keeps the standard attributes in fields of their own.
-        match (k.as_str(), &value) {
-            ("aperture", AttributeValue::F32(f)) => attrs.aperture = Some(*f),
-            ("expTime", AttributeValue::F32(f)) => attrs.exposure = Some(*f),
-            ("focus", AttributeValue::F32(f)) => attrs.focus = Some(*f),
-            ("isoSpeed", AttributeValue::F32(f)) => attrs.iso_speed = Some(*f),
-            ("framesPerSecond", AttributeValue::Rational(r)) => attrs.frames_per_second = Some(*r),
-            _ => {
-                attrs.other.insert(text(path, "attribute name", k, false)?, value);
+        own.insert(k.clone(), value);
+    }
+    for (k, value) in &own {
+        // A reserved name that has no field (`channels`, ...): the exr crate refuses it.
+        let name = text(path, "attribute name", k, false)?;
+        if let Some(value) = place_attribute(&mut attrs, &mut shared, name.clone(), value.clone()) {
+            attrs.other.insert(name, value);
+        }
+    }
+    let mut taken: std::collections::BTreeSet<String> = own.keys().cloned().collect();
+    let data_window = IntegerBounds::new(attrs.layer_position, Vec2(width as usize, height as usize));
+    for (k, value) in &opts.input_attributes {
+        if own.get(k) == Some(value) {
+            continue;
+        }
+        // realcam's names, and input/ for the input's own input's attributes (a render of a
+        // render): input/<name> is always the input's <name>.
+        let realcams = |k: &str| own.contains_key(k) || k.starts_with("realcam/") || k.starts_with("input/");
+        let mut name = if realcams(k) { format!("input/{k}") } else { k.clone() };
+        while taken.contains(&name) {
+            name = format!("input/{name}");
+        }
+        let mut value = value.clone();
+        loop {
+            let text_name = text(path, "input attribute name", &name, false)?;
+            // One the exr crate would refuse (a name of 256 bytes or more, an empty text
+            // vector, ...) is left out rather than the output.
+            let mut long_names = false;
+            let checked = exr::meta::attribute::validate(&text_name, &value, &mut long_names, true, data_window, true);
+            if let Err(e) = checked {
+                log::warn!("\"{}\": the input's attribute {k} is left out of the header: {e}", path.display());
+                break;
             }
+            // A standard name the input gives another type: kept beside, as a custom attribute.
+            let Some(refused) = place_attribute(&mut attrs, &mut shared, text_name, value) else {
+                taken.insert(name);
+                break;
+            };
+            taken.insert(name.clone());
+            while taken.contains(&name) {
+                name = format!("input/{name}");
+            }
+            value = refused;
         }
     }
     let size = Vec2(width as usize, height as usize);
@@ -361,9 +464,8 @@ fn write_exr_planes_to(
         None => IntegerBounds::new(attrs.layer_position, size),
     };
     let layer = Layer::new(size, attrs, opts.compression.encoding(), AnyChannels::sort(list));
-    let mut image_attributes = ImageAttributes::new(display);
-    image_attributes.chromaticities = chromaticities;
-    let image = exr::image::Image::new(image_attributes, layer);
+    shared.display_window = display;
+    let image = exr::image::Image::new(shared, layer);
     image.write().to_buffered(out).map_err(|source| IoError::ExrEncode { path: path.into(), source })
 }
 
@@ -459,6 +561,7 @@ mod tests {
                 data_origin: (7, -3),
                 float32_channels: Vec::new(),
                 compression: ExrCompression::Zip,
+                input_attributes: Vec::new(),
                 attributes: vec![
                     ("realcam/lens".into(), ExrAttribute::Text("a 50".into())),
                     ("aperture".into(), ExrAttribute::F32(2.8)),
@@ -499,6 +602,73 @@ mod tests {
             let is_f32 = matches!(layer.channel_data.list[0].sample_data, FlatSamples::F32(_));
             assert_eq!(is_f32, float32);
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn an_inputs_attributes_are_written_as_they_are_and_realcams_win_a_clash() {
+        // Any type, as given; a name realcam writes (focus, software, a realcam/ name) keeps
+        // realcam's value and the input's goes under input/ unless the values are the same; an
+        // input's own input/ name goes one level deeper; a standard name of another type is
+        // kept under input/.
+        let dir = test_dir("write-input-attributes");
+        let path = dir.join("a.exr");
+        let t = |s: &str| AttributeValue::Text(Text::from(s));
+        let aces = Chromaticities {
+            red: Vec2(0.713, 0.293),
+            green: Vec2(0.165, 0.83),
+            blue: Vec2(0.128, 0.044),
+            white: Vec2(0.32168, 0.33767),
+        };
+        let input = vec![
+            ("cryptomatte/abc1234/name".to_string(), t("CryptoObject")),
+            ("Frame".into(), t("12")),
+            ("samples".into(), AttributeValue::I32(128)),
+            ("exposureBias".into(), AttributeValue::F32(0.5)),
+            ("worldToCamera".into(), AttributeValue::Matrix4x4(std::array::from_fn(|i| i as f32 * 0.5))),
+            ("owner".into(), t("studio")),
+            ("focus".into(), AttributeValue::F32(7.5)),
+            ("aperture".into(), AttributeValue::F32(2.8)),
+            ("software".into(), t("Blender 3.4")),
+            ("realcam/grain".into(), AttributeValue::F32(0.05)),
+            ("input/focus".into(), AttributeValue::F32(1.0)),
+            ("comments".into(), AttributeValue::I32(3)),
+            ("chromaticities".into(), AttributeValue::Chromaticities(aces)),
+            (format!("realcam/{}", "x".repeat(245)), AttributeValue::I32(1)),
+            ("timeCode".into(), AttributeValue::TimeCode(exr::meta::attribute::TimeCode::default())),
+        ];
+        let opts = ExrWriteOptions {
+            attributes: vec![
+                ("focus".into(), ExrAttribute::F32(3.0)),
+                ("aperture".into(), ExrAttribute::F32(2.8)),
+                ("chromaticities".into(), ExrAttribute::Chromaticities(REC709)),
+            ],
+            input_attributes: input.clone(),
+            ..Default::default()
+        };
+        write_exr_rgba(&path, &ramp(3, 2), &opts).unwrap();
+        let header = exr::meta::MetaData::read_from_file(&path, false).unwrap().headers.remove(0);
+        let written: std::collections::BTreeMap<String, AttributeValue> =
+            header.all_named_attributes().map(|(k, v)| (Text::from_slice_unchecked(k).to_string(), v)).collect();
+        let get = |k: &str| written.get(k).cloned();
+        for (k, v) in &input[..6] {
+            assert_eq!(get(k).as_ref(), Some(v), "{k}");
+        }
+        assert_eq!(get("focus"), Some(AttributeValue::F32(3.0)));
+        assert_eq!(get("input/focus"), Some(AttributeValue::F32(7.5)));
+        assert_eq!(get("input/input/focus"), Some(AttributeValue::F32(1.0)));
+        assert_eq!(get("aperture"), Some(AttributeValue::F32(2.8)));
+        assert_eq!(get("input/aperture"), None, "the same value is written once");
+        assert_eq!(get("software"), Some(t(SOFTWARE)));
+        assert_eq!(get("input/software"), Some(t("Blender 3.4")));
+        assert_eq!(get("realcam/grain"), None);
+        assert_eq!(get("input/realcam/grain"), Some(AttributeValue::F32(0.05)));
+        assert_eq!((get("comments"), get("input/comments")), (None, Some(AttributeValue::I32(3))));
+        assert_eq!(get("input/chromaticities"), Some(AttributeValue::Chromaticities(aces)));
+        assert_eq!(get("timeCode"), Some(input.last().unwrap().1.clone()));
+        // input/realcam/xxx... would be 253 + 6 bytes, over OpenEXR's 255: left out, alone.
+        assert!(!written.keys().any(|k| k.ends_with("xxx")), "{written:?}");
+        assert!(SOFTWARE.starts_with("realcam ") && SOFTWARE.ends_with(env!("CARGO_PKG_VERSION")), "{SOFTWARE}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

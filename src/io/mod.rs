@@ -27,7 +27,8 @@ pub mod output;
 pub mod png;
 pub mod sequence;
 
-pub use exr_read::{load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
+pub use exr_read::STRUCTURAL_ATTRIBUTES;
+pub use exr_read::{describes_channels, load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
 pub use exr_write::{
     encode_exr_channels, encode_exr_planes, encode_exr_rgba, rgba_planes, write_exr_channels, write_exr_planes_to_file,
     write_exr_rgba, ExrAttribute, ExrCompression, ExrWriteOptions,
@@ -366,6 +367,11 @@ pub struct ScenePasses {
     pub render_focal_length_mm: Option<(f64, String)>,
     /// The colour file's `chromaticities` attribute: the colour space of its RGB.
     pub chromaticities: Option<crate::optics::colour::Chromaticities>,
+    /// The colour file's header attributes (its first part's), any of OpenEXR's types, as
+    /// stored, in name order, for the output ([`ExrWriteOptions::input_attributes`]): those
+    /// of the file's layout ([`STRUCTURAL_ATTRIBUTES`]) left out, and those describing
+    /// channels ([`describes_channels`]: Cryptomatte's) unless [`PassSources::keep_layers`].
+    pub header_attributes: Vec<(String, exr::meta::attribute::AttributeValue)>,
 }
 
 /// A fresh, empty directory under the system temp dir for one test.

@@ -43,6 +43,9 @@ pub struct LoadedFrame {
     pub plan: Plan,
     /// The input's other channels (--keep-layers), written beside R, G, B, A.
     pub kept_channels: Vec<(String, Vec<f32>)>,
+    /// The colour input's header attributes, for the output's header
+    /// ([`ScenePasses::header_attributes`](crate::io::ScenePasses::header_attributes)).
+    pub header_attributes: Vec<(String, exr::meta::attribute::AttributeValue)>,
     channel_report: String,
     space_line: String,
     /// The OpenColorIO display and view of the preview, when a config gives one.
@@ -62,6 +65,7 @@ pub fn load_frame(settings: &RenderSettings, camera: &Camera) -> Result<LoadedFr
 pub fn plan_frame(settings: &RenderSettings, camera: &Camera, mut passes: ScenePasses) -> Result<LoadedFrame> {
     let channel_report = passes.channel_report.clone();
     let kept_channels = std::mem::take(&mut passes.kept_channels);
+    let header_attributes = std::mem::take(&mut passes.header_attributes);
     let render_focal_length = passes.render_focal_length_mm.clone();
     let mut frame = Frame::from_passes(passes, camera, settings.depth_kind);
     let wants_view = settings.png.is_some();
@@ -73,7 +77,16 @@ pub fn plan_frame(settings: &RenderSettings, camera: &Camera, mut passes: SceneP
         Some((_, attribute)) => format!("{w} (its {attribute} attribute)"),
         None => w,
     });
-    Ok(LoadedFrame { frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning })
+    Ok(LoadedFrame {
+        frame,
+        plan,
+        kept_channels,
+        header_attributes,
+        channel_report,
+        space_line,
+        display_view,
+        focal_length_warning,
+    })
 }
 
 /// Renders the `loaded` frame through `camera` on the session's GPU; `--explain` and the
@@ -84,8 +97,16 @@ pub fn render_loaded(
     loaded: LoadedFrame,
     session: &mut Session,
 ) -> Result<RenderedFrame> {
-    let LoadedFrame { mut frame, plan, kept_channels, channel_report, space_line, display_view, focal_length_warning } =
-        loaded;
+    let LoadedFrame {
+        mut frame,
+        plan,
+        kept_channels,
+        header_attributes,
+        channel_report,
+        space_line,
+        display_view,
+        focal_length_warning,
+    } = loaded;
     let report = session.report();
     if settings.explain {
         report.say(&format!("inputs:\n{}", indent(&channel_report)));
@@ -151,6 +172,9 @@ pub fn render_loaded(
         attributes,
         float32_channels: Vec::new(),
         compression: settings.compression,
+        // The input's own, beside realcam's (which win a clash; the input's then under
+        // input/<name>).
+        input_attributes: header_attributes,
     };
     let working_space = frame.working_space;
     Ok(RenderedFrame {

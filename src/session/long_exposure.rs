@@ -112,7 +112,10 @@ pub(super) fn render(
         ..image.clone()
     });
     let attributes = output_attributes(camera, image.width, image.height, &working_space);
-    let exr_options = ExrWriteOptions { attributes, ..exr_options.unwrap_or_default() };
+    let mut exr_options = ExrWriteOptions { attributes, ..exr_options.unwrap_or_default() };
+    // The last frame's header attributes; those describing channels (Cryptomatte's) go, as
+    // the long exposure keeps no channels of its inputs.
+    exr_options.input_attributes.retain(|(name, _)| !crate::io::describes_channels(name));
     let rendered = RenderedFrame {
         image,
         preview,

@@ -45,6 +45,48 @@ pub(super) struct ExrFile {
     pub(super) focal_length_mm: Option<(f64, String)>,
     /// Its `chromaticities` attribute: the colour space of its RGB.
     pub(super) chromaticities: Option<crate::optics::colour::Chromaticities>,
+    /// Its first part's header attributes, in name order, those of the file's structure
+    /// ([`STRUCTURAL_ATTRIBUTES`]) left out.
+    pub(super) header_attributes: Vec<(String, exr::meta::attribute::AttributeValue)>,
+}
+
+/// The attributes that describe a file's layout rather than its image: its channels, blocks,
+/// windows and codec, its parts' names, and the `preview` thumbnail of its pixels. An output
+/// has its own; the input's are not carried into it.
+pub const STRUCTURAL_ATTRIBUTES: [&str; 17] = [
+    "channels",
+    "compression",
+    "dataWindow",
+    "displayWindow",
+    "lineOrder",
+    "pixelAspectRatio",
+    "screenWindowCenter",
+    "screenWindowWidth",
+    "name",
+    "type",
+    "version",
+    "chunkCount",
+    "tiles",
+    "maxSamplesPerPixel",
+    "dwaCompressionLevel",
+    "deepImageState",
+    "preview",
+];
+
+/// A header's attributes as the file holds them (the exr crate's typed fields named again),
+/// those of [`STRUCTURAL_ATTRIBUTES`] left out, in name order.
+fn header_attributes(header: &exr::meta::header::Header) -> Vec<(String, exr::meta::attribute::AttributeValue)> {
+    // The exr crate turns these two counts into i32 as it lists them; both are structural.
+    let mut header = header.clone();
+    header.chunk_count = 0;
+    header.max_samples_per_pixel = None;
+    let mut attributes: Vec<_> = header
+        .all_named_attributes()
+        .map(|(name, value)| (exr::meta::attribute::Text::from_slice_unchecked(name).to_string(), value))
+        .filter(|(name, _)| !STRUCTURAL_ATTRIBUTES.contains(&name.as_str()))
+        .collect();
+    attributes.sort_by(|a, b| a.0.cmp(&b.0));
+    attributes
 }
 
 /// The focal length a renderer wrote in a header: OpenEXR's lens attributes (floats, mm), else
@@ -115,6 +157,7 @@ impl ExrFile {
         }
         let loaded = largest.0.saturating_mul(largest.1).saturating_mul(LOADED_BYTES_PER_PX);
         budget.check(what, path, largest.0, largest.1, decoded_bytes.saturating_add(loaded))?;
+        let header_attributes = meta.headers.first().map(header_attributes).unwrap_or_default();
         drop(meta);
         // The decoder is not ours: should it panic on a malformed file, that is an error about
         // the file, not the end of the run.
@@ -183,6 +226,7 @@ impl ExrFile {
             chans,
             focal_length_mm,
             chromaticities,
+            header_attributes,
         })
     }
 

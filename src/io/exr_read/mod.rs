@@ -42,7 +42,16 @@ mod file;
 mod passes;
 mod velocity;
 
-pub use file::DECODER_PANICS;
+pub use file::{DECODER_PANICS, STRUCTURAL_ATTRIBUTES};
+
+/// Whether a header attribute describes channels: Cryptomatte's `cryptomatte/<id>/...` (name,
+/// hash, conversion, manifest), `multiView` (the views' channel prefixes) and Blender's
+/// `BlenderMultiChannel` (which has Blender read the channels as view layers and passes).
+/// They go with the channels: into an output only with the input's other channels
+/// (`--keep-layers`).
+pub fn describes_channels(attribute: &str) -> bool {
+    attribute.starts_with("cryptomatte/") || attribute == "multiView" || attribute == "BlenderMultiChannel"
+}
 
 /// Reads the color of an EXR file as RGBA (alpha = 1 when absent) using the same channel
 /// discovery as [`load_passes`]. Values are returned as stored (NaN/Inf kept).
@@ -112,6 +121,12 @@ pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
         kept_channels,
         render_focal_length_mm: cf.focal_length_mm.clone(),
         chromaticities: cf.chromaticities,
+        header_attributes: cf
+            .header_attributes
+            .iter()
+            .filter(|(name, _)| src.keep_layers || !describes_channels(name))
+            .cloned()
+            .collect(),
     })
 }
 
@@ -467,5 +482,37 @@ mod tests {
         assert!((dx - 76.19 * scale).abs() < 0.5 && (dy + 10.16 * scale).abs() < 0.5, "({dx}, {dy})");
         assert_eq!(v.get(5, 5, 0), 0.0);
         assert_eq!(multi.depth_m.get(5, 5, 0), 1.0e10);
+    }
+
+    #[test]
+    fn header_attributes_are_read_as_stored_without_the_layouts_and_cryptomatte_only_when_kept() {
+        use exr::meta::attribute::{AttributeValue, Text};
+        let dir = test_dir("read-header-attributes");
+        let path = dir.join("a.exr");
+        let t = |s: &str| AttributeValue::Text(Text::from(s));
+        let input = vec![
+            ("Frame".to_string(), t("7")),
+            ("cryptomatte/abc/manifest".into(), t("{}")),
+            ("owner".into(), t("studio")),
+            ("samples".into(), AttributeValue::I32(64)),
+        ];
+        let planes = [vec![0.5f32; (W * H) as usize], vec![2.0f32; (W * H) as usize]];
+        let list: Vec<(&str, &[f32])> =
+            vec![("R", &planes[0]), ("G", &planes[0]), ("B", &planes[0]), ("Z", &planes[1])];
+        let opts = ExrWriteOptions { input_attributes: input.clone(), ..Default::default() };
+        write_exr_channels(&path, W, H, &list, &opts).unwrap();
+        let names = |keep_layers: bool| -> Vec<String> {
+            let p = load_passes(&PassSources { keep_layers, ..sources(&path) }).unwrap();
+            for (name, value) in &p.header_attributes {
+                if let Some((_, v)) = input.iter().find(|(n, _)| n == name) {
+                    assert_eq!(value, v, "{name}");
+                }
+            }
+            p.header_attributes.into_iter().map(|(name, _)| name).collect()
+        };
+        let software = crate::io::exr_write::SOFTWARE;
+        assert_eq!(names(true), ["Frame", "cryptomatte/abc/manifest", "owner", "samples", "software"], "{software}");
+        assert_eq!(names(false), ["Frame", "owner", "samples", "software"]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
