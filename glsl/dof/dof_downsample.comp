@@ -6,8 +6,8 @@
 // premultiplied by the weight: color_half = sum w c / 4, coc_half = (the nearest blurring
 // pixel's CoC, sum w / 4). The nearest, not the mean: a texel across a depth edge (a defocused
 // pole before the sky, a card with holes) would take a mean CoC near 0 and keep its mixed light
-// sharp, a seam along every such edge (scene A f/2: 5.1% -> 3.3% of the tiles off the
-// reference by more than 5%, the worst generated scene 23% -> 17%).
+// sharp, a seam along every such edge (scene A f/2: 5.1% -> 3.4% of the tiles off the
+// reference by more than 5%; docs/measurements.md, "The tiled path's picture, tile by tile").
 // Also lists the texels holding a highlight candidate (a bright pixel of large CoC) for dof_highlights.comp, which
 // tests them against their background. The test has its own dispatch over that short list:
 // lavapipe runs both sides of every branch, so a test written here would cost its ring of

@@ -1,7 +1,8 @@
 #version 450
 // Tiled depth of field: level L of the pyramid from level L - 1 (L = 2 .. 4), the same
 // premultiplied averages as level 1 (dof_downsample.comp): colour sum / 4, the nearest CoC of
-// the texels that hold blurring pixels, weight sum / 4. Texels beyond the finer level's edge count as empty.
+// the texels that hold blurring pixels, weight sum / 4. Texels beyond the finer level's edge
+// count as empty.
 #include "common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
