@@ -8,6 +8,28 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use realcam::io::{Image, ScenePasses};
 
+/// `array` as float32: a float32 array as it is, float16 and float64 converted (NumPy's
+/// `astype`); any other dtype is refused with its name.
+pub fn float32<'py>(what: &str, array: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArrayDyn<'py, f32>> {
+    if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'py, f32>>() {
+        return Ok(a);
+    }
+    let dtype = array.getattr("dtype").map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!("{what}: a NumPy array is expected, got {}", type_name(array)))
+    })?;
+    let name: String = dtype.getattr("name")?.extract()?;
+    if !["float16", "float64"].contains(&name.as_str()) {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{what}: an array of float32 (or float16, float64, converted) is expected, got {name}"
+        )));
+    }
+    array.call_method1("astype", ("float32",))?.extract()
+}
+
+fn type_name(object: &Bound<'_, PyAny>) -> String {
+    object.get_type().name().map_or_else(|_| "?".into(), |n| n.to_string())
+}
+
 /// An array's values in row-major order, with its shape.
 fn values(array: &PyReadonlyArrayDyn<'_, f32>) -> (Vec<usize>, Vec<f32>) {
     let view = array.as_array();

@@ -162,3 +162,94 @@ def test_hdr_and_nan_colour_stay_finite():
     image = camera.render(color, depth)
     clean = np.nan_to_num(color, nan=0.0, posinf=0.0)
     assert abs(image[..., :3].sum() / clean[..., :3].sum() - 1.0) < 5e-3
+
+
+def test_settings_change_per_frame_on_one_device():
+    """A rack focus from Python (issue 31, item 7): `set` and a render's own keywords change
+    the camera; the device and pipelines stay."""
+    passes = realcam.read_passes(str(TESTDATA / "point_bg_color.exr"), depth=str(TESTDATA / "point_bg_depth.exr"))
+    camera = realcam.Camera(validate=True, fstop=2, focus=2, film="linear", no_exposure=True, no_flare=True)
+    at_2m = camera.render(**passes)
+    camera.set(focus=3)
+    at_3m = camera.render(**passes)
+    assert not np.array_equal(at_2m, at_3m)
+    # A render's own keyword holds for that render only.
+    assert np.array_equal(camera.render(**passes, focus=2), at_2m)
+    assert np.array_equal(camera.render(**passes), at_3m)
+    # None removes a setting: the default focus, 2 m.
+    camera.set(focus=None)
+    assert np.array_equal(camera.render(**passes), at_2m)
+    assert camera.gpu_opens == 1
+
+
+def test_a_camera_file_gives_each_frame_its_setting(tmp_path):
+    passes = realcam.read_passes(str(TESTDATA / "point_bg_color.exr"), depth=str(TESTDATA / "point_bg_depth.exr"))
+    rack = tmp_path / "rack.toml"
+    rack.write_text("[focus_distance_m]\ninterpolation = \"linear\"\nkeys = [[10, 2.0], [20, 3.0]]\n")
+    fixed = dict(validate=True, fstop=2, film="linear", no_exposure=True, no_flare=True)
+    keyed = realcam.Camera(camera_file=str(rack), **fixed)
+    for frame, focus in [(10, 2), (20, 3)]:
+        expected = realcam.Camera(focus=focus, **fixed).render(**passes, frame=frame)
+        assert np.array_equal(keyed.render(**passes, frame=frame), expected)
+
+
+def test_float16_and_float64_arrays_are_converted_and_others_named():
+    passes = realcam.read_passes(str(TESTDATA / "point_fg_color.exr"), depth=str(TESTDATA / "point_fg_depth.exr"))
+    camera = realcam.Camera(fstop=2, focus=2)
+    expected = camera.render(passes["color"], passes["depth"])
+    # float64 holds every float32 exactly; the depth of this file is exact in float16 too.
+    assert np.array_equal(passes["depth"].astype(np.float16).astype(np.float32), passes["depth"])
+    image = camera.render(passes["color"].astype(np.float64), passes["depth"].astype(np.float16))
+    assert np.array_equal(image, expected)
+    with pytest.raises(TypeError) as e:
+        camera.render(passes["color"].astype(np.int32), passes["depth"])
+    assert str(e.value) == "color: an array of float32 (or float16, float64, converted) is expected, got int32"
+
+
+def test_render_file_writes_what_the_cli_writes(tmp_path):
+    color, depth = TESTDATA / "point_bg_color.exr", TESTDATA / "point_bg_depth.exr"
+    cli_out = tmp_path / "cli.exr"
+    run = cli("render", "--color", color, "--depth", depth, "--fstop", "2", "--focus", "2", "--float", "-o", cli_out)
+    assert run.returncode == 0, run.stderr
+    camera = realcam.Camera(validate=True, fstop=2, focus=2, float=True)
+    out = tmp_path / "py.exr"
+    assert camera.render_file(str(color), str(out), depth=str(depth), png=str(tmp_path / "py.png")) == [
+        str(out),
+        str(tmp_path / "py.png"),
+    ]
+    assert np.array_equal(realcam.read_exr(str(out)), realcam.read_exr(str(cli_out)))
+    # Never over an input.
+    with pytest.raises(realcam.RealcamError) as e:
+        camera.render_file(str(color), str(depth), depth=str(depth))
+    assert "depth pass" in str(e.value)
+
+
+def test_the_gpu_works_without_the_gil():
+    """Another Python thread runs while a render is on the GPU (lavapipe: on the CPU)."""
+    import threading
+    import time
+
+    color = np.zeros((384, 512, 4), np.float32)
+    color[..., :3] = np.random.default_rng(1).random((384, 512, 3), np.float32)
+    color[..., 3] = 1
+    depth = np.full((384, 512), 9.0, np.float32)
+    camera = realcam.Camera(fstop=1.4, focus=0.5, bokeh="reference")
+    camera.render(color, depth)  # the device and pipelines opened
+    ticks, stop = [], threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=tick)
+    thread.start()
+    time.sleep(0.02)
+    start = time.perf_counter()
+    camera.render(color, depth)
+    end = time.perf_counter()
+    stop.set()
+    thread.join()
+    inside = [t for t in ticks if start + 0.01 < t < end - 0.01]
+    assert end - start > 0.05, "the render was too quick to tell"
+    assert len(inside) >= 3, f"{len(inside)} ticks during a render of {end - start:.3f} s"

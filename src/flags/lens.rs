@@ -2,7 +2,7 @@
 
 use crate::gpu::{Gpu, GpuOptions};
 use crate::io::lens_file::LensFile;
-use crate::model::camera::{CameraRequest, CocModel};
+use crate::model::camera::{CameraField, CameraRequest, CocModel};
 use crate::optics::sensor::SensorFit;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
@@ -62,15 +62,18 @@ pub struct LensArgs {
     /// Lens file (TOML, see lenses/) or --lens-lensfun MODEL; the built-in default lens when absent.
     #[command(flatten)]
     pub lens: LensChoice,
-    /// Focal length in mm (must match a prime lens file unless --force).
+    /// Focal length in mm (must match a prime lens file unless --force); default: the camera
+    /// file's, else the lens file's (the ideal lens: the input's, else 50 mm).
     #[arg(long = "focal-length")]
     pub focal_length_mm: Option<f64>,
-    /// f-number N.
+    /// f-number N; default: the camera file's, else the input's `aperture` attribute, else the
+    /// lens's widest but no wider than f/2.8.
     #[arg(long = "fstop")]
     pub f_number: Option<f64>,
-    /// Focus distance in metres (planar, from the lens).
-    #[arg(long = "focus", default_value_t = CameraRequest::default().focus_distance_m)]
-    pub focus_m: f64,
+    /// Focus distance in metres (planar, from the lens); default: the camera file's, else the
+    /// input's `focus` attribute, else 2 m.
+    #[arg(long = "focus")]
+    pub focus_m: Option<f64>,
     /// Sensor: full-frame (36x24), super35, aps-c, aps-c-canon, m43, 1in, apsh, medium-format, or WxH in mm.
     #[arg(long, default_value = "full-frame")]
     pub sensor: String,
@@ -94,12 +97,28 @@ pub enum CocModelArg {
 }
 
 impl LensArgs {
+    /// The focus distance of --focus, else the default 2 m.
+    pub fn focus_m(&self) -> f64 {
+        self.focus_m.unwrap_or(CameraRequest::default().focus_distance_m)
+    }
+
+    /// The settings of a shot these flags give (the rest may come from a camera file or the
+    /// input's header).
+    pub fn given(&self) -> Vec<CameraField> {
+        let given = [
+            (CameraField::FocalLengthMm, self.focal_length_mm.is_some()),
+            (CameraField::FNumber, self.f_number.is_some()),
+            (CameraField::FocusDistanceM, self.focus_m.is_some()),
+        ];
+        given.into_iter().filter_map(|(field, given)| given.then_some(field)).collect()
+    }
+
     /// `base` with the lens setting, the sensor and --force of these flags.
     pub fn request(&self, base: CameraRequest) -> CameraRequest {
         CameraRequest {
             focal_length_mm: self.focal_length_mm,
             f_number: self.f_number,
-            focus_distance_m: self.focus_m,
+            focus_distance_m: self.focus_m.unwrap_or(base.focus_distance_m),
             sensor: Some(self.sensor.clone()),
             sensor_fit: Some(self.sensor_fit.into()),
             force: self.force,

@@ -12,11 +12,11 @@ pub use motion::MotionArgs;
 pub use sequence::SequenceArgs;
 
 use crate::io::{self, DepthKind, MemoryBudget, PassSources};
-use crate::model::camera::{BokehMode, Camera, CameraRequest, FilmMode, FilmPreset};
+use crate::model::camera::{BokehMode, Camera, CameraField, CameraRequest, FilmMode, FilmPreset, ShotCamera};
 use crate::model::settings::{parse_coc_limit, parse_flare_light, parse_shutter_s, parse_spherical_aberration};
 use crate::session::errors::NameFlags;
 use crate::session::{ColourSettings, RenderSettings};
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
@@ -117,15 +117,26 @@ pub struct RenderArgs {
     pub velocity: Option<PathBuf>,
     #[command(flatten)]
     lens: LensArgs,
-    /// Shutter time in seconds, e.g. 0.02 or 1/50.
-    #[arg(long, default_value = "1/50")]
-    shutter: String,
-    #[arg(long, default_value_t = CameraRequest::default().iso)]
-    iso: f64,
-    /// Luminance in cd/m^2 of a scene value of 1.0. The default exposes a scene value of 0.18 as
-    /// ISO 12232 middle grey at 1/50 s, ISO 100, f/2.
-    #[arg(long = "nits-per-unit", default_value_t = CameraRequest::default().nits_per_unit)]
-    nits_per_unit: f64,
+    /// Shutter time in seconds, e.g. 0.02 or 1/50; default: the camera file's, else the input's
+    /// `expTime` attribute, else 1/50.
+    #[arg(long)]
+    shutter: Option<String>,
+    /// ISO speed; default: the camera file's, else the input's `isoSpeed` attribute, else 100.
+    #[arg(long)]
+    iso: Option<f64>,
+    /// Luminance in cd/m^2 of a scene value of 1.0; default 160, which exposes a scene value of
+    /// 0.18 as ISO 12232 middle grey at 1/50 s, ISO 100, f/2.
+    #[arg(long = "nits-per-unit")]
+    nits_per_unit: Option<f64>,
+    /// A camera file (TOML): the camera's settings keyframed over the shot's frames (a rack
+    /// focus, an iris pull, a zoom), with linear or smooth interpolation; see the README. A flag
+    /// wins over the file, the file over the input's header attributes.
+    #[arg(long = "camera-file", value_name = "FILE")]
+    camera_file: Option<PathBuf>,
+    /// The frame number of a single render (without --frames): where a camera file's keys are
+    /// evaluated and what seeds the grain.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "frames")]
+    frame: Option<i64>,
     /// Aperture blades (0 = circular); default from the lens file.
     #[arg(long)]
     blades: Option<u32>,
@@ -190,9 +201,10 @@ pub struct RenderArgs {
     /// instead of --film.
     #[arg(long = "film-file", value_name = "FILE")]
     film_file: Option<PathBuf>,
-    /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO)); 0: none.
-    #[arg(long, default_value_t = CameraRequest::default().grain)]
-    grain: f64,
+    /// Sensor noise at ISO 100 (standard deviation at sensor value 1, growing with sqrt(ISO));
+    /// default 0: none.
+    #[arg(long)]
+    grain: Option<f64>,
     /// Seed of the sensor noise: the same seed and frame give the same noise; each frame of a
     /// sequence mixes its frame number in, so neighbouring frames' grain is independent.
     #[arg(long, default_value_t = CameraRequest::default().seed, value_parser = parse_seed)]
@@ -308,10 +320,26 @@ impl FlareArgs {
 }
 
 impl RenderArgs {
-    /// The camera these flags ask for.
+    /// The camera these flags ask for, without a camera file's keys or an input's settings
+    /// (at the camera file's first key).
     pub fn camera(&self) -> Result<Camera> {
+        Ok(self.shot_camera()?.base().clone())
+    }
+
+    /// The frame number of a single render (--frame).
+    pub fn frame(&self) -> Option<i64> {
+        self.frame
+    }
+
+    /// The shot these flags ask for: the flags' settings, a camera file's keys for the rest,
+    /// then each frame's input header ([`ShotCamera`]).
+    pub fn shot_camera(&self) -> Result<ShotCamera> {
         let lens_file = self.lens.lens.load()?;
-        let shutter_s = parse_shutter_s(&self.shutter).with_context(|| format!("--shutter {:?}", self.shutter))?;
+        let default = CameraRequest::default();
+        let shutter_s = match &self.shutter {
+            Some(text) => parse_shutter_s(text).with_context(|| format!("--shutter {text:?}"))?,
+            None => default.shutter_s,
+        };
         let film = FilmMode::choose(self.film.into(), self.film_file.as_deref())?;
         let spherical_aberration = match &self.spherical_aberration {
             Some(text) => {
@@ -322,8 +350,8 @@ impl RenderArgs {
         let max_coc = parse_coc_limit(&self.max_coc).with_context(|| format!("--max-coc {:?}", self.max_coc))?;
         let request = self.lens.request(self.motion.request(CameraRequest {
             shutter_s,
-            iso: self.iso,
-            nits_per_unit: self.nits_per_unit,
+            iso: self.iso.unwrap_or(default.iso),
+            nits_per_unit: self.nits_per_unit.unwrap_or(default.nits_per_unit),
             blades: self.blades,
             blade_rotation_deg: self.blade_rotation_deg,
             blade_curvature: self.blade_curvature,
@@ -336,7 +364,7 @@ impl RenderArgs {
             film_on_output: self.film_in_exr,
             max_coc,
             bokeh: self.bokeh.into(),
-            grain: self.grain,
+            grain: self.grain.unwrap_or(default.grain),
             seed: self.seed,
             flare: match (self.flare.flare, self.flare.no_flare) {
                 (_, true) => Some(false),
@@ -348,11 +376,53 @@ impl RenderArgs {
             flare_lights: self.flare.lights()?,
             ..CameraRequest::default()
         })?);
-        let mut camera = Camera::new(&lens_file, &request).name_flags()?;
-        if let Some(path) = &self.aperture_image {
-            camera.aperture_mask = Some(crate::model::aperture::ApertureMask::load(path, &self.budget()).name_flags()?);
+        let aperture_mask = match &self.aperture_image {
+            Some(path) => Some(crate::model::aperture::ApertureMask::load(path, &self.budget()).name_flags()?),
+            None => None,
+        };
+        let keys = match &self.camera_file {
+            Some(path) => Some(crate::io::camera_file::load_camera_file(path).context("--camera-file")?),
+            None => None,
+        };
+        ShotCamera::new(lens_file, request, self.given(), keys, aperture_mask).name_flags()
+    }
+
+    /// A single render (no --frames) of a camera file that changes a setting must say its
+    /// frame (--frame): refused otherwise, with the range the file animates.
+    pub fn check_single_frame(&self, shot: &ShotCamera) -> Result<()> {
+        let Some(keys) = shot.keys().filter(|_| self.frame.is_none() && self.sequence.frames.is_none()) else {
+            return Ok(());
+        };
+        if let Some((field, track)) = keys.tracks.iter().find(|(_, t)| t.is_animated()) {
+            let (first, last) = (track.keys()[0].0, track.keys()[track.keys().len() - 1].0);
+            bail!(
+                "--camera-file: {} changes {} over frames {first} to {last}: say which frame this render is \
+                 with --frame N, or render the shot with --frames",
+                keys.origin,
+                field.name()
+            );
         }
-        Ok(camera)
+        Ok(())
+    }
+
+    /// The settings of a shot these flags give.
+    fn given(&self) -> Vec<CameraField> {
+        let mut given = self.lens.given();
+        let shutter_angle = self.motion.shutter_angle_given();
+        let flags = [
+            (CameraField::ShutterS, self.shutter.is_some() || shutter_angle),
+            (CameraField::ShutterAngleDeg, shutter_angle),
+            (CameraField::Iso, self.iso.is_some()),
+            (CameraField::NitsPerUnit, self.nits_per_unit.is_some()),
+            (CameraField::Blades, self.blades.is_some()),
+            (CameraField::BladeRotationDeg, self.blade_rotation_deg.is_some()),
+            (CameraField::BladeCurvature, self.blade_curvature.is_some()),
+            (CameraField::SphericalAberration, self.spherical_aberration.is_some()),
+            (CameraField::CatsEye, self.cats_eye.is_some()),
+            (CameraField::Grain, self.grain.is_some()),
+        ];
+        given.extend(flags.into_iter().filter_map(|(field, given)| given.then_some(field)));
+        given
     }
 
     /// The session's settings these flags give: where the passes are, what to write, how.
@@ -362,6 +432,7 @@ impl RenderArgs {
             ("lens file", self.lens.lens.lens.as_deref()),
             ("film file", self.film_file.as_deref()),
             ("flare light list", self.flare.flare_lights.as_deref()),
+            ("camera file", self.camera_file.as_deref()),
         ];
         RenderSettings {
             sources: self.sources(),

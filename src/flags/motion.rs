@@ -112,6 +112,11 @@ pub struct MotionArgs {
 }
 
 impl MotionArgs {
+    /// Whether --shutter-angle was given.
+    pub fn shutter_angle_given(&self) -> bool {
+        self.shutter_angle_deg.is_some()
+    }
+
     /// `request` with the shutter and motion-blur settings of these flags.
     pub fn request(&self, request: CameraRequest) -> Result<CameraRequest> {
         let shutter_curve = parse_curve(&self.shutter_curve).context("--shutter-curve")?;

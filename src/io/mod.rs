@@ -15,6 +15,7 @@
 //!   run never touches an existing file; targets that are not regular files, or are inputs, are
 //!   refused before any work.
 
+pub mod camera_file;
 pub mod colour_config;
 pub mod exr_read;
 pub mod exr_write;

@@ -72,6 +72,22 @@ impl FieldError for CameraError {
     }
 }
 
+/// A shot's camera names the flag of the refused setting only when a flag gave it; a key's or
+/// an input header's says where it came from instead.
+impl FieldError for crate::model::camera::ShotError {
+    fn field_name(&self) -> Option<&'static str> {
+        if self.from.is_some() {
+            None
+        } else {
+            self.error.field_name()
+        }
+    }
+
+    fn overridden_by(&self) -> Option<&'static str> {
+        self.error.overridden_by()
+    }
+}
+
 impl FieldError for IoError {
     fn field_name(&self) -> Option<&'static str> {
         self.field()

@@ -6,7 +6,7 @@ use super::{RenderSettings, Session};
 use crate::io::colour_config::DisplayView;
 use crate::io::output::Outputs;
 use crate::io::{self, ExrWriteOptions, Image, ScenePasses};
-use crate::model::camera::Camera;
+use crate::model::camera::{Camera, InputCamera, ShotCamera};
 use crate::model::frame::Frame;
 use crate::optics::colour::Chromaticities;
 use crate::pipeline::planner::{self, Plan};
@@ -31,15 +31,24 @@ pub struct RenderedFrame {
     pub profile: crate::gpu::Profile,
 }
 
-/// Renders the frame whose passes `settings` name through `camera`.
-pub fn render_image(settings: &RenderSettings, camera: &Camera, session: &mut Session) -> Result<RenderedFrame> {
-    render_loaded(settings, camera, load_frame(settings, camera)?, session)
+/// Renders the frame whose passes `settings` name, frame `frame` of `shot`.
+pub fn render_image(
+    settings: &RenderSettings,
+    shot: &ShotCamera,
+    frame: Option<i64>,
+    session: &mut Session,
+) -> Result<RenderedFrame> {
+    render_loaded(settings, load_frame(settings, shot, frame)?, session)
 }
 
 /// A frame's passes read, in their working colour space, and planned: the work before the GPU,
 /// which a sequence does for the next frame while the GPU renders this one.
 pub struct LoadedFrame {
     pub frame: Frame,
+    /// The frame's camera: the shot's settings at this frame, with the input header's.
+    pub camera: Camera,
+    /// What the frame's camera settings brought to say (an input header that disagrees).
+    pub camera_warnings: Vec<String>,
     pub plan: Plan,
     /// The input's other channels (--keep-layers), written beside R, G, B, A.
     pub kept_channels: Vec<(String, Vec<f32>)>,
@@ -53,10 +62,43 @@ pub struct LoadedFrame {
     focal_length_warning: Option<String>,
 }
 
-/// Reads the passes `settings` name and plans the frame through `camera`.
-pub fn load_frame(settings: &RenderSettings, camera: &Camera) -> Result<LoadedFrame> {
+/// Reads the passes `settings` name and plans them as frame `frame` (None: a single frame
+/// without a number) of `shot`, whose camera takes the input header's settings where neither a
+/// flag nor a key gives them.
+pub fn load_frame(settings: &RenderSettings, shot: &ShotCamera, frame: Option<i64>) -> Result<LoadedFrame> {
+    load_frame_as(settings, shot, frame, Camera::clone)
+}
+
+/// [`load_frame`] with the frame's camera made `adapt(camera)` (a long exposure's frames stop
+/// at the sensor).
+pub(super) fn load_frame_as(
+    settings: &RenderSettings,
+    shot: &ShotCamera,
+    frame: Option<i64>,
+    adapt: impl Fn(&Camera) -> Camera,
+) -> Result<LoadedFrame> {
     let passes = io::load_passes(&settings.sources).name_flags()?;
-    plan_frame(settings, camera, passes)
+    let input = input_camera(&passes);
+    let frame_camera = shot.camera(frame, &input).name_flags()?;
+    let mut loaded = plan_frame(settings, &adapt(&frame_camera.camera), passes)?;
+    loaded.camera_warnings = frame_camera.warnings;
+    Ok(loaded)
+}
+
+/// The camera settings the colour file's header carries (OpenEXR's `focus`, `aperture`,
+/// `expTime`, `isoSpeed` and the focal length a renderer wrote).
+pub fn input_camera(passes: &ScenePasses) -> InputCamera {
+    use exr::meta::attribute::AttributeValue;
+    let number = |v: &AttributeValue| match v {
+        AttributeValue::F32(v) => Some(f64::from(*v)),
+        AttributeValue::F64(v) => Some(*v),
+        AttributeValue::I32(v) => Some(f64::from(*v)),
+        _ => None,
+    };
+    InputCamera::from_attributes(
+        passes.header_attributes.iter().map(|(name, value)| (name.as_str(), number(value))),
+        passes.render_focal_length_mm.clone(),
+    )
 }
 
 /// The frame of loaded `passes` (from files, or the Python package's arrays) in its working
@@ -79,6 +121,8 @@ pub fn plan_frame(settings: &RenderSettings, camera: &Camera, mut passes: SceneP
     });
     Ok(LoadedFrame {
         frame,
+        camera: camera.clone(),
+        camera_warnings: Vec::new(),
         plan,
         kept_channels,
         header_attributes,
@@ -89,16 +133,13 @@ pub fn plan_frame(settings: &RenderSettings, camera: &Camera, mut passes: SceneP
     })
 }
 
-/// Renders the `loaded` frame through `camera` on the session's GPU; `--explain` and the
+/// Renders the `loaded` frame through its camera on the session's GPU; `--explain` and the
 /// warnings are printed here, in frame order.
-pub fn render_loaded(
-    settings: &RenderSettings,
-    camera: &Camera,
-    loaded: LoadedFrame,
-    session: &mut Session,
-) -> Result<RenderedFrame> {
+pub fn render_loaded(settings: &RenderSettings, loaded: LoadedFrame, session: &mut Session) -> Result<RenderedFrame> {
     let LoadedFrame {
         mut frame,
+        camera,
+        camera_warnings,
         plan,
         kept_channels,
         header_attributes,
@@ -112,6 +153,9 @@ pub fn render_loaded(
         report.say(&format!("inputs:\n{}", indent(&channel_report)));
         let (_, _, w, h) = frame.display_window;
         report.say(&camera.explain_camera(w, h));
+        if let Some(sources) = camera.explain_sources() {
+            report.say(&sources);
+        }
         let film = match (camera.film_on_output, &display_view) {
             (true, None) => "in the EXR and the PNG (--film-in-exr)",
             (false, None) => "in the PNG preview only; the EXR is scene-referred",
@@ -136,6 +180,9 @@ pub fn render_loaded(
         }
         report.say(&plan.explain());
     }
+    for warning in &camera_warnings {
+        report.say(&format!("warning: {warning}"));
+    }
     if let Some(warning) = &focal_length_warning {
         report.say(&format!("warning: {warning}"));
     }
@@ -155,7 +202,7 @@ pub fn render_loaded(
     let image = Image { width: frame.width, height: frame.height, channels: 4, data: rendered.rgba };
     let preview = settings.png.as_ref().map(|_| Image {
         data: crate::pipeline::render::preview_rgba(
-            camera,
+            &camera,
             &frame.working_space,
             &image.data,
             image.width,
@@ -164,7 +211,7 @@ pub fn render_loaded(
         ..image.clone()
     });
     let (_, _, w, h) = frame.display_window;
-    let attributes = output_attributes(camera, w, h, &frame.working_space);
+    let attributes = output_attributes(&camera, w, h, &frame.working_space);
     let exr_options = ExrWriteOptions {
         float32: settings.float32,
         display_window: Some(frame.display_window),

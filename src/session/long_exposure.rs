@@ -8,7 +8,7 @@ use super::settings::Patterns;
 use super::{errors::error_text, RenderSettings, Report, SequenceSettings, Session};
 use crate::io::sequence::{FrameRange, IoPriority};
 use crate::io::ExrWriteOptions;
-use crate::model::camera::Camera;
+use crate::model::camera::ShotCamera;
 use crate::model::long_exposure::LongExposure;
 use anyhow::{bail, Context, Result};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -21,7 +21,7 @@ pub(super) fn render(
     settings: &RenderSettings,
     sequence: &SequenceSettings,
     patterns: &Patterns,
-    camera: &Camera,
+    shot: &ShotCamera,
     report: Arc<dyn Report>,
 ) -> Result<()> {
     if settings.trace.is_some() {
@@ -34,9 +34,14 @@ pub(super) fn render(
     patterns.check_outputs(settings, range, &state_output)?;
     let outputs = settings.outputs()?;
     // The frames are rendered up to the sensor and averaged; the film comes once, after.
+    // (Each frame's camera is the shot's at that frame; the film is the base camera's.)
+    let camera = shot.base();
     let sensor = crate::pipeline::planner::sensor_camera(camera);
-    // Every setting of the camera, so a resumed exposure is refused other settings.
-    let camera_settings = format!("{sensor:?}");
+    // Every setting of the camera and the shot's keys, so a resumed exposure is refused others.
+    let camera_settings = match shot.keys() {
+        Some(keys) => format!("{sensor:?}, keys: {:?}", keys.tracks),
+        None => format!("{sensor:?}"),
+    };
     let mut exposure = match state.filter(|p| p.exists()) {
         Some(path) => read_state(path, range, &camera_settings)?,
         None => LongExposure::new(&camera_settings),
@@ -55,7 +60,7 @@ pub(super) fn render(
     let mut session = Session::opening(&settings.gpu, &sensor, report.clone());
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
-        let read = read_ahead(scope, jobs, &sensor, &stop, &priority);
+        let read = read_ahead(scope, jobs, shot, crate::pipeline::planner::sensor_camera, &stop, &priority);
         for ReadFrame { frame, settings: one, loaded } in read {
             finished += 1;
             let Some(loaded) = loaded else {
@@ -64,7 +69,7 @@ pub(super) fn render(
                 report.frame_finished(frame, finished, total);
                 continue;
             };
-            let rendered = loaded.and_then(|loaded| render_loaded(&one, &sensor, loaded, &mut session));
+            let rendered = loaded.and_then(|loaded| render_loaded(&one, loaded, &mut session));
             if let Some(gpu) = session.gpu() {
                 priority.device_opened(gpu.info().on_cpu());
             }

@@ -17,14 +17,16 @@ pub mod report;
 mod sequence;
 mod settings;
 
-pub use frame::{load_frame, output_attributes, plan_frame, render_loaded, write_outputs, LoadedFrame, RenderedFrame};
+pub use frame::{
+    input_camera, load_frame, output_attributes, plan_frame, render_loaded, write_outputs, LoadedFrame, RenderedFrame,
+};
 pub use report::{Report, StderrReport};
 pub use sequence::render_sequence;
 pub use settings::{ColourSettings, RenderSettings, SequenceSettings};
 
 use crate::gpu::{Gpu, GpuOptions};
 use crate::io::Image;
-use crate::model::camera::Camera;
+use crate::model::camera::{Camera, ShotCamera};
 use crate::model::frame::Frame;
 use crate::pipeline::planner::{self, Plan};
 use crate::pipeline::render::{Rendered, Renderer};
@@ -49,17 +51,18 @@ pub fn open_gpu(options: &GpuOptions) -> Result<Gpu> {
     })
 }
 
-/// Renders one frame as `settings` say through `camera` into its outputs, every output
-/// written and renamed; the session comes back still open (the command line ends the process
-/// without closing its GPU) and the paths written.
+/// Renders one frame as `settings` say, frame `frame` of `shot` (None: a frame without a
+/// number), into its outputs, every output written and renamed; the session comes back still
+/// open (the command line ends the process without closing its GPU) and the paths written.
 pub fn render_single(
     settings: &RenderSettings,
-    camera: &Camera,
+    shot: &ShotCamera,
+    frame: Option<i64>,
     report: Arc<dyn Report>,
 ) -> Result<(Session, Vec<PathBuf>)> {
     let outputs = settings.outputs()?;
-    let mut session = Session::opening(&settings.gpu, camera, report);
-    let rendered = frame::render_image(settings, camera, &mut session)?;
+    let mut session = Session::opening(&settings.gpu, shot.base(), report);
+    let rendered = frame::render_image(settings, shot, frame, &mut session)?;
     let paths = write_outputs(settings, outputs, &rendered)?;
     Ok((session, paths))
 }

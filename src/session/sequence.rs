@@ -2,12 +2,12 @@
 //! number (`crate::io::sequence`); the next frame is read while the GPU renders this one and
 //! the last one is written behind it; progress goes to the session's [`Report`].
 
-use super::frame::{load_frame, render_loaded, write_outputs, LoadedFrame, RenderedFrame};
+use super::frame::{load_frame_as, render_loaded, write_outputs, LoadedFrame, RenderedFrame};
 use super::settings::Patterns;
 use super::{errors::error_text, long_exposure, RenderSettings, Report, SequenceSettings, Session};
 use crate::io::output::Outputs;
 use crate::io::sequence::IoPriority;
-use crate::model::camera::Camera;
+use crate::model::camera::{Camera, ShotCamera};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -15,18 +15,18 @@ use std::sync::mpsc::{sync_channel, Receiver};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Renders the frames of `sequence` through `camera`, each frame's paths from `settings`'
-/// patterns; a long exposure accumulates them into one output. Fails when a frame failed
-/// (after the others ran, unless `fail_fast`).
+/// Renders the frames of `sequence`, each through its camera of `shot` and with its paths from
+/// `settings`' patterns; a long exposure accumulates them into one output. Fails when a frame
+/// failed (after the others ran, unless `fail_fast`).
 pub fn render_sequence(
     settings: &RenderSettings,
     sequence: &SequenceSettings,
-    camera: &Camera,
+    shot: &ShotCamera,
     report: Arc<dyn Report>,
 ) -> Result<()> {
     let patterns = Patterns::new(settings, sequence.long_exposure)?;
     if sequence.long_exposure {
-        return long_exposure::render(settings, sequence, &patterns, camera, report);
+        return long_exposure::render(settings, sequence, &patterns, shot, report);
     }
     let range = &sequence.range;
     // Every frame's outputs are checked against every file the run reads and each other, and
@@ -51,10 +51,10 @@ pub fn render_sequence(
     // The reading and writing threads yield to a GPU that runs on the CPU (io::sequence).
     let priority = IoPriority::default();
     let tally = std::thread::scope(|scope| {
-        let read = read_ahead(scope, jobs, camera, &stop, &priority);
+        let read = read_ahead(scope, jobs, shot, Camera::clone, &stop, &priority);
         let (finish, finished) = sync_channel(1);
         let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority, &*report));
-        let mut session = Session::opening(&settings.gpu, camera, report.clone());
+        let mut session = Session::opening(&settings.gpu, shot.base(), report.clone());
         for ReadFrame { frame, settings: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
                 break;
@@ -64,8 +64,7 @@ pub fn render_sequence(
                 Some(loaded) => {
                     let rendered = loaded.and_then(|loaded| {
                         let outputs = one.outputs()?;
-                        let camera = camera.at_frame(frame);
-                        Ok((outputs, render_loaded(&one, &camera, loaded, &mut session)?))
+                        Ok((outputs, render_loaded(&one, loaded, &mut session)?))
                     });
                     if let Some(gpu) = session.gpu() {
                         priority.device_opened(gpu.info().on_cpu());
@@ -144,12 +143,13 @@ pub(super) struct ReadFrame {
 
 /// Reads the frames of `jobs` (frame, its settings, whether to skip it) in order on a thread of
 /// `scope`, at most two frames ahead of the receiver (one in the channel, one being read), so
-/// that the next frame's EXRs are read while the GPU renders this one. Stops when `stop` is set
-/// or the receiver is gone.
+/// that the next frame's EXRs are read while the GPU renders this one; each frame through its
+/// camera of `shot`, made `adapt(camera)`. Stops when `stop` is set or the receiver is gone.
 pub(super) fn read_ahead<'scope>(
     scope: &'scope std::thread::Scope<'scope, '_>,
     jobs: Vec<(i64, RenderSettings, bool)>,
-    camera: &'scope Camera,
+    shot: &'scope ShotCamera,
+    adapt: fn(&Camera) -> Camera,
     stop: &'scope AtomicBool,
     priority: &'scope IoPriority,
 ) -> Receiver<ReadFrame> {
@@ -161,8 +161,8 @@ pub(super) fn read_ahead<'scope>(
             if stop.load(Ordering::Relaxed) {
                 break;
             }
-            // The frame's own grain: seeded by the seed and the frame number.
-            let loaded = (!skip).then(|| load_frame(&settings, &camera.at_frame(frame)));
+            // The frame's own camera, its grain seeded by the seed and the frame number.
+            let loaded = (!skip).then(|| load_frame_as(&settings, shot, Some(frame), adapt));
             if send.send(ReadFrame { frame, settings, loaded }).is_err() {
                 break;
             }

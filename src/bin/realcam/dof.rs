@@ -19,7 +19,7 @@ pub struct DofArgs {
 
 pub fn run(args: &DofArgs) -> Result<()> {
     let lens_file = args.lens.lens.load()?;
-    let lens = thin_lens(&lens_file, args.lens.focal_length_mm, args.lens.f_number, args.lens.focus_m)?;
+    let lens = thin_lens(&lens_file, args.lens.focal_length_mm, args.lens.f_number, args.lens.focus_m())?;
     let sensor = Sensor::parse(&args.lens.sensor)?;
     let criterion = CocCriterion::parse(&args.coc)?;
     println!("lens: {}", lens_file.name);

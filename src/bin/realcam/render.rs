@@ -10,12 +10,14 @@ use std::sync::Arc;
 pub fn run(args: &RenderArgs) -> Result<Option<Session>> {
     let settings = args.settings();
     let sequence = args.sequence.settings()?;
-    let camera = args.camera()?;
+    let shot = args.shot_camera()?;
+    args.check_single_frame(&shot)?;
     if let Some(sequence) = sequence {
         let report = Arc::new(StderrReport::new(Some(sequence.range.frames.len())));
-        return session::render_sequence(&settings, &sequence, &camera, report).map(|()| None);
+        return session::render_sequence(&settings, &sequence, &shot, report).map(|()| None);
     }
-    let (session, paths) = session::render_single(&settings, &camera, Arc::new(StderrReport::new(None)))?;
+    let report = Arc::new(StderrReport::new(None));
+    let (session, paths) = session::render_single(&settings, &shot, args.frame(), report)?;
     for path in paths {
         session.report().say(&format!("wrote {}", path.display()));
     }

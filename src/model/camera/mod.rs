@@ -11,13 +11,16 @@ use crate::optics::{Num, OpticsError, Sensor, ThinLens};
 use std::path::Path;
 
 mod error;
+pub mod keys;
 mod new;
 mod report;
 mod request;
+pub mod shot;
 
 pub use error::{CameraError, CameraField};
 pub use new::thin_lens;
 pub use request::{CameraRequest, DEFAULT_FPS};
+pub use shot::{FrameCamera, InputCamera, SettingSource, ShotCamera, ShotError};
 
 /// Defined with the thin lens (a lens file names it too); kept here, where a camera is set up.
 pub use crate::optics::lens::CocModel;
@@ -194,6 +197,10 @@ pub struct Camera {
     pub motion: Motion,
     /// Lens flare: ghosts, starburst and halo around bright lights.
     pub flare: crate::model::flare::FlareSettings,
+    /// Where the settings a shot may change came from, in words (a flag, the shot's keys, the
+    /// input's header, a default), for `--explain` and the output header; empty for a camera
+    /// made directly ([`ShotCamera`] fills it).
+    pub setting_sources: Vec<(CameraField, String)>,
 }
 
 /// Which motion-blur method renders the velocity pass.

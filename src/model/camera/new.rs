@@ -224,6 +224,7 @@ impl Camera {
                 max_blur_px: req.max_blur_px,
             },
             flare: flare_settings(lens_file, req),
+            setting_sources: Vec::new(),
         };
         check_overflow(&camera)?;
         Ok(camera)

@@ -45,7 +45,39 @@ impl Camera {
         } else if fps * 1000.0 <= i32::MAX as f64 {
             attributes.push(("framesPerSecond", ExrAttribute::Rational((fps * 1000.0).round() as i32, 1000)));
         }
-        attributes.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+        let mut attributes: Vec<(String, ExrAttribute)> =
+            attributes.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+        // Where each setting of a shot's camera came from (issue 31): `realcam/source/f_number`.
+        for (field, source) in &self.setting_sources {
+            attributes.push((format!("realcam/source/{}", field.name()), text(source)));
+        }
+        attributes
+    }
+
+    /// The settings of a shot's camera and where each came from, one per line (`--explain`).
+    pub fn explain_sources(&self) -> Option<String> {
+        if self.setting_sources.is_empty() {
+            return None;
+        }
+        let value = |field: CameraField| match field {
+            CameraField::FocalLengthMm => field.quantity(self.lens.focal_length_mm),
+            CameraField::FNumber => field.quantity(self.lens.f_number),
+            CameraField::FocusDistanceM => field.quantity(self.lens.focus_distance_mm / 1000.0),
+            CameraField::ShutterS => field.quantity(self.shutter_s),
+            CameraField::ShutterAngleDeg => field.quantity(self.shutter_s * self.motion.fps * 360.0),
+            CameraField::Iso => field.quantity(self.iso),
+            CameraField::NitsPerUnit => field.quantity(self.nits_per_unit),
+            CameraField::Blades => field.quantity(self.aperture.blades.into()),
+            CameraField::BladeRotationDeg => field.quantity(self.aperture.rotation_deg),
+            CameraField::BladeCurvature => field.quantity(self.aperture.curvature),
+            CameraField::SphericalAberration => field.quantity(self.aperture.spherical_aberration),
+            CameraField::CatsEye => field.quantity(self.aperture.cats_eye),
+            CameraField::Grain => field.quantity(self.grain),
+            _ => field.label().to_string(),
+        };
+        let lines: Vec<String> =
+            self.setting_sources.iter().map(|(field, source)| format!("    {}: {source}", value(*field))).collect();
+        Some(format!("  settings from:\n{}", lines.join("\n")))
     }
 
     /// The numbers a user matches against the 3D camera that rendered a frame whose display
