@@ -6,6 +6,20 @@ passes, the operator `realcam.apply` runs the realcam command line on them with 
 camera's own settings and loads the result as a new image. The panel (Properties > Output >
 realcam) holds the lens file, the film and the source; the add-on's preferences the binary.
 
+`realcam.apply_animation` does a shot: for each frame of the scene's range (frame_start ..
+frame_end by frame_step) it sets the frame, renders (bpy.ops.render.render: blocking, so it works
+alike headless and in the UI, and the Render Result, which holds one frame, is saved right after
+each) and saves the passes as passes_NNNN.exr; it evaluates the camera at every frame first,
+passes the settings that hold still as flags and writes those that change to a camera file, one
+key per frame with constant interpolation (the very values Blender evaluated), then runs one
+`realcam render --frames` over the range. The output is the panel's Output, where a run of #
+is the frame number (a folder: realcam_####.exr in it; a name without #: _#### before its
+extension), loaded as an image sequence; without one, a temporary folder, from which the scene's
+current frame's result (else the last's) is loaded and packed.
+
+Every temporary folder (the passes, the camera file, an output with no place of its own) is a
+tempfile.TemporaryDirectory: removed when the operator ends, whether it succeeds or fails.
+
 What the camera gives (README.md, "Blender"):
 - focal length, sensor width and height and the sensor fit (AUTO/HORIZONTAL/VERTICAL), as
   `--focal-length`, `--sensor WxH`, `--sensor-fit`;
@@ -119,7 +133,12 @@ class RealcamSettings(bpy.types.PropertyGroup):
         default="",
     )
     output: bpy.props.StringProperty(
-        name="Output", description="Where the result is written; empty: a temporary folder", subtype="FILE_PATH"
+        name="Output",
+        description=(
+            "Where the result is written (the animation: a run of # is the frame number, e.g. //realcam/shot_####.exr; "
+            "a folder gets realcam_####.exr); empty: a temporary folder, removed once the result is loaded and packed"
+        ),
+        subtype="FILE_PATH",
     )
     last_image: bpy.props.StringProperty(name="Last result", default="")
 
@@ -140,8 +159,10 @@ def num(value):
     return f"{value:.7g}"
 
 
-def camera_flags(scene, settings):
-    """realcam render's flags for the scene camera and the panel's settings."""
+def camera_values(scene, settings):
+    """The scene camera's settings at the scene's current frame, as (flag, camera-file setting,
+    value); the setting is None for what realcam takes once per shot (sensor, fit, unit, fps,
+    shutter position)."""
     camera_object = scene.camera
     if camera_object is None or camera_object.type != "CAMERA":
         raise ValueError("the scene has no camera")
@@ -149,21 +170,30 @@ def camera_flags(scene, settings):
     if cam.type != "PERSP":
         raise ValueError(f"camera {camera_object.name!r} is {cam.type}: realcam models perspective lenses")
     unit_m = scene.unit_settings.scale_length if scene.unit_settings.system != "NONE" else 1.0
-    flags = [
-        f"--focal-length={num(cam.lens)}",
-        f"--sensor={num(cam.sensor_width)}x{num(cam.sensor_height)}",
-        f"--sensor-fit={cam.sensor_fit.lower()}",
-        f"--fstop={num(cam.dof.aperture_fstop)}",
-        f"--focus={num(focus_distance_m(scene, camera_object) * unit_m)}",
+    return [
+        ("--focal-length", "focal_length_mm", cam.lens),
+        ("--sensor", None, f"{num(cam.sensor_width)}x{num(cam.sensor_height)}"),
+        ("--sensor-fit", None, cam.sensor_fit.lower()),
+        ("--fstop", "f_number", cam.dof.aperture_fstop),
+        ("--focus", "focus_distance_m", focus_distance_m(scene, camera_object) * unit_m),
         # Blender: fewer than 3 blades is a round aperture; realcam: 0.
-        f"--blades={cam.dof.aperture_blades if cam.dof.aperture_blades >= 3 else 0}",
-        f"--blade-rotation={num(math.degrees(cam.dof.aperture_rotation))}",
-        f"--depth-unit={num(unit_m)}",
-        f"--fps={num(scene.render.fps / scene.render.fps_base)}",
-        f"--shutter-angle={num(360.0 * scene.render.motion_blur_shutter)}",
-        f"--shutter-position={shutter_position(scene)}",
-        f"--iso={num(settings.iso)}",
+        ("--blades", "blades", cam.dof.aperture_blades if cam.dof.aperture_blades >= 3 else 0),
+        ("--blade-rotation", "blade_rotation_deg", math.degrees(cam.dof.aperture_rotation)),
+        ("--depth-unit", None, unit_m),
+        ("--fps", None, scene.render.fps / scene.render.fps_base),
+        ("--shutter-angle", "shutter_angle_deg", 360.0 * scene.render.motion_blur_shutter),
+        ("--shutter-position", None, shutter_position(scene)),
+        ("--iso", "iso", settings.iso),
     ]
+
+
+def flag(name, value):
+    return f"{name}={num(value) if isinstance(value, float) else value}"
+
+
+def panel_flags(settings):
+    """realcam render's flags for the panel's settings (one per run)."""
+    flags = []
     if settings.lens_file:
         flags.append(f"--lens={bpy.path.abspath(settings.lens_file)}")
     else:
@@ -178,6 +208,95 @@ def camera_flags(scene, settings):
         flags.append("--no-exposure")
     flags.append("--flare" if settings.flare else "--no-flare")
     return flags
+
+
+def camera_flags(scene, settings):
+    """realcam render's flags for the scene camera at the current frame and the panel's settings."""
+    return [flag(name, value) for name, _, value in camera_values(scene, settings)] + panel_flags(settings)
+
+
+def shot_camera(scene, settings, frames):
+    """The scene camera over `frames` (each evaluated with scene.frame_set): the flags of the
+    settings that hold still, and {camera-file setting: [(frame, value), ...]} for those that
+    change. A setting realcam takes once per shot that changes is an error."""
+    evaluated = []
+    for frame in frames:
+        scene.frame_set(frame)
+        evaluated.append(camera_values(scene, settings))
+    flags, tracks = [], {}
+    for i, (name, setting, first) in enumerate(evaluated[0]):
+        values = [(frame, row[i][2]) for frame, row in zip(frames, evaluated)]
+        if all(value == first for _, value in values):
+            flags.append(flag(name, first))
+        elif setting is None:
+            changes = next(f"{first} at frame {frames[0]}, {v} at frame {f}" for f, v in values if v != first)
+            raise ValueError(f"{name[2:]} changes over the frames ({changes}): realcam takes one per shot")
+        else:
+            tracks[setting] = values
+    return flags + panel_flags(settings), tracks
+
+
+def toml_number(value):
+    """A TOML number: an int as it is, a float as Python's repr (the exact double of Blender's
+    single-precision value: realcam reads back the very value Blender evaluated)."""
+    return str(value) if isinstance(value, int) else repr(float(value))
+
+
+def camera_file_text(tracks):
+    """A realcam camera file (docs/shots.md): one key per frame, constant interpolation."""
+    lines = ["# The scene camera as Blender evaluated it at each frame (realcam Blender add-on)."]
+    for setting, keys in tracks.items():
+        lines.append(f"[{setting}]")
+        lines.append('interpolation = "constant"')
+        lines.append("keys = [" + ", ".join(f"[{frame}, {toml_number(v)}]" for frame, v in keys) + "]")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def frame_path(pattern, frame):
+    """`pattern`'s path for `frame`: its run of # as the frame number, zero-padded to the run's
+    width counting the sign (printf's %0Nd, as realcam and Blender write it)."""
+    text = str(pattern)
+    start = text.index("#")
+    end = start
+    while end < len(text) and text[end] == "#":
+        end += 1
+    return Path(f"{text[:start]}{frame:0{end - start}d}{text[end:]}")
+
+
+def output_pattern(settings, folder):
+    """Where the animation's frames go: the panel's Output with a run of # for the frame number
+    (a folder: realcam_####.exr in it; a name without #: _#### before its extension), else a
+    temporary folder. Returns the pattern and whether the user asked for it."""
+    if not settings.output:
+        return folder / "realcam_####.exr", False
+    path = bpy.path.abspath(settings.output)
+    if path.endswith(("/", os.sep)) or os.path.isdir(path):
+        return Path(path) / "realcam_####.exr", True
+    head, name = os.path.split(path)
+    if "#" not in name:
+        stem, ext = os.path.splitext(name)
+        name = f"{stem}_####{ext or '.exr'}"
+    return Path(head) / name, True
+
+
+def run_realcam(command):
+    """Runs realcam; its error's last line as a ValueError (its whole stderr on the console)."""
+    print(" ".join(command))
+    run = subprocess.run(command, capture_output=True, text=True)
+    print(run.stderr)
+    if run.returncode != 0:
+        lines = run.stderr.strip().splitlines()
+        raise ValueError(lines[-1] if lines else f"realcam exited with {run.returncode}")
+
+
+def load_result(path, name, pack):
+    """The result as a new image; packed (read into the .blend) when its file is about to go."""
+    image = bpy.data.images.load(str(path), check_existing=False)
+    image.name = name
+    if pack:
+        image.pack()
+    return image
 
 
 def save_render_result(scene, path):
@@ -196,6 +315,14 @@ def save_render_result(scene, path):
         settings.file_format, settings.color_depth, settings.exr_codec = kept
 
 
+def binary_or_report(operator, context):
+    binary = find_binary(context)
+    if not binary or not os.path.isfile(binary):
+        operator.report({"ERROR"}, "realcam binary not found: set it in the add-on's preferences, or put realcam on PATH")
+        return None
+    return binary
+
+
 class REALCAM_OT_apply(bpy.types.Operator):
     """Run realcam on the view layer's Combined, Depth and Vector passes with the scene camera's settings"""
 
@@ -205,38 +332,107 @@ class REALCAM_OT_apply(bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         settings = scene.realcam
-        binary = find_binary(context)
-        if not binary or not os.path.isfile(binary):
-            self.report({"ERROR"}, "realcam binary not found: set it in the add-on's preferences, or put realcam on PATH")
+        binary = binary_or_report(self, context)
+        if binary is None:
             return {"CANCELLED"}
-        folder = Path(tempfile.mkdtemp(prefix="realcam-"))
-        try:
-            flags = camera_flags(scene, settings)
-            if settings.source:
-                source = Path(bpy.path.abspath(settings.source))
-            else:
-                source = folder / "passes.exr"
-                save_render_result(scene, source)
-        except ValueError as e:
-            self.report({"ERROR"}, f"realcam: {e}")
-            return {"CANCELLED"}
-        if scene.camera.data.dof.use_dof and not settings.source:
-            self.report({"WARNING"}, "the render has the camera's depth of field already: turn it off for pinhole passes")
-        output = Path(bpy.path.abspath(settings.output)) if settings.output else folder / "realcam.exr"
-        command = [binary, "render", "--color", str(source), "--layer", context.view_layer.name, *flags]
-        command += ["--float", "--explain", "-o", str(output)]
-        run = subprocess.run(command, capture_output=True, text=True)
-        if run.returncode != 0:
-            lines = run.stderr.strip().splitlines()
-            message = lines[-1] if lines else f"realcam exited with {run.returncode}"
-            self.report({"ERROR"}, message)
-            print(run.stderr)
-            return {"CANCELLED"}
-        print(run.stderr)
-        image = bpy.data.images.load(str(output), check_existing=False)
-        image.name = f"realcam {scene.camera.name}"
+        # The passes (and the output, unless the panel names one) live in a folder that goes
+        # when the operator ends, however it ends; an output kept there is packed first.
+        with tempfile.TemporaryDirectory(prefix="realcam-") as temporary:
+            folder = Path(temporary)
+            try:
+                flags = camera_flags(scene, settings)
+                if settings.source:
+                    source = Path(bpy.path.abspath(settings.source))
+                else:
+                    source = folder / "passes.exr"
+                    save_render_result(scene, source)
+                if scene.camera.data.dof.use_dof and not settings.source:
+                    self.report({"WARNING"}, "the render has the camera's depth of field already: turn it off for pinhole passes")
+                if not settings.output:
+                    output = folder / "realcam.exr"
+                elif "#" in os.path.basename(settings.output):  # the animation's pattern: this frame's file
+                    output = frame_path(output_pattern(settings, folder)[0], scene.frame_current)
+                else:
+                    output = Path(bpy.path.abspath(settings.output))
+                command = [binary, "render", "--color", str(source), "--layer", context.view_layer.name, *flags]
+                # The frame number seeds the grain: the frame gets the grain it gets in the shot.
+                command.append(f"--frame={scene.frame_current}")
+                run_realcam(command + ["--float", "--explain", "-o", str(output)])
+                image = load_result(output, f"realcam {scene.camera.name}", pack=not settings.output)
+            except (ValueError, RuntimeError, OSError) as e:
+                self.report({"ERROR"}, f"realcam: {e}")
+                return {"CANCELLED"}
         settings.last_image = image.name
-        self.report({"INFO"}, f"realcam: {image.name} from {output}")
+        self.report({"INFO"}, f"realcam: {image.name} from {output if settings.output else 'a temporary file (packed)'}")
+        return {"FINISHED"}
+
+
+class REALCAM_OT_apply_animation(bpy.types.Operator):
+    """Render every frame of the scene's frame range and run realcam over them as one shot, with the scene camera's animation"""
+
+    bl_idname = "realcam.apply_animation"
+    bl_label = "Apply realcam to the animation"
+
+    def execute(self, context):
+        scene = context.scene
+        settings = scene.realcam
+        binary = binary_or_report(self, context)
+        if binary is None:
+            return {"CANCELLED"}
+        frames = list(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
+        if not frames:
+            self.report({"ERROR"}, f"realcam: the frame range {scene.frame_start}-{scene.frame_end} is empty")
+            return {"CANCELLED"}
+        current = scene.frame_current
+        shown = current if current in frames else frames[-1]
+        with tempfile.TemporaryDirectory(prefix="realcam-") as temporary:
+            folder = Path(temporary)
+            try:
+                try:
+                    flags, tracks = shot_camera(scene, settings, frames)
+                    if scene.camera.data.dof.use_dof:
+                        self.report({"WARNING"}, "the camera's depth of field is on in the render: turn it off for pinhole passes")
+                    passes = folder / "passes_####.exr"
+                    progress = context.window_manager
+                    progress.progress_begin(0, len(frames))
+                    for i, frame in enumerate(frames):
+                        scene.frame_set(frame)
+                        if bpy.ops.render.render() != {"FINISHED"}:
+                            raise ValueError(f"Blender's render of frame {frame} did not finish")
+                        save_render_result(scene, frame_path(passes, frame))
+                        progress.progress_update(i + 1)
+                finally:
+                    context.window_manager.progress_end()
+                    scene.frame_set(current)
+                output, kept = output_pattern(settings, folder)
+                output.parent.mkdir(parents=True, exist_ok=True)
+                command = [binary, "render", f"--frames={frames[0]}-{frames[-1]}"]
+                if scene.frame_step > 1:
+                    command[-1] += f"x{scene.frame_step}"
+                command += ["--color", str(passes), "--layer", context.view_layer.name, *flags]
+                if tracks:
+                    camera_file = folder / "camera.toml"
+                    camera_file.write_text(camera_file_text(tracks))
+                    command.append(f"--camera-file={camera_file}")
+                run_realcam(command + ["--float", "--explain", "--fail-fast", "-o", str(output)])
+                missing = [frame for frame in frames if not frame_path(output, frame).is_file()]
+                if missing:
+                    raise ValueError(f"realcam wrote no output for frames {missing}")
+                name = f"realcam {scene.camera.name}"
+                if kept:
+                    # The frames stay where the user asked: an image sequence from the first.
+                    image = load_result(frame_path(output, frames[0]), name, pack=False)
+                    image.source = "SEQUENCE"
+                else:
+                    # Only the current frame's result (else the last) outlives the folder, packed.
+                    image = load_result(frame_path(output, shown), name, pack=True)
+            except (ValueError, RuntimeError, OSError) as e:
+                self.report({"ERROR"}, f"realcam: {e}")
+                return {"CANCELLED"}
+        settings.last_image = image.name
+        animated = ", ".join(tracks) or "nothing"
+        where = output if kept else f"frame {shown}, packed (set Output to keep every frame)"
+        self.report({"INFO"}, f"realcam: {len(frames)} frames ({animated} animated); {image.name}: {where}")
         return {"FINISHED"}
 
 
@@ -260,9 +456,10 @@ class REALCAM_PT_panel(bpy.types.Panel):
         layout.prop(settings, "source")
         layout.prop(settings, "output")
         layout.operator(REALCAM_OT_apply.bl_idname)
+        layout.operator(REALCAM_OT_apply_animation.bl_idname)
 
 
-CLASSES = (RealcamPreferences, RealcamSettings, REALCAM_OT_apply, REALCAM_PT_panel)
+CLASSES = (RealcamPreferences, RealcamSettings, REALCAM_OT_apply, REALCAM_OT_apply_animation, REALCAM_PT_panel)
 
 
 def register():
