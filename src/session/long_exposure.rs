@@ -61,7 +61,7 @@ pub(super) fn render(
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
         let read = read_ahead(scope, jobs, shot, crate::pipeline::planner::sensor_camera, &stop, &priority);
-        for ReadFrame { frame, settings: one, loaded } in read {
+        for ReadFrame { frame, settings: one, loaded, .. } in read {
             finished += 1;
             let Some(loaded) = loaded else {
                 skipped += 1;

@@ -50,22 +50,29 @@ pub fn render_sequence(
     let stop = AtomicBool::new(false);
     // The reading and writing threads yield to a GPU that runs on the CPU (io::sequence).
     let priority = IoPriority::default();
+    let mut split = Split::default();
     let tally = std::thread::scope(|scope| {
         let read = read_ahead(scope, jobs, shot, Camera::clone, &stop, &priority);
         let (finish, finished) = sync_channel(1);
         let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority, &*report));
         let mut session = Session::opening(&settings.gpu, shot.base(), report.clone());
-        for ReadFrame { frame, settings: one, loaded } in read {
+        for ReadFrame { frame, read_s, settings: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
                 break;
             }
             let item = match loaded {
                 None => Finished::Skipped { frame, output: one.output.clone() },
                 Some(loaded) => {
+                    let gpu_started = Instant::now();
                     let rendered = loaded.and_then(|loaded| {
                         let outputs = one.outputs()?;
                         Ok((outputs, render_loaded(&one, loaded, &mut session)?))
                     });
+                    if rendered.is_ok() {
+                        split.frames += 1;
+                        split.read_s += read_s;
+                        split.gpu_s += gpu_started.elapsed().as_secs_f64();
+                    }
                     if let Some(gpu) = session.gpu() {
                         priority.device_opened(gpu.info().on_cpu());
                     }
@@ -87,6 +94,17 @@ pub fn render_sequence(
         writer.join().map_err(|_| anyhow::anyhow!("the thread writing the frames' outputs panicked"))
     })?;
     summary(&*report, tally.done, tally.skipped, tally.failed.len(), total, started, "(--fail-fast)");
+    if split.frames > 0 && tally.done > 0 {
+        let ms = |s: f64, n: usize| 1e3 * s / n as f64;
+        report.say(&format!(
+            "per frame: read {:.0} ms, GPU {:.0} ms, write {:.0} ms, overlapped on three threads \
+             (wall {:.0} ms per frame)",
+            ms(split.read_s, split.frames),
+            ms(split.gpu_s, split.frames),
+            ms(tally.write_s, tally.done),
+            ms(started.elapsed().as_secs_f64(), tally.done + tally.failed.len()),
+        ));
+    }
     if !tally.failed.is_empty() {
         let list: Vec<String> = tally.failed.iter().map(i64::to_string).collect();
         bail!("{} of {total} frames failed: {}", tally.failed.len(), list.join(", "));
@@ -137,6 +155,8 @@ pub(super) fn summary(
 /// and planned, or None for a frame it was told to skip.
 pub(super) struct ReadFrame {
     pub frame: i64,
+    /// Seconds the reader took for the frame (its EXRs read and planned).
+    pub read_s: f64,
     pub settings: RenderSettings,
     pub loaded: Option<Result<LoadedFrame>>,
 }
@@ -162,8 +182,10 @@ pub(super) fn read_ahead<'scope>(
                 break;
             }
             // The frame's own camera, its grain seeded by the seed and the frame number.
+            let started = Instant::now();
             let loaded = (!skip).then(|| load_frame_as(&settings, shot, Some(frame), adapt));
-            if send.send(ReadFrame { frame, settings, loaded }).is_err() {
+            let read_s = started.elapsed().as_secs_f64();
+            if send.send(ReadFrame { frame, read_s, settings, loaded }).is_err() {
                 break;
             }
         }
@@ -184,6 +206,19 @@ struct Tally {
     done: usize,
     skipped: usize,
     failed: Vec<i64>,
+    /// Seconds spent writing the frames done.
+    write_s: f64,
+}
+
+/// Where a sequence's time went, summed over the frames rendered: reading (and planning) on
+/// the reader thread, the GPU's work with its recording and download on the render thread,
+/// writing on the writer thread. The three overlap: the wall time per frame is about the
+/// largest of them, not their sum.
+#[derive(Default)]
+struct Split {
+    frames: usize,
+    read_s: f64,
+    gpu_s: f64,
 }
 
 /// The writer thread: writes each rendered frame's outputs (atomically, as a single frame's)
@@ -218,7 +253,10 @@ fn write_behind(
                 frame
             }
             Finished::Rendered { frame, settings, outputs, rendered } => {
-                match write_outputs(&settings, outputs, &rendered) {
+                let write_started = Instant::now();
+                let written = write_outputs(&settings, outputs, &rendered);
+                tally.write_s += write_started.elapsed().as_secs_f64();
+                match written {
                     Ok(paths) => {
                         tally.done += 1;
                         let paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
