@@ -229,3 +229,25 @@ fn a_single_render_of_an_animated_camera_file_needs_its_frame() {
     succeeded(realcam(&dir, &["--color", "in.exr", "--camera-file", "iris.toml", "--frame", "15", "-o", "out.exr"]));
     assert_eq!(float(&header(&dir.join("out.exr")), "aperture"), 5.0);
 }
+
+/// A USD camera's time samples drive a rack focus (issue 31, item 2); `fStop` 0 leaves the
+/// f-number to the input's header.
+#[test]
+fn a_usd_camera_racks_focus_frame_by_frame() {
+    let dir = TestDir::new("usd");
+    write_input(&dir.join("in.exr"), &[("aperture", 4.0)]);
+    std::fs::write(
+        dir.join("shot.usda"),
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\n\ndef Xform \"Camera\"\n{\n    def Camera \"Lens\"\n    {\n        \
+         float focusDistance.timeSamples = {\n            1: 1,\n            3: 3,\n        }\n        float fStop = 0\n    }\n}\n",
+    )
+    .unwrap();
+    let args = ["--color", "in.exr", "--camera-file", "shot.usda", "--frames", "1-3", "-o", "out_####.exr"];
+    succeeded(realcam(&dir, &args));
+    for (frame, focus_m) in [(1, 1.0), (2, 2.0), (3, 3.0)] {
+        let h = header(&dir.join(&format!("out_000{frame}.exr")));
+        assert_eq!(float(&h, "focus"), focus_m, "frame {frame}");
+        assert_eq!(float(&h, "aperture"), 4.0, "frame {frame}");
+        assert_eq!(text(&h, "realcam/source/focus_distance_m"), "the USD camera /Camera/Lens of \"shot.usda\"");
+    }
+}

@@ -129,8 +129,10 @@ pub struct RenderArgs {
     #[arg(long = "nits-per-unit")]
     nits_per_unit: Option<f64>,
     /// A camera file (TOML): the camera's settings keyframed over the shot's frames (a rack
-    /// focus, an iris pull, a zoom), with linear or smooth interpolation; see the README. A flag
-    /// wins over the file, the file over the input's header attributes.
+    /// focus, an iris pull, a zoom), with linear or smooth interpolation; or a USD file's camera
+    /// (.usda, .usdc, .usdz; FILE:/Prim/Path to name one of several): its focal length, f-stop,
+    /// focus distance and shutter with their time samples. A flag wins over the file, the file
+    /// over the input's header attributes.
     #[arg(long = "camera-file", value_name = "FILE")]
     camera_file: Option<PathBuf>,
     /// The frame number of a single render (without --frames): where a camera file's keys are
@@ -300,6 +302,22 @@ pub struct FlareArgs {
     flare_lights: Option<PathBuf>,
 }
 
+/// The keys of `--camera-file`: a camera file (TOML), or a USD file's camera (`shot.usda`, or
+/// `shot.usda:/World/Camera` to name one of several).
+fn load_camera_keys(path: &std::path::Path) -> Result<crate::model::camera::keys::CameraKeys> {
+    use crate::io::usd_camera::{is_usd, load_usd_camera};
+    let text = path.to_string_lossy();
+    if let Some((file, prim)) =
+        text.rsplit_once(':').filter(|(f, p)| p.starts_with('/') && !path.exists() && is_usd(std::path::Path::new(f)))
+    {
+        return Ok(load_usd_camera(std::path::Path::new(file), Some(prim))?);
+    }
+    if is_usd(path) {
+        return Ok(load_usd_camera(path, None)?);
+    }
+    Ok(crate::io::camera_file::load_camera_file(path)?)
+}
+
 /// `--seed`: a whole number the seed's 32 bits hold, else the range in the message.
 fn parse_seed(text: &str) -> Result<u32, String> {
     text.trim().parse::<u32>().map_err(|_| format!("the seed is a whole number from 0 to {}", u32::MAX))
@@ -381,7 +399,7 @@ impl RenderArgs {
             None => None,
         };
         let keys = match &self.camera_file {
-            Some(path) => Some(crate::io::camera_file::load_camera_file(path).context("--camera-file")?),
+            Some(path) => Some(load_camera_keys(path).context("--camera-file")?),
             None => None,
         };
         ShotCamera::new(lens_file, request, self.given(), keys, aperture_mask).name_flags()

@@ -27,6 +27,7 @@ pub mod lensfun;
 pub mod output;
 pub mod png;
 pub mod sequence;
+pub mod usd_camera;
 
 pub use exr_read::STRUCTURAL_ATTRIBUTES;
 pub use exr_read::{describes_channels, load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
