@@ -2,7 +2,14 @@
 // flare_bins.comp (which sorts) and ghost_sprites.comp (which shades). The including shader
 // declares `fc` (FlareConstants), `sprite_data[]` and includes aperture.glsl first.
 // The shapes are convex with 1-Lipschitz distance functions (the polygon's edge distances, the
-// clip circle's), so the tile's centre bounds every pixel of it.
+// clip circle's), so the tile's centre bounds every pixel of it. A fitted sprite's distance
+// (Walch's primitive, the distance to its Bezier border) is 1-Lipschitz too; the search finds it
+// within FITTED_MARGIN px.
+#include "bezier_ghost.glsl"
+
+// How far (px) the 12-step search's distance may be from the exact one, for the sorting
+// (src/passes/flare/fitted.rs FITTED_MARGIN_PX).
+#define FITTED_MARGIN 1.0
 
 // Half the diagonal of a tile's pixel centres.
 #define TILE_REACH (0.5 * float(TILE_SIZE - 1) * 1.41421356)
@@ -18,6 +25,68 @@ float ghost_sdf(uint b, uint c, vec2 q) {
     // Past the corners the edge distance underestimates: the circumscribed circle bounds it.
     float d = max(aperture_sdf(o, radius, ap), length(o) - radius);
     return max(d, distance(q, vec2(sprite_data[cb + 4], sprite_data[cb + 5])) - sprite_data[cb + 6]);
+}
+
+// The signed distance (px, > 0 inside) of fitted sprite base b's primitive at pixel centre q:
+// q turned back by eq 8.2's roll about the frame's centre, then the 12-step search of each
+// side (bezier_ghost.glsl; src/optics/bezier_ghost.rs sides() for the control points).
+float fitted_distance(uint b, vec2 q) {
+    uint w = b + SPRITE_DATA;
+    vec2 pivot = vec2(sprite_data[w + BEZIER_ROLL + 2], sprite_data[w + BEZIER_ROLL + 3]);
+    float c = sprite_data[w + BEZIER_ROLL], s = sprite_data[w + BEZIER_ROLL + 1];
+    vec2 o = q - pivot;
+    vec2 local = pivot + vec2(c * o.x + s * o.y, -s * o.x + c * o.y);
+    uint k = w + BEZIER_SHAPE;
+    vec2 m = vec2(sprite_data[k], sprite_data[k + 1]) - local;
+    float h = sprite_data[k + 2], l = sprite_data[k + 3], r = sprite_data[k + 4];
+    float cl = sprite_data[k + 5], cr = sprite_data[k + 6];
+    vec2 top = m + vec2(0.0, -h), bottom = m + vec2(0.0, h), left = m + vec2(-l, 0.0), right = m + vec2(r, 0.0);
+    vec2 best = bezier_side_distance(top, m + vec2(-cl * l, -h), m + vec2(-l, -cl * h), left);
+    vec2 d = bezier_side_distance(left, m + vec2(-l, cl * h), m + vec2(-cl * l, h), bottom);
+    if (d.x < best.x) best = d;
+    d = bezier_side_distance(bottom, m + vec2(cr * r, h), m + vec2(r, cr * h), right);
+    if (d.x < best.x) best = d;
+    d = bezier_side_distance(right, m + vec2(r, -cr * h), m + vec2(cr * r, -h), top);
+    if (d.x < best.x) best = d;
+    return best.x * best.y;
+}
+
+// Eq 6.4's light of fitted sprite base b at pixel centre q (before its colour).
+float fitted_light(uint b, vec2 q) {
+    uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
+    return bezier_transfer(fitted_distance(b, q), sprite_data[t], sprite_data[t + 1], sprite_data[t + 2],
+                           sprite_data[t + 3], sprite_data[t + 4], sprite_data[t + 5]);
+}
+
+// A fitted sprite is shaded from its distance on a 3x3 grid over the tile's pixel centres,
+// FITTED_GRID_STEP = 7.5 px apart, interpolated bilinearly in each quarter where every row's
+// and column's second difference is at most FITTED_LINEAR px: a distance bending by D2 between
+// the nodes is interpolated to about D2 / 8 (0.03 px); else searched at each pixel (near the
+// primitive's corners, its medial axis, a border of curvature radius under (7.5 px)^2 / 0.25 =
+// 225 px). The Tessar's fitted primitives are mostly 1000-2000 px across. The twin is
+// src/passes/flare/fitted.rs; tests/flare_fitted.rs measures the error against the exact search.
+#define FITTED_GRID_STEP (0.5 * float(TILE_SIZE - 1))
+#define FITTED_LINEAR 0.25
+
+// Whether the grid `g` (row by row) is near linear enough to interpolate.
+bool fitted_linear(float g[9]) {
+    bool linear = true;
+    for (uint k = 0; k < 3u; ++k) {
+        linear = linear && abs(g[3u * k] - 2.0 * g[3u * k + 1u] + g[3u * k + 2u]) <= FITTED_LINEAR;
+        linear = linear && abs(g[k] - 2.0 * g[k + 3u] + g[k + 6u]) <= FITTED_LINEAR;
+    }
+    return linear;
+}
+
+// The grid `g` interpolated at `o` px from its first node (0..2 FITTED_GRID_STEP each way).
+float fitted_interpolated(float g[9], vec2 o) {
+    vec2 u = o / FITTED_GRID_STEP;
+    vec2 cell = min(floor(u), vec2(1.0));
+    vec2 f = u - cell;
+    uint k = uint(cell.y) * 3u + uint(cell.x);
+    float top = mix(g[k], g[k + 1u], f.x);
+    float bottom = mix(g[k + 3u], g[k + 4u], f.x);
+    return mix(top, bottom, f.y);
 }
 
 // Sprite `s` against the tile at `origin`: its bin byte (bits 0-2 crossing channels, bits 3-5
@@ -52,6 +121,19 @@ uint sprite_bin(uint s, ivec2 origin) {
         return t.y > t.x ? 7u : 0u;
     } else if (kind == KIND_GLOW) {
         return 7u;
+    } else if (kind == KIND_FITTED) {
+        // Its channels; the same light I_i at every pixel past F_i inside, none past F_o
+        // outside (eq 6.4's fades end there).
+        uint w = b + SPRITE_DATA;
+        uint channels = 0u;
+        for (uint c = 0; c < 3; ++c) {
+            if (sprite_data[w + BEZIER_COLOUR + c] > 0.0) channels |= 1u << c;
+        }
+        float d = fitted_distance(b, vec2(origin) + 0.5 * float(TILE_SIZE));
+        float reach = TILE_REACH + FITTED_MARGIN;
+        if (d >= sprite_data[w + BEZIER_TRANSFER + 2] + reach) return channels << BIN_COVERING_SHIFT;
+        if (d <= -(sprite_data[w + BEZIER_TRANSFER + 3] + reach)) return 0u;
+        return channels;
     }
     return 0u;
 }
