@@ -193,7 +193,7 @@ fn explain_names_the_fitted_model() {
     let _ = Path::new(&dir);
 }
 
-/// The kernel's shading of a fitted sprite (its distance interpolated on a tile's 3x3 grid
+/// The kernel's shading of a fitted sprite (its distance interpolated from five nodes per tile
 /// where near linear) against the 12-step search at every pixel, on the CPU twins: every
 /// fitted ghost of the Tessar for lights at 3 and 9 degrees, on a 160x90 frame (the fits at
 /// 1/8 of their size, more curved per px than at full size): the light within 0.5% in sum, and

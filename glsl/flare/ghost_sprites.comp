@@ -52,8 +52,10 @@ shared float s_covering[3];
 // order.
 shared uint s_list[4][SPRITE_LIST];
 shared uint s_listed[4];
-// A fitted sprite's signed distance at the tile's 3x3 grid of pixel centres.
-shared float s_grid[9];
+// The listed fitted sprites' signed distances at the tile's corner and centre pixel centres,
+// FITTED_LIST at a time.
+#define FITTED_LIST 256
+shared float s_nodes[FITTED_LIST][FITTED_NODES];
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
 vec3 spike_light(uint b, vec2 lo) {
@@ -113,27 +115,35 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
     }
     for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
     for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
-    // The fitted sprites: their distance searched on the tile's 3x3 grid by nine invocations
-    // (one sprite at a time, between barriers: the trip count is the same for every
-    // invocation), each pixel's interpolated where it is near linear, searched where not.
+    // The fitted sprites, FITTED_LIST at a time: their distance searched at the tile's corners
+    // and centre by all invocations together (one barrier; the trip count is the same for
+    // every invocation), then each pixel's interpolated where the five are near linear,
+    // searched where not.
     vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE)) + 0.5;
-    for (uint i = 0; i < (SPRITE_FITTED ? s_listed[3] : 0u); ++i) {
-        uint b = (s_list[3][i] & 0xFFFFFFu) * SPRITE_WORDS;
-        // Every pixel has read the previous sprite's grid.
+    uint fitted = SPRITE_FITTED ? s_listed[3] : 0u;
+    for (uint start = 0; start < fitted; start += FITTED_LIST) {
+        uint n = min(fitted - start, FITTED_LIST);
+        // Every pixel has read the previous nodes.
         barrier();
-        if (gl_LocalInvocationIndex < 9u) {
-            uint j = gl_LocalInvocationIndex;
-            s_grid[j] = fitted_distance(b, first + FITTED_GRID_STEP * vec2(j % 3u, j / 3u));
+        for (uint k = gl_LocalInvocationIndex; k < n * FITTED_NODES; k += GROUP) {
+            uint i = k / FITTED_NODES, j = k % FITTED_NODES;
+            s_nodes[i][j] = fitted_distance((s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS, first + fitted_node(j));
         }
         barrier();
-        float g[9];
-        for (uint j = 0; j < 9u; ++j) g[j] = s_grid[j];
-        float d = fitted_linear(g) ? fitted_interpolated(g, q - first) : fitted_distance(b, q);
-        uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
-        float light = bezier_transfer(d, sprite_data[t], sprite_data[t + 1], sprite_data[t + 2], sprite_data[t + 3],
-                                      sprite_data[t + 4], sprite_data[t + 5]);
-        uint colour = b + SPRITE_DATA + BEZIER_COLOUR;
-        sum += light * vec3(sprite_data[colour], sprite_data[colour + 1], sprite_data[colour + 2]);
+        for (uint i = 0; i < n; ++i) {
+            uint b = (s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS;
+            float g[FITTED_NODES];
+            for (uint j = 0; j < FITTED_NODES; ++j) g[j] = s_nodes[i][j];
+            float d = fitted_interpolated(g, q - first);
+            // Searched where the nodes are not near linear: as a loop, which lavapipe skips when
+            // no lane enters it (it would run both sides of an `if` or `?:`).
+            for (bool search = !fitted_linear(g); search; search = false) d = fitted_distance(b, q);
+            uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
+            float light = bezier_transfer(d, sprite_data[t], sprite_data[t + 1], sprite_data[t + 2], sprite_data[t + 3],
+                                          sprite_data[t + 4], sprite_data[t + 5]);
+            uint colour = b + SPRITE_DATA + BEZIER_COLOUR;
+            sum += light * vec3(sprite_data[colour], sprite_data[colour + 1], sprite_data[colour + 2]);
+        }
     }
 }
 

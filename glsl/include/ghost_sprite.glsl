@@ -58,35 +58,32 @@ float fitted_light(uint b, vec2 q) {
                            sprite_data[t + 3], sprite_data[t + 4], sprite_data[t + 5]);
 }
 
-// A fitted sprite is shaded from its distance on a 3x3 grid over the tile's pixel centres,
-// FITTED_GRID_STEP = 7.5 px apart, interpolated bilinearly in each quarter where every row's
-// and column's second difference is at most FITTED_LINEAR px: a distance bending by D2 between
-// the nodes is interpolated to about D2 / 8 (0.03 px); else searched at each pixel (near the
-// primitive's corners, its medial axis, a border of curvature radius under (7.5 px)^2 / 0.25 =
-// 225 px). The Tessar's fitted primitives are mostly 1000-2000 px across. The twin is
-// src/passes/flare/fitted.rs; tests/flare_fitted.rs measures the error against the exact search.
-#define FITTED_GRID_STEP (0.5 * float(TILE_SIZE - 1))
-#define FITTED_LINEAR 0.25
+// A fitted sprite is shaded from its distance at five nodes of the tile: its corner pixels'
+// centres (FITTED_SPAN = 15 px apart) and its centre, interpolated bilinearly over the tile
+// where the centre's distance is within FITTED_LINEAR px of the corners' mean (a distance
+// bending by D between the nodes is interpolated to about D); else searched at each pixel
+// (near the primitive's corners, its medial axis, a border of curvature radius under
+// (15 px)^2 / 8 / 0.05 = 560 px). The Tessar's fitted primitives are mostly 1000-2000 px across.
+// The twin is src/passes/flare/fitted.rs; tests/flare_fitted.rs measures the error against the
+// search at every pixel.
+#define FITTED_NODES 5
+#define FITTED_SPAN float(TILE_SIZE - 1)
+#define FITTED_LINEAR 0.05
 
-// Whether the grid `g` (row by row) is near linear enough to interpolate.
-bool fitted_linear(float g[9]) {
-    bool linear = true;
-    for (uint k = 0; k < 3u; ++k) {
-        linear = linear && abs(g[3u * k] - 2.0 * g[3u * k + 1u] + g[3u * k + 2u]) <= FITTED_LINEAR;
-        linear = linear && abs(g[k] - 2.0 * g[k + 3u] + g[k + 6u]) <= FITTED_LINEAR;
-    }
-    return linear;
+// Node j from the tile's first pixel centre: the corners row by row, then the centre.
+vec2 fitted_node(uint j) {
+    return j == 4u ? vec2(0.5 * FITTED_SPAN) : FITTED_SPAN * vec2(j & 1u, j >> 1u);
 }
 
-// The grid `g` interpolated at `o` px from its first node (0..2 FITTED_GRID_STEP each way).
-float fitted_interpolated(float g[9], vec2 o) {
-    vec2 u = o / FITTED_GRID_STEP;
-    vec2 cell = min(floor(u), vec2(1.0));
-    vec2 f = u - cell;
-    uint k = uint(cell.y) * 3u + uint(cell.x);
-    float top = mix(g[k], g[k + 1u], f.x);
-    float bottom = mix(g[k + 3u], g[k + 4u], f.x);
-    return mix(top, bottom, f.y);
+// Whether the nodes `g` are near linear enough to interpolate.
+bool fitted_linear(float g[FITTED_NODES]) {
+    return abs(g[4] - 0.25 * (g[0] + g[1] + g[2] + g[3])) <= FITTED_LINEAR;
+}
+
+// The corners of `g` interpolated at `o` px from the first (0..FITTED_SPAN each way).
+float fitted_interpolated(float g[FITTED_NODES], vec2 o) {
+    vec2 f = o / FITTED_SPAN;
+    return mix(mix(g[0], g[1], f.x), mix(g[2], g[3], f.x), f.y);
 }
 
 // Sprite `s` against the tile at `origin`: its bin byte (bits 0-2 crossing channels, bits 3-5

@@ -270,47 +270,41 @@ fn fitted_distance(w: &[f32], q: [f32; 2]) -> f32 {
     search_signed_distance(&w[BEZIER_SHAPE as usize..][..7], local)
 }
 
-/// The nodes of a fitted sprite's distance grid over a tile are this far apart (px):
-/// FITTED_GRID_STEP of glsl/include/ghost_sprite.glsl, 3x3 nodes over the 16 pixel centres.
-pub const GRID_STEP_PX: f32 = 0.5 * (TILE_SIZE - 1) as f32;
-/// The grid is interpolated where every row's and column's second difference is at most this
-/// (px; FITTED_LINEAR): the bilinear interpolation is then within about a eighth of it.
-pub const LINEAR_PX: f32 = 0.25;
+/// A fitted sprite's distance is searched at five nodes of a tile (FITTED_NODES of
+/// glsl/include/ghost_sprite.glsl): its corner pixels' centres, this far apart (px), and its centre.
+pub const SPAN_PX: f32 = (TILE_SIZE - 1) as f32;
+/// The nodes are interpolated where the centre's distance is within this (px) of the corners'
+/// mean (FITTED_LINEAR).
+pub const LINEAR_PX: f32 = 0.05;
 
-/// The signed distance of fitted sprite `s` at the 3x3 grid of the tile whose first pixel is
-/// `origin`, row by row (ghost_sprites.comp's `s_grid`).
-pub fn grid(s: &[f32], origin: [u32; 2]) -> [f32; 9] {
+/// The signed distance of fitted sprite `s` at the five nodes of the tile whose first pixel is
+/// `origin`: the corners row by row, then the centre (ghost_sprites.comp's `s_nodes`).
+pub fn nodes(s: &[f32], origin: [u32; 2]) -> [f32; 5] {
     let first = [origin[0] as f32 + 0.5, origin[1] as f32 + 0.5];
     let w = &s[SPRITE_DATA as usize..];
     std::array::from_fn(|j| {
-        let q = [first[0] + GRID_STEP_PX * (j % 3) as f32, first[1] + GRID_STEP_PX * (j / 3) as f32];
-        fitted_distance(w, q)
+        let o = if j == 4 { [0.5 * SPAN_PX; 2] } else { [SPAN_PX * (j & 1) as f32, SPAN_PX * (j >> 1) as f32] };
+        fitted_distance(w, [first[0] + o[0], first[1] + o[1]])
     })
 }
 
-/// Whether grid `g` is near linear enough to interpolate (ghost_sprite.glsl's fitted_linear).
-pub fn linear(g: &[f32; 9]) -> bool {
-    (0..3).all(|k| {
-        (g[3 * k] - 2.0 * g[3 * k + 1] + g[3 * k + 2]).abs() <= LINEAR_PX
-            && (g[k] - 2.0 * g[k + 3] + g[k + 6]).abs() <= LINEAR_PX
-    })
+/// Whether nodes `g` are near linear enough to interpolate (ghost_sprite.glsl's fitted_linear).
+pub fn linear(g: &[f32; 5]) -> bool {
+    (g[4] - 0.25 * (g[0] + g[1] + g[2] + g[3])).abs() <= LINEAR_PX
 }
 
-/// Grid `g` interpolated at `o` px from its first node (ghost_sprite.glsl's
+/// The corner nodes of `g` interpolated at `o` px from the first (ghost_sprite.glsl's
 /// fitted_interpolated).
-pub fn interpolated(g: &[f32; 9], o: [f32; 2]) -> f32 {
-    let u = [o[0] / GRID_STEP_PX, o[1] / GRID_STEP_PX];
-    let cell = [u[0].floor().min(1.0), u[1].floor().min(1.0)];
-    let f = [u[0] - cell[0], u[1] - cell[1]];
-    let k = cell[1] as usize * 3 + cell[0] as usize;
+pub fn interpolated(g: &[f32; 5], o: [f32; 2]) -> f32 {
+    let f = [o[0] / SPAN_PX, o[1] / SPAN_PX];
     let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-    mix(mix(g[k], g[k + 1], f[0]), mix(g[k + 3], g[k + 4], f[0]), f[1])
+    mix(mix(g[0], g[1], f[0]), mix(g[2], g[3], f[0]), f[1])
 }
 
 /// Fitted sprite `s`'s light added to `sums` (a `width`-pixel-wide frame of `height` rows) over
-/// the pixels of its bounds, as ghost_sprites.comp shades it: per tile its grid, each pixel's
-/// distance interpolated where the grid is near linear, searched where not; eq 6.4 of it times
-/// the sprite's colour.
+/// the pixels of its bounds, as ghost_sprites.comp shades it: per tile its five nodes, each
+/// pixel's distance interpolated where they are near linear, searched where not; eq 6.4 of it
+/// times the sprite's colour.
 pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
     let bx = &s[SPRITE_BOUNDS as usize..][..4];
     let (x0, y0) = (bx[0].floor().max(0.0) as u32, bx[1].floor().max(0.0) as u32);
@@ -324,7 +318,7 @@ pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
     for ty in y0 / TILE_SIZE..=(y1 - 1) / TILE_SIZE {
         for tx in x0 / TILE_SIZE..=(x1 - 1) / TILE_SIZE {
             let origin = [tx * TILE_SIZE, ty * TILE_SIZE];
-            let g = grid(s, origin);
+            let g = nodes(s, origin);
             let near_linear = linear(&g);
             for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
                 for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
