@@ -11,7 +11,8 @@
 // written by its own invocation only, and a frame without a light dispatches no group and
 // keeps its colour untouched (no copy).
 // Walch's fitted primitives (ch. 6-8) are one more kind: eq 6.4 of the 12-step search's signed
-// distance (ghost_sprite.glsl fitted_light), binned like the others (covered tiles add I_i once).
+// distance (ghost_sprite.glsl), binned like the others (covered tiles add I_i once), interpolated
+// from five searched nodes per tile where smooth.
 #include "common.glsl"
 #include "flare.glsl"
 // Only aperture_sdf is used: the mask and shape-table bindings are declared, never read.
@@ -56,6 +57,11 @@ shared uint s_listed[4];
 // FITTED_LIST at a time.
 #define FITTED_LIST 256
 shared float s_nodes[FITTED_LIST][FITTED_NODES];
+// The smooth fitted sprites' light at the tile's corners (corner by corner, channel by channel),
+// and the others (indices into the chunk of the list).
+shared float s_corner_sums[12];
+shared uint s_searched[FITTED_LIST];
+shared uint s_searched_count;
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
 vec3 spike_light(uint b, vec2 lo) {
@@ -116,21 +122,45 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
     for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
     for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
     // The fitted sprites, FITTED_LIST at a time: their distance searched at the tile's corners
-    // and centre by all invocations together (one barrier; the trip count is the same for
-    // every invocation), then each pixel's interpolated where the five are near linear,
-    // searched where not.
+    // and centre by all invocations together (the trip counts are the same for every
+    // invocation, so the barriers are reached by all). A sprite whose light is smooth over the
+    // tile (ghost_sprite.glsl fitted_smooth) adds its corners' light to the tile's corner sums,
+    // interpolated bilinearly at each pixel once for all of them; the others are shaded per
+    // pixel from their distance, interpolated where near linear, searched where not.
     vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE)) + 0.5;
     uint fitted = SPRITE_FITTED ? s_listed[3] : 0u;
+    if (gl_LocalInvocationIndex < 12u) s_corner_sums[gl_LocalInvocationIndex] = 0.0;
     for (uint start = 0; start < fitted; start += FITTED_LIST) {
         uint n = min(fitted - start, FITTED_LIST);
-        // Every pixel has read the previous nodes.
+        // Every pixel has read the previous nodes and list.
         barrier();
         for (uint k = gl_LocalInvocationIndex; k < n * FITTED_NODES; k += GROUP) {
             uint i = k / FITTED_NODES, j = k % FITTED_NODES;
             s_nodes[i][j] = fitted_distance((s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS, first + fitted_node(j));
         }
         barrier();
-        for (uint i = 0; i < n; ++i) {
+        // Invocation 3 corner + c sums channel c's smooth light at that corner, in list order;
+        // invocation 0 also lists the others.
+        if (gl_LocalInvocationIndex < 12u) {
+            uint corner = gl_LocalInvocationIndex / 3u, c = gl_LocalInvocationIndex % 3u;
+            float acc = 0.0;
+            uint m = 0u;
+            for (uint i = 0; i < n; ++i) {
+                uint b = (s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS;
+                float g[FITTED_NODES];
+                for (uint j = 0; j < FITTED_NODES; ++j) g[j] = s_nodes[i][j];
+                if (fitted_smooth(b, g)) {
+                    acc += fitted_transfer(b, g[corner]) * sprite_data[b + SPRITE_DATA + BEZIER_COLOUR + c];
+                } else if (gl_LocalInvocationIndex == 0u) {
+                    s_searched[m++] = i;
+                }
+            }
+            s_corner_sums[gl_LocalInvocationIndex] += acc;
+            if (gl_LocalInvocationIndex == 0u) s_searched_count = m;
+        }
+        barrier();
+        for (uint k = 0; k < s_searched_count; ++k) {
+            uint i = s_searched[k];
             uint b = (s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS;
             float g[FITTED_NODES];
             for (uint j = 0; j < FITTED_NODES; ++j) g[j] = s_nodes[i][j];
@@ -138,11 +168,15 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
             // Searched where the nodes are not near linear: as a loop, which lavapipe skips when
             // no lane enters it (it would run both sides of an `if` or `?:`).
             for (bool search = !fitted_linear(g); search; search = false) d = fitted_distance(b, q);
-            uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
-            float light = bezier_transfer(d, sprite_data[t], sprite_data[t + 1], sprite_data[t + 2], sprite_data[t + 3],
-                                          sprite_data[t + 4], sprite_data[t + 5]);
             uint colour = b + SPRITE_DATA + BEZIER_COLOUR;
-            sum += light * vec3(sprite_data[colour], sprite_data[colour + 1], sprite_data[colour + 2]);
+            sum += fitted_transfer(b, d) * vec3(sprite_data[colour], sprite_data[colour + 1], sprite_data[colour + 2]);
+        }
+    }
+    // Every invocation has added its share to the sums (the last barrier of the loop).
+    if (fitted > 0u) {
+        vec2 f = (q - first) / FITTED_SPAN;
+        for (uint c = 0; c < 3u; ++c) {
+            sum[c] += mix(mix(s_corner_sums[c], s_corner_sums[3u + c], f.x), mix(s_corner_sums[6u + c], s_corner_sums[9u + c], f.x), f.y);
         }
     }
 }

@@ -86,6 +86,29 @@ float fitted_interpolated(float g[FITTED_NODES], vec2 o) {
     return mix(mix(g[0], g[1], f.x), mix(g[2], g[3], f.x), f.y);
 }
 
+// Eq 6.4's light of fitted sprite base b at signed distance d (before its colour).
+float fitted_transfer(uint b, float d) {
+    uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
+    return bezier_transfer(d, sprite_data[t], sprite_data[t + 1], sprite_data[t + 2], sprite_data[t + 3],
+                           sprite_data[t + 4], sprite_data[t + 5]);
+}
+
+// Whether fitted sprite base b's light is smooth over the tile of nodes `g`: no kink of eq 6.4
+// in it (its border d = 0, the fades' ends d = -F_o and F_i lie over the tile's reach from its
+// centre) and the centre's light within FITTED_SMOOTH of its brightest of the corners' mean.
+// Its light is then interpolated bilinearly from the corners.
+#define FITTED_SMOOTH 1e-3
+bool fitted_smooth(uint b, float g[FITTED_NODES]) {
+    uint t = b + SPRITE_DATA + BEZIER_TRANSFER;
+    float reach = TILE_REACH + FITTED_MARGIN;
+    float d = g[4];
+    bool clear = abs(d) > reach && abs(d + sprite_data[t + 3]) > reach && abs(d - sprite_data[t + 2]) > reach;
+    float mean = 0.25 * (fitted_transfer(b, g[0]) + fitted_transfer(b, g[1]) + fitted_transfer(b, g[2])
+                         + fitted_transfer(b, g[3]));
+    float peak = max(sprite_data[t], sprite_data[t + 1]);
+    return clear && abs(fitted_transfer(b, d) - mean) <= FITTED_SMOOTH * peak;
+}
+
 // Sprite `s` against the tile at `origin`: its bin byte (bits 0-2 crossing channels, bits 3-5
 // covering channels, 0: away from it, its bounds or a ghost channel whose edge lies more than
 // the tile's half-diagonal plus half the ramp from the tile's centre, outward).
@@ -118,9 +141,12 @@ uint sprite_bin(uint s, ivec2 origin) {
         return t.y > t.x ? 7u : 0u;
     } else if (kind == KIND_GLOW) {
         return 7u;
-    } else if (kind == KIND_FITTED) {
-        // Its channels; the same light I_i at every pixel past F_i inside, none past F_o
-        // outside (eq 6.4's fades end there).
+    }
+    // A fitted sprite: its channels; the same light I_i at every pixel past F_i inside, none
+    // past F_o outside (eq 6.4's fades end there). A loop, not an `if`: lavapipe runs both sides
+    // of an `if` (the search for every sprite), but skips a loop no lane enters.
+    uint mode = 0u;
+    for (bool fitted = kind == KIND_FITTED; fitted; fitted = false) {
         uint w = b + SPRITE_DATA;
         uint channels = 0u;
         for (uint c = 0; c < 3; ++c) {
@@ -128,9 +154,8 @@ uint sprite_bin(uint s, ivec2 origin) {
         }
         float d = fitted_distance(b, vec2(origin) + 0.5 * float(TILE_SIZE));
         float reach = TILE_REACH + FITTED_MARGIN;
-        if (d >= sprite_data[w + BEZIER_TRANSFER + 2] + reach) return channels << BIN_COVERING_SHIFT;
-        if (d <= -(sprite_data[w + BEZIER_TRANSFER + 3] + reach)) return 0u;
-        return channels;
+        mode = d >= sprite_data[w + BEZIER_TRANSFER + 2] + reach ? channels << BIN_COVERING_SHIFT
+             : (d <= -(sprite_data[w + BEZIER_TRANSFER + 3] + reach) ? 0u : channels);
     }
-    return 0u;
+    return mode;
 }

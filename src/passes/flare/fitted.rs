@@ -301,9 +301,26 @@ pub fn interpolated(g: &[f32; 5], o: [f32; 2]) -> f32 {
     mix(mix(g[0], g[1], f[0]), mix(g[2], g[3], f[0]), f[1])
 }
 
+/// A fitted sprite's light is interpolated from the tile's corners where its centre's is within
+/// this share of the sprite's brightest of the corners' mean (FITTED_SMOOTH).
+pub const SMOOTH: f32 = 1e-3;
+
+/// Whether the light of transfer `t` (I_b, I_i, F_i, F_o, E_i, E_o) is smooth over the tile of
+/// nodes `g` (ghost_sprite.glsl's fitted_smooth): its border and fades' ends over the tile's
+/// reach from its centre, the centre's light within [`SMOOTH`] of the peak of the corners' mean.
+pub fn smooth(t: &[f32], g: &[f32; 5]) -> bool {
+    use crate::tools::bezier_ghosts::transfer;
+    let reach = (TILE_REACH_PX + FITTED_MARGIN_PX) as f32;
+    let d = g[4];
+    let clear = d.abs() > reach && (d + t[3]).abs() > reach && (d - t[2]).abs() > reach;
+    let mean = 0.25 * (transfer(g[0], t) + transfer(g[1], t) + transfer(g[2], t) + transfer(g[3], t));
+    clear && (transfer(d, t) - mean).abs() <= SMOOTH * t[0].max(t[1])
+}
+
 /// Fitted sprite `s`'s light added to `sums` (a `width`-pixel-wide frame of `height` rows) over
-/// the pixels of its bounds, as ghost_sprites.comp shades it: per tile its five nodes, each
-/// pixel's distance interpolated where they are near linear, searched where not; eq 6.4 of it
+/// the pixels of its bounds, as ghost_sprites.comp shades it: per tile its five nodes; where its
+/// light is smooth over the tile, the corners' light interpolated bilinearly; else each pixel's
+/// distance interpolated where the nodes are near linear, searched where not, and eq 6.4 of it;
 /// times the sprite's colour.
 pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
     let bx = &s[SPRITE_BOUNDS as usize..][..4];
@@ -320,6 +337,20 @@ pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
             let origin = [tx * TILE_SIZE, ty * TILE_SIZE];
             let g = nodes(s, origin);
             let near_linear = linear(&g);
+            if smooth(t, &g) {
+                // The corners' light interpolated bilinearly.
+                let corners: Vec<f32> = (0..4).map(|j| crate::tools::bezier_ghosts::transfer(g[j], t)).collect();
+                for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
+                    for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
+                        let f = [(x - origin[0]) as f32 / SPAN_PX, (y - origin[1]) as f32 / SPAN_PX];
+                        let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
+                        let light = mix(mix(corners[0], corners[1], f[0]), mix(corners[2], corners[3], f[0]), f[1]);
+                        let sum = &mut sums[(y * width + x) as usize];
+                        (0..3).for_each(|c| sum[c] += light as f64 * colour[c] as f64);
+                    }
+                }
+                continue;
+            }
             for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
                 for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
                     let q = [x as f32 + 0.5, y as f32 + 0.5];
