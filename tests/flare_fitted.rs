@@ -15,7 +15,7 @@ use realcam::passes::flare::{Flare, FlareModel, FlareParams};
 use realcam::passes::PlanInput;
 use realcam::pipeline::planner::plan;
 use realcam::pipeline::render::Renderer;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use support::*;
 
 const FITTED: &str = "docs/flare/tessar-walch-fitted.toml";
@@ -190,7 +190,6 @@ fn explain_names_the_fitted_model() {
     assert!(err.contains("--flare-ghosts fitted: lens") && err.contains("has no [[fitted_ghost]]"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
-    let _ = Path::new(&dir);
 }
 
 /// The kernel's shading of a fitted sprite (its distance interpolated from five nodes per tile
