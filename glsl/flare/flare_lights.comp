@@ -10,9 +10,11 @@
 //      they take (which the kernel takes from its pixels).
 //   4. Per (light, element): a sprite with tight bounds, or none where the element would add
 //      less than `visible` anywhere: every ghost of the table (src/optics/flare/ghosts.rs), every
-//      spike of the starburst, one glow (the round diffraction and the halo).
+//      fitted ghost (Walch's primitives, src/passes/flare/fitted.rs), every spike of the
+//      starburst, one glow (the round diffraction and the halo).
 #include "common.glsl"
 #include "flare.glsl"
+#include "bezier_ghost.glsl"
 
 #define GROUP 256
 #define MAX_LIGHTS 64
@@ -118,6 +120,80 @@ void ghost_sprite(uint s, uint l, uint g) {
     lo -= vec2(0.5 * softness);
     hi += vec2(0.5 * softness);
     if (write_bounds(s, lo, hi, KIND_GHOST, l)) sprite_data[b + SPRITE_SOFTNESS] = softness;
+}
+
+// Polynomial parameter k of the fitted ghost at table word t at angle a (deg), kept in its range
+// (src/optics/bezier_ghost.rs GhostPolynomials::at).
+float fitted_param(uint t, uint k, float a) {
+    uint p = t + FITTED_PARAMS + k * FITTED_PARAM_WORDS;
+    float v = ghost_data[p + FITTED_TERMS - 1];
+    for (int i = FITTED_TERMS - 2; i >= 0; --i) v = v * a + ghost_data[p + uint(i)];
+    return clamp(v, ghost_data[p + FITTED_TERMS], ghost_data[p + FITTED_TERMS + 1]);
+}
+
+// Fitted ghost g of light l (Walch 2017 ch. 8; src/passes/flare/fitted.rs fitted_sprite): eq
+// 8.1's angle between the axis and the light, from its place in the frame (the slope u of
+// the matrix ghosts); outside the fitted range none (the polynomials do not extrapolate). The
+// primitive of the polynomials at that angle, drawn towards the light: eq 8.2's roll about the
+// frame's centre; the fit's pixels scaled to this frame's. Eq 8.3's brightness: the fits are per
+// unit of the light's own image's energy, so the light's energy in the channel (over the
+// scale^2 of the pixels' areas) scales them.
+void fitted_sprite(uint s, uint l, uint g) {
+    uint t = uint(fc.ghost_count) * GHOST_CHANNEL_WORDS + g * FITTED_WORDS;
+    vec2 centre = vec2(fc.centre_x, fc.centre_y);
+    vec2 u = (vec2(s_light[l][LIGHT_X], s_light[l][LIGHT_Y]) - centre) * fc.pitch_mm / fc.g0_mm;
+    float slope = length(u);
+    float angle = degrees(atan(slope));
+    float lo = ghost_data[t + FITTED_ANGLES], hi = ghost_data[t + FITTED_ANGLES + 1];
+    if (!(angle >= lo - 1e-3 && angle <= hi + 1e-3)) {
+        write_none(s);
+        return;
+    }
+    angle = clamp(angle, lo, hi);
+    // On screen (y down) the light's direction is +x turned counter-clockwise by atan2(-u_y, u_x).
+    float roll = slope > 0.0 ? atan(-u.y, u.x) : 0.0;
+    float p[FITTED_PARAM_COUNT];
+    for (uint k = 0; k < FITTED_PARAM_COUNT; ++k) p[k] = fitted_param(t, k, angle);
+    float scale = ghost_data[t + FITTED_SCALE];
+    vec2 pivot = vec2(ghost_data[t + FITTED_PIVOT], ghost_data[t + FITTED_PIVOT + 1]);
+    vec2 m = centre + scale * (vec2(p[0], p[1]) - pivot);
+    float h = scale * p[2], left = scale * p[3], right = scale * p[4];
+    float fi = scale * p[9], fo = scale * p[10];
+    uint channel = uint(ghost_data[t + FITTED_CHANNEL]);
+    float value = s_light[l][LIGHT_ENERGY + channel] / (scale * scale);
+    if (!(max(p[7], p[8]) * value >= fc.visible)) {
+        write_none(s);
+        return;
+    }
+    // The primitive's box (the shape and its outer fade) turned about the centre.
+    float reach = fo + 1.0;
+    float cs = cos(roll), sn = sin(roll);
+    vec2 lo_px = vec2(1e30), hi_px = vec2(-1e30);
+    for (uint k = 0; k < 4; ++k) {
+        vec2 corner = vec2((k & 1u) == 0u ? m.x - left - reach : m.x + right + reach,
+                           (k & 2u) == 0u ? m.y - h - reach : m.y + h + reach);
+        vec2 o = corner - centre;
+        vec2 turned = centre + vec2(cs * o.x + sn * o.y, -sn * o.x + cs * o.y);
+        lo_px = min(lo_px, turned);
+        hi_px = max(hi_px, turned);
+    }
+    if (!write_bounds(s, lo_px, hi_px, KIND_FITTED, l)) return;
+    uint b = s * SPRITE_WORDS;
+    uint w = b + SPRITE_DATA;
+    sprite_data[b + SPRITE_SOFTNESS] = 0.0;
+    sprite_data[b + SPRITE_INNER] = p[8] * value;
+    // The bounds as write_bounds clamped them.
+    vec4 box = vec4(max(lo_px, vec2(0.0)), min(hi_px, vec2(fc.width, fc.height)));
+    for (uint k = 0; k < 4; ++k) sprite_data[w + BEZIER_BOUNDS + k] = box[k];
+    float shape[7] = float[7](m.x, m.y, h, left, right, p[5], p[6]);
+    for (uint k = 0; k < 7; ++k) sprite_data[w + BEZIER_SHAPE + k] = shape[k];
+    float transfer[6] = float[6](p[7], p[8], fi, fo, p[11], p[12]);
+    for (uint k = 0; k < 6; ++k) sprite_data[w + BEZIER_TRANSFER + k] = transfer[k];
+    for (uint c = 0; c < 3; ++c) sprite_data[w + BEZIER_COLOUR + c] = c == channel ? value : 0.0;
+    sprite_data[w + BEZIER_ROLL] = cs;
+    sprite_data[w + BEZIER_ROLL + 1] = -sn;
+    sprite_data[w + BEZIER_ROLL + 2] = centre.x;
+    sprite_data[w + BEZIER_ROLL + 3] = centre.y;
 }
 
 // Spike k of light l: along an edge's normal (n for an even blade count, each two edges; 2n for
@@ -320,10 +396,13 @@ void main() {
     uint slots = uint(fc.slots_per_light);
     for (uint s = lid; s < lights * slots; s += GROUP) {
         uint l = s / slots, e = s % slots;
+        uint fitted_end = uint(fc.ghost_count + fc.fitted_count);
         if (e < uint(fc.ghost_count)) {
             ghost_sprite(s, l, e);
-        } else if (e < uint(fc.ghost_count + fc.spike_count)) {
-            spike_sprite(s, l, e - uint(fc.ghost_count));
+        } else if (e < fitted_end) {
+            fitted_sprite(s, l, e - uint(fc.ghost_count));
+        } else if (e < fitted_end + uint(fc.spike_count)) {
+            spike_sprite(s, l, e - fitted_end);
         } else {
             glow_sprite(s, l);
         }

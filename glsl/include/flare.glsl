@@ -50,11 +50,27 @@
 #define GHOST_WORDS 56     // GHOST_CLIP0 + 2 * MAX_CLIPS
 #define GHOST_CHANNEL_WORDS 168 // 3 channels
 
+// A fitted ghost (Walch 2017 ch. 6-8: a lens file's [[fitted_ghost]]; src/passes/flare/fitted.rs),
+// after the matrix ghosts in the ghost table: its channel, the fitted range of the angle of
+// eq 8.1 (deg), the frame's px per px of the fit's frame, the fit's pivot (its frame's centre, px
+// of its frame), then per parameter of src/optics/bezier_ghost.rs PARAM_NAMES its polynomial's
+// coefficients c0..c3 (zeros past its order) and the range it is kept in.
+#define FITTED_CHANNEL 0
+#define FITTED_ANGLES 1    // 2 words: low, high
+#define FITTED_SCALE 3
+#define FITTED_PIVOT 4     // 2 words
+#define FITTED_PARAMS 8
+#define FITTED_PARAM_COUNT 13
+#define FITTED_TERMS 4
+#define FITTED_PARAM_WORDS 6 // FITTED_TERMS coefficients, low, high
+#define FITTED_WORDS 88    // FITTED_PARAMS + FITTED_PARAM_COUNT * FITTED_PARAM_WORDS
+
 // A sprite of the ghost-sprite kernel: bounds, kind, and per kind:
 #define SPRITE_BOUNDS 0    // 4 words: x0, y0, x1, y1 (pixel coordinates; x0 > x1: none)
 #define SPRITE_KIND 4
 #define SPRITE_LIGHT 5
 #define SPRITE_SOFTNESS 6  // ghost: the edge's ramp, px
+#define SPRITE_INNER 7     // fitted: its light deep inside (I_i x its channel's value)
 #define SPRITE_DATA 8
 #define SPRITE_WORDS 32
 #define KIND_NONE 0
@@ -68,6 +84,10 @@
 // Glow: centre x, y, r0, r1, diffraction coefficient per channel (value x px: D / r^3 per px),
 // halo peak per channel (value per px), halo radius px.
 #define KIND_GLOW 3
+// Fitted (Walch's primitive at the light's angle, in this frame's px): the BEZIER_WORDS of
+// bezier_ghost.glsl (bounds, shape, transfer, colour: the value per unit of eq 6.4's light in
+// its channel, 0 in the others; eq 8.2's roll about the frame's centre).
+#define KIND_FITTED 4
 
 // The counts flare_lights writes, and the group counts of the indirect dispatches after it
 // (x, y, z each): flare_bins one group per sprite, ghost_sprites every tile where a light was
@@ -117,11 +137,12 @@ struct FlareConstants {
     float halo_fraction;
     float halo_radius_px;
     float max_radius_px;   // spikes and glows end here at the latest
-    int slots_per_light;   // ghost_count + spike_count + 1
+    int slots_per_light;   // ghost_count + fitted_count + spike_count + 1
     int blades;
     float rotation;
     float curvature;
     float aperture_area;   // area of the aperture of circumradius 1
+    int fitted_count;      // fitted ghosts in the table, after the ghost_count matrix ghosts
 };
 
 // The pixel's square [p, p + 1]^2 against the ray o + t d, t in [t0, t1]: the part inside.

@@ -300,6 +300,21 @@ pub struct FlareArgs {
     /// Lights given explicitly as a JSON list: [{"x": .., "y": .., "energy": .. | "rgb": [r, g, b], "area_px": ..}].
     #[arg(long = "flare-lights", value_name = "FILE")]
     flare_lights: Option<PathBuf>,
+    /// Which model draws the ghosts: the lens file's fitted primitives (Walch ch. 6-8,
+    /// `[[fitted_ghost]]`), the prescription's ray-transfer matrices, or auto (fitted when the
+    /// lens file has fits).
+    #[arg(long = "flare-ghosts", value_enum, default_value_t = FlareGhostsArg::Auto)]
+    flare_ghosts: FlareGhostsArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FlareGhostsArg {
+    /// Fitted when the lens file has `[[fitted_ghost]]`, else the matrices.
+    Auto,
+    /// The lens file's `[[fitted_ghost]]` primitives (an error without them).
+    Fitted,
+    /// The prescription's ray-transfer matrices.
+    Matrix,
 }
 
 /// The keys of `--camera-file`: a camera file (TOML), or a USD file's camera (`shot.usda`, or
@@ -334,6 +349,20 @@ impl FlareArgs {
             lights.extend(crate::io::flare_lights::load_flare_lights(path)?);
         }
         Ok(lights)
+    }
+
+    /// The ghost model the flags ask for; `fitted` needs the lens file's fits.
+    fn ghosts(&self, lens_file: &crate::io::lens_file::LensFile) -> Result<crate::model::flare::FlareGhosts> {
+        use crate::model::flare::FlareGhosts;
+        Ok(match self.flare_ghosts {
+            FlareGhostsArg::Auto => FlareGhosts::Auto,
+            FlareGhostsArg::Matrix => FlareGhosts::Matrix,
+            FlareGhostsArg::Fitted if lens_file.fitted_ghosts.is_empty() => anyhow::bail!(
+                "--flare-ghosts fitted: lens {:?} has no [[fitted_ghost]] section (write one with realcam flare-fit, or use --flare-ghosts matrix)",
+                lens_file.name
+            ),
+            FlareGhostsArg::Fitted => FlareGhosts::Fitted,
+        })
     }
 }
 
@@ -392,6 +421,7 @@ impl RenderArgs {
             },
             flare_threshold: self.flare.flare_threshold,
             flare_lights: self.flare.lights()?,
+            flare_ghosts: self.flare.ghosts(&lens_file)?,
             ..CameraRequest::default()
         })?);
         let aperture_mask = match &self.aperture_image {

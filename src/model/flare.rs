@@ -2,6 +2,7 @@
 //! saturation a pixel counts as a light, the lights given explicitly (a renderer's list, lights
 //! just outside the frame), the lens's prescription (for its ghosts), its coatings and halo.
 
+use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::flare::starburst::Halo;
 use crate::optics::prescription::Prescription;
 use std::sync::Arc;
@@ -29,6 +30,41 @@ pub struct FlareSettings {
     pub coating_design_nm: Option<f64>,
     /// The scattering around a light.
     pub halo: Halo,
+    /// Which model draws the ghosts (`--flare-ghosts`).
+    pub ghosts: FlareGhosts,
+    /// The lens file's `[[fitted_ghost]]` entries (Walch 2017 ch. 6-8), empty without.
+    pub fitted: Vec<FittedGhostSpec>,
+}
+
+/// Which model draws a lens's ghosts (`--flare-ghosts`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlareGhosts {
+    /// The fitted primitives when the lens file has `[[fitted_ghost]]`, else the matrices.
+    #[default]
+    Auto,
+    /// Walch's fitted primitives (ch. 6-8) from the lens file's `[[fitted_ghost]]`.
+    Fitted,
+    /// The ray-transfer matrices of the prescription (src/optics/flare/ghosts.rs).
+    Matrix,
+}
+
+impl FlareGhosts {
+    /// The flag's word for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            FlareGhosts::Auto => "auto",
+            FlareGhosts::Fitted => "fitted",
+            FlareGhosts::Matrix => "matrix",
+        }
+    }
+
+    /// Whether the fitted primitives draw the ghosts of a lens with `fits` entries.
+    pub fn draws_fitted(self, fits: usize) -> bool {
+        match self {
+            FlareGhosts::Auto | FlareGhosts::Fitted => fits > 0,
+            FlareGhosts::Matrix => false,
+        }
+    }
 }
 
 /// Who turned the flare off.
@@ -66,6 +102,8 @@ impl FlareSettings {
             prescription: None,
             coating_design_nm: None,
             halo: Halo { fraction: 0.0, radius_mm: 0.0 },
+            ghosts: FlareGhosts::Auto,
+            fitted: Vec::new(),
         }
     }
 }

@@ -1,8 +1,10 @@
 //! `realcam bench --flare`: GPU time of the lens-flare passes (src/passes/flare/mod.rs: lights per
 //! tile, the light list and its sprites, the ghost-sprite kernel) for 1, 4 and 16 lights found in
 //! the frame, with every ghost of the Tessar in lenses/ (21 two-reflection paths), its starburst
-//! and halo. Every time is also a multiple of the bare pass measured in the same run, and the
-//! kernel's time per sprite is given.
+//! and halo; then the same lights with the Tessar's fitted ghosts (Walch ch. 6-8, the 21
+//! `[[fitted_ghost]]` of docs/flare/tessar-walch-fitted.toml) drawing the ghosts instead. Every
+//! time is also a multiple of the bare pass measured in the same run, and the kernel's time per
+//! sprite is given.
 
 use crate::gpu::{Gpu, GpuResult, Profile};
 use crate::io::lens_file::LensFile;
@@ -20,9 +22,16 @@ use std::path::Path;
 /// its prescription and tables.
 pub const TESSAR_LENS_TOML: &str = include_str!("../../lenses/tessar-walch-lens.toml");
 
+/// The Tessar with its ghosts fitted by `realcam flare-fit` (green, 0..12 deg, 1280x720).
+pub const TESSAR_FITTED_TOML: &str = include_str!("../../docs/flare/tessar-walch-fitted.toml");
+
 /// The scene value of a light's pixels: a sun-like 1e5, so that every ghost of every light
 /// shows (each adds at least a thousandth of saturation somewhere) and is drawn.
 pub const LIGHT_VALUE: f32 = 1.0e5;
+/// The scene value of the lights where the fitted ghosts are compared with the matrix ghosts:
+/// the Tessar's fitted primitives spread their light over 1000-2000 px (at most 1e-11 of the
+/// light's energy per px), so a light of 1e5 draws none of them; at 1e9 most show.
+pub const FITTED_LIGHT_VALUE: f32 = 1.0e9;
 /// A light is a square of this many pixels on a side.
 pub const LIGHT_SIDE_PX: u32 = 3;
 
@@ -32,6 +41,10 @@ pub const FLARE_PASSES: [&str; 4] = [tiles::NAME, lights::NAME, bins::NAME, ghos
 /// One measured configuration.
 #[derive(Clone, Debug)]
 pub struct FlareBenchRow {
+    /// Which model drew the ghosts: "matrix" or "fitted".
+    pub model: &'static str,
+    /// The lights' scene value.
+    pub light_value: f32,
     pub width: u32,
     pub height: u32,
     pub lights: usize,
@@ -50,6 +63,11 @@ impl FlareBenchRow {
     pub fn pass_ms(&self, name: &str) -> f64 {
         self.profile.pass_ms(name).unwrap_or(0.0)
     }
+
+    /// Whether `o` is the same resolution and model.
+    fn same_set(&self, o: &FlareBenchRow) -> bool {
+        (o.width, o.height, o.model, o.light_value) == (self.width, self.height, self.model, self.light_value)
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -62,9 +80,18 @@ pub struct FlareBenchOptions {
 /// The Tessar at f/2.8 focused at infinity on a 36 mm wide sensor of the frame's aspect, scene
 /// values kept (no exposure, vignetting or film curve), flare on.
 pub fn flare_camera(width: u32, height: u32) -> Camera {
-    // The embedded lens file is checked by a unit test: this cannot fail.
-    let lens =
-        LensFile::parse(TESSAR_LENS_TOML, Path::new("lenses/tessar-walch-lens.toml")).unwrap_or_else(|e| panic!("{e}"));
+    camera_of(TESSAR_LENS_TOML, "lenses/tessar-walch-lens.toml", width, height)
+}
+
+/// [`flare_camera`] with the fitted Tessar (docs/flare/tessar-walch-fitted.toml): its fitted
+/// ghosts draw (`--flare-ghosts auto`).
+pub fn fitted_camera(width: u32, height: u32) -> Camera {
+    camera_of(TESSAR_FITTED_TOML, "docs/flare/tessar-walch-fitted.toml", width, height)
+}
+
+fn camera_of(text: &str, path: &str, width: u32, height: u32) -> Camera {
+    // The embedded lens files are checked by a unit test: this cannot fail.
+    let lens = LensFile::parse(text, Path::new(path)).unwrap_or_else(|e| panic!("{e}"));
     let request = CameraRequest {
         sensor: Some(format!("36x{}", 36.0 * height as f64 / width as f64)),
         flare: Some(true),
@@ -78,6 +105,11 @@ pub fn flare_camera(width: u32, height: u32) -> Camera {
 /// allows) over the middle two thirds of the frame, every light at least two tiles from the
 /// next so that each is its own light.
 pub fn flare_frame(width: u32, height: u32, lights: usize) -> Frame {
+    flare_frame_of(width, height, lights, LIGHT_VALUE)
+}
+
+/// [`flare_frame`] with lights of scene value `value`.
+pub fn flare_frame_of(width: u32, height: u32, lights: usize, value: f32) -> Frame {
     let cols = (lights as f64).sqrt().ceil().max(1.0) as usize;
     let rows = lights.div_ceil(cols).max(1);
     let mut color = Vec::with_capacity((width * height * 4) as usize);
@@ -94,7 +126,7 @@ pub fn flare_frame(width: u32, height: u32, lights: usize) -> Frame {
         for y in cy..cy + LIGHT_SIDE_PX {
             for x in cx..cx + LIGHT_SIDE_PX {
                 let i = ((y.min(height - 1) * width + x.min(width - 1)) * 4) as usize;
-                color[i..i + 3].copy_from_slice(&[LIGHT_VALUE; 3]);
+                color[i..i + 3].copy_from_slice(&[value; 3]);
             }
         }
     }
@@ -104,7 +136,7 @@ pub fn flare_frame(width: u32, height: u32, lights: usize) -> Frame {
 /// The flare's parameters with every ghost of the catalogue (not only those the plan shows).
 pub fn all_ghosts(frame: &Frame, camera: &Camera) -> FlareParams {
     let input = PlanInput::new(frame, camera);
-    let model = FlareModel::new(camera, input.facts.pixel_pitch_mm, frame.centre_px);
+    let model = FlareModel::chosen(camera, input.facts.pixel_pitch_mm, frame.centre_px);
     FlareParams::new(&input, &model, None)
 }
 
@@ -117,13 +149,21 @@ pub fn run(gpu: &Gpu, options: &FlareBenchOptions, mut progress: impl FnMut(&str
     for &(width, height) in &options.resolutions {
         progress(&format!("{width}x{height}: the bare pass"));
         let bare_ms = bare_pass_ms(gpu, width, height, options.runs)?;
-        let camera = flare_camera(width, height);
-        for &lights in &options.light_counts {
-            progress(&format!("{width}x{height}, {lights} lights"));
-            let frame = flare_frame(width, height, lights);
-            let mut p = plan(&frame, &camera);
-            let params = all_ghosts(&frame, &camera);
-            let (ghosts, per_light) = (params.ghosts.len(), params.constants.slots_per_light as usize);
+        let (matrix, fitted) = (flare_camera(width, height), fitted_camera(width, height));
+        let sets = [
+            ("matrix", &matrix, LIGHT_VALUE),
+            ("matrix", &matrix, FITTED_LIGHT_VALUE),
+            ("fitted", &fitted, FITTED_LIGHT_VALUE),
+        ];
+        for (&lights, &(model, camera, light_value)) in
+            options.light_counts.iter().flat_map(|l| sets.iter().map(move |c| (l, c)))
+        {
+            progress(&format!("{width}x{height}, {lights} lights of {light_value:.0e}, {model} ghosts"));
+            let frame = flare_frame_of(width, height, lights, light_value);
+            let mut p = plan(&frame, camera);
+            let params = all_ghosts(&frame, camera);
+            let ghosts = params.ghosts.len() + params.constants.fitted_count as usize;
+            let per_light = params.constants.slots_per_light as usize;
             p.force::<Flare>(params);
             let renderer = Renderer::new(gpu, &p)?;
             // One warm-up run, then the median of `runs`.
@@ -139,6 +179,8 @@ pub fn run(gpu: &Gpu, options: &FlareBenchOptions, mut progress: impl FnMut(&str
                 .cloned()
                 .unwrap_or_default();
             rows.push(FlareBenchRow {
+                model,
+                light_value,
                 width,
                 height,
                 lights,
@@ -162,12 +204,25 @@ pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
          starburst and the halo of each light drawn. GPU ms from timestamp queries (median of the runs), also as \
          multiples of the bare pass (read the frame, write it: `glsl/copy.comp`) at the same resolution, measured in \
          the same run. Sprites: per light its ghosts, its starburst's spikes and one glow; the cost per sprite is \
-         the kernel's time over one light's, per sprite added.\n\n"
+         the kernel's time over one light's, per sprite added. Ghosts: 'matrix' the prescription's ray-transfer \
+         matrices (lenses/tessar-walch-lens.toml), 'fitted' Walch's fitted primitives (ch. 6-8) of \
+         docs/flare/tessar-walch-fitted.toml (21 ghosts in green) for the same lights; 'fitted / matrix' is the \
+         ghost_sprites kernel's time with the fitted ghosts over its time with the matrix ghosts for the same \
+         lights; the fitted ghosts need lights of {FITTED_LIGHT_VALUE:.0e} to show, so both models are measured \
+         there too.\n\n"
     );
-    out += "| resolution | bare pass ms | lights | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | flare_bins | ghost_sprites | ghost_sprites ms per added sprite |\n";
-    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    out += "| resolution | ghosts model | bare pass ms | lights | light value | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | flare_bins | ghost_sprites | ghost_sprites ms per added sprite | fitted / matrix |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
-        let one = rows.iter().find(|o| (o.width, o.height) == (r.width, r.height) && o.lights == 1);
+        let one = rows.iter().find(|o| r.same_set(o) && o.lights == 1);
+        let matrix = rows.iter().find(|o| {
+            (o.width, o.height, o.lights, o.model, o.light_value)
+                == (r.width, r.height, r.lights, "matrix", r.light_value)
+                && r.model == "fitted"
+        });
+        let versus = matrix.map_or(String::new(), |m| {
+            format!("{:.2}x", r.pass_ms(ghost_sprites::NAME) / m.pass_ms(ghost_sprites::NAME))
+        });
         let ratio = one.map_or(String::new(), |o| format!("{:.2}x", r.flare_ms / o.flare_ms));
         // The kernel's cost of each sprite more than one light makes (its time per pixel is the
         // rest).
@@ -178,11 +233,13 @@ pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
         let passes: Vec<String> =
             FLARE_PASSES.iter().map(|n| format!("{:.2} ({:.1}x)", r.pass_ms(n), r.pass_ms(n) / r.bare_ms)).collect();
         out += &format!(
-            "| {}x{} | {:.2} | {} | {} | {} | {:.2} | {:.1}x | {ratio} | {} | {per_sprite} |\n",
+            "| {}x{} | {} | {:.2} | {} | {:.0e} | {} | {} | {:.2} | {:.1}x | {ratio} | {} | {per_sprite} | {versus} |\n",
             r.width,
             r.height,
+            r.model,
             r.bare_ms,
             r.lights,
+            r.light_value,
             r.ghosts,
             r.sprites,
             r.flare_ms,
@@ -210,6 +267,9 @@ mod tests {
             assert_eq!(params.ghosts.len(), 21);
             let p = plan(&frame, &camera);
             assert!(p.params::<Flare>().is_some(), "the flare runs with {lights} lights");
+            // The fitted Tessar: its 21 fitted ghosts instead of the matrices.
+            let fitted = all_ghosts(&frame, &fitted_camera(320, 180));
+            assert_eq!((fitted.ghosts.len(), fitted.constants.fitted_count), (0, 21));
         }
     }
 }

@@ -170,6 +170,8 @@ fn flare_settings(lens_file: &LensFile, req: &CameraRequest) -> FlareSettings {
             fraction: lens_file.flare.halo_fraction,
             radius_mm: lens_file.flare.halo_radius_mm,
         },
+        ghosts: req.flare_ghosts,
+        fitted: lens_file.fitted_ghosts.clone(),
     }
 }
 

@@ -78,6 +78,8 @@ pub struct CameraRequest {
     pub motion_blur: MotionBlurMode,
     /// Clamp on the motion blur length in pixels.
     pub max_blur_px: f64,
+    /// Which model draws the lens's ghosts (`--flare-ghosts`).
+    pub flare_ghosts: crate::model::flare::FlareGhosts,
 }
 
 impl Default for CameraRequest {
@@ -123,6 +125,7 @@ impl Default for CameraRequest {
             flare: None,
             flare_threshold: crate::model::flare::FlareSettings::DEFAULT_THRESHOLD,
             flare_lights: Vec::new(),
+            flare_ghosts: crate::model::flare::FlareGhosts::Auto,
         }
     }
 }

@@ -6,9 +6,9 @@
 use super::sprite::{ghost_channel, ray_in_box};
 use super::types::{constants_of, FlareConstants};
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW,
-    KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST, SPRITE_SOFTNESS,
-    SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
+    ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_FITTED, KIND_GHOST,
+    KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST,
+    SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
@@ -71,6 +71,7 @@ pub fn sprite_light(s: &[f32], aperture: &AperturePolygon, x: u32, y: u32) -> [f
             }
             std::array::from_fn(|c| f(6 + c as u32) * (1.0 / t0 - 1.0 / t1))
         }
+        KIND_FITTED => super::fitted::fitted_light(s, [x as f32 + 0.5, y as f32 + 0.5]),
         KIND_GLOW => {
             let r = (q[0] - f(0)).hypot(q[1] - f(1));
             if r < f(2) || r > f(3) {
@@ -86,7 +87,8 @@ pub fn sprite_light(s: &[f32], aperture: &AperturePolygon, x: u32, y: u32) -> [f
 
 impl Twin for GhostSpritesShader {
     /// Every sprite at every pixel of its bounds (the bins only skip sprites whose light there is
-    /// 0, and add covering ones once per tile: the same light).
+    /// 0, and add covering ones once per tile: the same light); a fitted sprite from its grid
+    /// per tile, as the kernel shades it.
     fn cpu(size: &[i32; 3], groups: [u32; 3], b: &mut [HostData]) {
         let fc = constants_of(&b[1]);
         let aperture = AperturePolygon {
@@ -100,6 +102,10 @@ impl Twin for GhostSpritesShader {
         let (w, h) = ((groups[0] * TILE_SIZE).min(size[0] as u32), (groups[1] * TILE_SIZE).min(size[1] as u32));
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
         for s in sprites.chunks_exact(SPRITE_WORDS as usize).take(total) {
+            if s[SPRITE_KIND as usize] as u32 == KIND_FITTED {
+                super::fitted::add_sprite(s, w, h, &mut sums);
+                continue;
+            }
             let bx = &s[SPRITE_BOUNDS as usize..][..4];
             if !matches!(bx[0].partial_cmp(&bx[2]), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)) {
                 continue;
@@ -143,10 +149,18 @@ impl Twin for GhostSpritesShader {
 /// `words_per_tile` bin words per tile: aperture.glsl's two (at their defaults: ghost_sdf uses
 /// neither path), whether it has ghost sprites and spike sprites (a pipeline without a kind has
 /// no loop for it, which lavapipe would run once per tile), and whether a tile's sprites may
-/// be more than one list holds (only then the batches' loop, whose mere presence costs lavapipe).
-pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 5] {
+/// be more than one list holds (only then the batches' loop, whose mere presence costs lavapipe),
+/// and whether it has fitted sprites (Walch's primitives).
+pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 6] {
     let batches = words_per_tile * BIN_SPRITES_PER_WORD as u64 > SPRITE_LIST as u64;
-    [1, 1, (constants.ghost_count > 0) as u32, (constants.spike_count > 0) as u32, batches as u32]
+    [
+        1,
+        1,
+        (constants.ghost_count > 0) as u32,
+        (constants.spike_count > 0) as u32,
+        batches as u32,
+        (constants.fitted_count > 0) as u32,
+    ]
 }
 
 /// Record the kernel: the sprites added to the frame's colour in place; `constants` from
@@ -156,7 +170,7 @@ pub fn specialization(constants: &FlareConstants, words_per_tile: u64) -> [u32; 
 pub fn record(
     kernel: &SpecializedKernel<GhostSpritesShader>,
     rec: &mut Recorder,
-    constants: &[u32; 5],
+    constants: &[u32; 6],
     b: &GhostSpritesBindings<'_>,
     words_per_tile: u64,
 ) -> GpuResult<()> {

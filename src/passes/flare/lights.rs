@@ -331,10 +331,15 @@ impl Twin for FlareLightsShader {
                 .iter()
                 .map(|&w| f32::from_bits(w))
                 .collect();
+            let fitted_end = (fc.ghost_count + fc.fitted_count).max(0) as usize;
             if e < fc.ghost_count as usize {
                 ghost_sprite(&fc, &mut sprite, &lights[l], l, &table, e);
-            } else if e < (fc.ghost_count + fc.spike_count) as usize {
-                spike_sprite(&fc, &mut sprite, &lights[l], l, e - fc.ghost_count as usize);
+            } else if e < fitted_end {
+                if !super::fitted::fitted_sprite(&fc, &mut sprite, &lights[l], l, &table, e - fc.ghost_count as usize) {
+                    self::none(&mut sprite);
+                }
+            } else if e < fitted_end + fc.spike_count.max(0) as usize {
+                spike_sprite(&fc, &mut sprite, &lights[l], l, e - fitted_end);
             } else {
                 glow_sprite(&fc, &mut sprite, &lights[l], l);
             }

@@ -5,8 +5,9 @@
 //!   1. `flare_tiles` (`tiles`): per 16x16 tile, the light pixels' energy, count and position;
 //!   2. `flare_lights` (`lights`): the tiles gathered into a short list of lights, and each
 //!      light's flare elements as sprites with tight bounds (the ghosts of the matrix model,
-//!      src/optics/flare/ghosts.rs; the starburst's spikes and glow and the halo,
-//!      src/optics/flare/starburst.rs), none where an element would not show;
+//!      src/optics/flare/ghosts.rs, or Walch's fitted primitives, `fitted`; the starburst's
+//!      spikes and glow and the halo, src/optics/flare/starburst.rs), none where an element
+//!      would not show;
 //!   3. `flare_bins` (`bins`): each sprite sorted against the tiles its bounds touch (away,
 //!      covering, crossing), once per frame, into per-tile bin words;
 //!   4. `ghost_sprites`: the ghost-sprite kernel, each tile's binned sprites added, every output
@@ -19,6 +20,7 @@
 //! the sensor's saturation, and says how bright a light would have to be.
 
 pub mod bins;
+pub mod fitted;
 pub mod ghost_sprites;
 pub mod lights;
 pub mod sprite;
@@ -35,6 +37,7 @@ use crate::passes::scene::PlanInput;
 use crate::passes::{Decision, FrameImages, Pass, TILE_SIZE};
 use ash::vk;
 use bins::{FlareBinsBindings, FlareBinsShader};
+use fitted::FittedGhosts;
 use ghost_sprites::{GhostSpritesBindings, GhostSpritesShader};
 use lights::{FlareLightsBindings, FlareLightsShader};
 use tiles::{light_weight, FlareTilesShader};
@@ -59,6 +62,9 @@ pub struct FlareModel {
     pub halo: Halo,
     pub pixel_pitch_mm: f64,
     pub centre_px: [f64; 2],
+    /// Walch's fitted primitives, when they draw the ghosts instead of the matrices
+    /// ([`FlareModel::chosen`]).
+    pub fitted: Option<FittedGhosts>,
 }
 
 /// The brightest flare element of a light, per unit of its energy.
@@ -89,7 +95,18 @@ impl FlareModel {
             halo: camera.flare.halo,
             pixel_pitch_mm,
             centre_px,
+            fitted: None,
         }
+    }
+
+    /// The model `--flare-ghosts` chooses: the matrix ghosts of [`FlareModel::new`], or the lens
+    /// file's fitted primitives drawing the ghosts instead (auto: when it has them).
+    pub fn chosen(camera: &Camera, pixel_pitch_mm: f64, centre_px: [f64; 2]) -> FlareModel {
+        let mut model = FlareModel::new(camera, pixel_pitch_mm, centre_px);
+        if camera.flare.ghosts.draws_fitted(camera.flare.fitted.len()) {
+            model.fitted = Some(FittedGhosts::new(camera, pixel_pitch_mm));
+        }
+        model
     }
 
     /// The light's image height per unit slope (mm): the prescription's, or the focal length.
@@ -128,7 +145,14 @@ impl FlareModel {
     /// Every element's peak, named.
     pub fn peaks(&self) -> Vec<(Option<GhostPath>, Peak)> {
         let mut peaks = Vec::new();
-        for g in self.catalogue.iter().flat_map(|c| &c.ghosts) {
+        if let Some(f) = &self.fitted {
+            for (k, spec) in f.specs.iter().enumerate() {
+                let what = format!("the fitted ghost {} (channel {})", spec.ghost, spec.channel);
+                peaks.push((None, Peak { what, per_energy: f.peak_per_energy(k) }));
+            }
+        }
+        let matrix = if self.fitted.is_some() { None } else { self.catalogue.as_ref() };
+        for g in matrix.iter().flat_map(|c| &c.ghosts) {
             let what = format!("the ghost of surfaces {} and {}", g.path.first, g.path.second);
             peaks.push((Some(g.path), Peak { what, per_energy: self.ghost_peak(g) }));
         }
@@ -177,13 +201,16 @@ impl FlareParams {
         let gain = camera.exposure_gain();
         let pitch = model.pixel_pitch_mm;
         let g0 = model.g0_mm(camera);
+        // The fitted primitives draw the ghosts instead of the matrices when the model has them.
         let chosen: Vec<MatrixGhost> = model
             .catalogue
             .iter()
+            .filter(|_| model.fitted.is_none())
             .flat_map(|c| &c.ghosts)
             .filter(|g| !matches!(ghosts, Some(list) if !list.contains(&g.path)))
             .cloned()
             .collect();
+        let fitted_count = model.fitted.as_ref().map_or(0, |f| f.specs.len());
         let spike_count = model.starburst.spikes().len() as i32;
         let a = model.starburst.aperture;
         let explicit: Vec<f32> = camera
@@ -236,15 +263,22 @@ impl FlareParams {
             halo_fraction: model.halo.fraction as f32,
             halo_radius_px: (model.halo.radius_mm / pitch) as f32,
             max_radius_px: (frame.width as f64).hypot(frame.height as f64) as f32,
-            slots_per_light: chosen.len() as i32 + spike_count + 1,
+            slots_per_light: (chosen.len() + fitted_count) as i32 + spike_count + 1,
             blades: a.blades as i32,
             rotation: a.rotation_rad as f32,
             curvature: a.curvature as f32,
             aperture_area: a.area_factor() as f32,
+            fitted_count: fitted_count as i32,
         };
+        // The matrix ghosts' table, then the fitted ghosts'.
+        let mut table = if chosen.is_empty() { Vec::new() } else { ghost_table(&chosen, g0) };
+        table.extend(model.fitted.iter().flat_map(FittedGhosts::table));
+        if table.is_empty() {
+            table.push(0.0);
+        }
         FlareParams {
             constants,
-            ghost_table: ghost_table(&chosen, g0),
+            ghost_table: table,
             explicit: if explicit.is_empty() { vec![0.0] } else { explicit },
             ghosts: chosen.iter().map(|g| g.path).collect(),
             max_lights: MAX_LIGHTS,
@@ -286,7 +320,7 @@ impl Pass for Flare {
         let gain = camera.exposure_gain();
         let threshold = flare.threshold / gain;
         let visible = VISIBLE_FLARE / gain;
-        let model = FlareModel::new(camera, input.facts.pixel_pitch_mm, frame.centre_px);
+        let model = FlareModel::chosen(camera, input.facts.pixel_pitch_mm, frame.centre_px);
         let peaks = model.peaks();
         let (lit, lit_energy) = lit_pixels(&frame.color, threshold as f32);
         // The brightest light there could be: every lit pixel in one, plus the given lights.
@@ -326,11 +360,16 @@ impl Pass for Flare {
         }
         let ghosts: Vec<GhostPath> = shown.iter().filter_map(|(g, _)| *g).collect();
         let params = FlareParams::new(input, &model, Some(&ghosts));
-        let ghost_text = match &model.catalogue {
-            Some(c) => {
-                format!("{} of the prescription's {} ghosts (two reflections, Walch eq 3.3)", ghosts.len(), c.paths)
-            }
-            None => "no ghosts (the lens file has no prescription)".into(),
+        let choice = format!("--flare-ghosts {}", flare.ghosts.name());
+        let ghost_text = match (&model.fitted, &model.catalogue) {
+            (Some(f), _) => format!("ghosts drawn by the fitted model ({choice}): {}", f.describe([frame.width, frame.height])),
+            (None, Some(c)) => format!(
+                "ghosts drawn by the matrix model ({choice}{}): {} of the prescription's {} ghosts (two reflections, Walch eq 3.3)",
+                if flare.fitted.is_empty() { ", the lens file has no [[fitted_ghost]]" } else { "" },
+                ghosts.len(),
+                c.paths
+            ),
+            (None, None) => "no ghosts (the lens file has no prescription)".into(),
         };
         let spikes = params.constants.spike_count;
         let why = format!(

@@ -1,11 +1,11 @@
 //! One flare sprite's geometry, the CPU twin of glsl/include/ghost_sprite.glsl: a ghost sprite's
 //! channel as a shape, a ray (a starburst spike) against a box, and a sprite's bin byte against a
 //! tile. Shared by the twins of `bins` (which sorts sprites into the tiles) and `ghost_sprites`
-//! (which draws them).
+//! (which draws them). The fitted sprites' geometry is `fitted`'s.
 
 use crate::gpu::shaders::flare::{
-    BIN_COVERING_SHIFT, GHOST_SPRITE_CHANNEL_WORDS, KIND_GHOST, KIND_GLOW, KIND_SPIKE, SPRITE_BOUNDS, SPRITE_DATA,
-    SPRITE_KIND, SPRITE_SOFTNESS,
+    BIN_COVERING_SHIFT, GHOST_SPRITE_CHANNEL_WORDS, KIND_FITTED, KIND_GHOST, KIND_GLOW, KIND_SPIKE, SPRITE_BOUNDS,
+    SPRITE_DATA, SPRITE_KIND, SPRITE_SOFTNESS,
 };
 use crate::optics::flare::ghosts::GhostShape;
 use crate::optics::flare::AperturePolygon;
@@ -71,6 +71,7 @@ pub fn sprite_bin(s: &[f32], aperture: &AperturePolygon, origin: [u32; 2]) -> u3
             }
         }
         KIND_GLOW => 7,
+        KIND_FITTED => super::fitted::fitted_bin(s, origin),
         _ => 0,
     }
 }

@@ -46,6 +46,8 @@ pub struct FlareConstants {
     pub curvature: f32,
     /// Area of the aperture of circumradius 1.
     pub aperture_area: f32,
+    /// Fitted ghosts in the table, after the `ghost_count` matrix ghosts (`fitted`).
+    pub fitted_count: i32,
 }
 
 /// The constants a twin finds in its binding.
