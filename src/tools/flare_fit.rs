@@ -10,6 +10,8 @@
 //!
 //! The primitive is drawn as the GPU draws it (the f32 twin of glsl/tools/bezier_ghosts.comp).
 
+pub mod capture;
+
 use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::bezier_ghost::{
     poly_eval, polyfit, BezierGhost, GhostPolynomials, Transfer, CIRCLE_CONTROL, PARAMS, PARAM_RANGES,
