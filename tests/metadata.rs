@@ -2,39 +2,20 @@
 //! binary renders an input whose header has Cryptomatte's metadata, a renderer's camera and
 //! custom attributes; the output's header is read back with the exr crate.
 
+mod support;
+use support::TestDir;
+
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
 use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::prelude::WritableImage;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 const W: usize = 16;
 const H: usize = 8;
-
-/// A fresh directory for one test, removed on drop.
-struct TestDir(PathBuf);
-
-impl TestDir {
-    fn new(test: &str) -> TestDir {
-        let path = std::env::temp_dir().join(format!("realcam-metadata-{test}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&path);
-        std::fs::create_dir_all(&path).unwrap_or_else(|e| panic!("creating {}: {e}", path.display()));
-        TestDir(path)
-    }
-
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TestDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn text(s: &str) -> AttributeValue {
     AttributeValue::Text(Text::from(s))
@@ -145,7 +126,7 @@ fn channel_names(path: &Path) -> Vec<String> {
 /// behind with its channels; the rest still comes.
 #[test]
 fn keep_layers_keeps_the_cryptomatte_metadata_and_the_inputs_attributes() {
-    let dir = TestDir::new("keep");
+    let dir = TestDir::new("metadata-keep");
     let input = dir.join("in.exr");
     let attributes: Vec<_> = cryptomatte().into_iter().chain(custom()).collect();
     write_input(&input, &attributes);
@@ -183,7 +164,7 @@ fn keep_layers_keeps_the_cryptomatte_metadata_and_the_inputs_attributes() {
 /// value is written once.
 #[test]
 fn an_input_attribute_realcam_writes_too_is_kept_under_input() {
-    let dir = TestDir::new("clash");
+    let dir = TestDir::new("metadata-clash");
     let input = dir.join("in.exr");
     let mut attributes = custom();
     attributes.push(("realcam/aperture_blades", AttributeValue::I32(5)));

@@ -3,13 +3,16 @@
 //! the output's header and its in-focus plane follow the frame. The `realcam` binary renders
 //! inputs written here with the exr crate; outputs are read back with it.
 
+mod support;
+use support::TestDir;
+
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
 use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::prelude::{ReadChannels, ReadLayers, WritableImage};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 const W: usize = 256;
@@ -17,27 +20,6 @@ const H: usize = 64;
 /// The left half of the frame is at 1 m, the right half at 3 m.
 const NEAR_M: f32 = 1.0;
 const FAR_M: f32 = 3.0;
-
-struct TestDir(PathBuf);
-
-impl TestDir {
-    fn new(test: &str) -> TestDir {
-        let path = std::env::temp_dir().join(format!("realcam-shot-{test}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&path);
-        std::fs::create_dir_all(&path).unwrap_or_else(|e| panic!("creating {}: {e}", path.display()));
-        TestDir(path)
-    }
-
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TestDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// A one-pixel checkerboard (0.1 / 0.9) over two planes, 1 m on the left, 3 m on the right,
 /// with `attributes` in its header.
@@ -146,7 +128,7 @@ fn contrast(red: &[f32], x0: usize, x1: usize) -> f32 {
 /// attributes and its in-focus plane follow its frame.
 #[test]
 fn each_frame_takes_the_camera_its_header_carries() {
-    let dir = TestDir::new("headers");
+    let dir = TestDir::new("shot-headers");
     write_input(&dir.join("in_0001.exr"), &[("focus", 1.0), ("aperture", 2.0)]);
     write_input(&dir.join("in_0002.exr"), &[("focus", 3.0), ("aperture", 8.0)]);
     let stderr = succeeded(realcam(&dir, &["--color", "in_####.exr", "--frames", "1-2", "-o", "out_####.exr"]));
@@ -174,7 +156,7 @@ fn each_frame_takes_the_camera_its_header_carries() {
 /// the input's header, and a header that disagrees is warned about once.
 #[test]
 fn a_camera_file_racks_focus_and_a_flag_wins() {
-    let dir = TestDir::new("keys");
+    let dir = TestDir::new("shot-keys");
     write_input(&dir.join("in.exr"), &[("focus", 5.0), ("aperture", 4.0)]);
     std::fs::write(
         dir.join("rack.toml"),
@@ -212,7 +194,7 @@ fn a_camera_file_racks_focus_and_a_flag_wins() {
 /// A single render of an animated camera file must say which frame it is.
 #[test]
 fn a_single_render_of_an_animated_camera_file_needs_its_frame() {
-    let dir = TestDir::new("single");
+    let dir = TestDir::new("shot-single");
     write_input(&dir.join("in.exr"), &[]);
     std::fs::write(dir.join("iris.toml"), "[f_number]\nkeys = [[10, 2.0], [20, 8.0]]\n").unwrap();
     let out = realcam(&dir, &["--color", "in.exr", "--camera-file", "iris.toml", "-o", "out.exr"]);
@@ -234,7 +216,7 @@ fn a_single_render_of_an_animated_camera_file_needs_its_frame() {
 /// f-number to the input's header.
 #[test]
 fn a_usd_camera_racks_focus_frame_by_frame() {
-    let dir = TestDir::new("usd");
+    let dir = TestDir::new("shot-usd");
     write_input(&dir.join("in.exr"), &[("aperture", 4.0)]);
     std::fs::write(
         dir.join("shot.usda"),

@@ -16,13 +16,14 @@ use crate::model::frame::Frame;
 use crate::optics::flare::ghosts::{GhostCatalogue, GhostPath, GhostShape};
 use crate::optics::flare::traced::{chief_ray, display_px, optical_slope, TracedImage};
 use crate::optics::flare::{channel_nm, FlareLens};
+use crate::passes::flare::ghost_shape::primitive_light;
 use crate::passes::flare::{Flare, FlareModel, FlareParams, MIN_GHOST_RADIUS_PX};
 use crate::passes::PlanInput;
 use crate::pipeline::planner::plan;
 use crate::pipeline::render::Renderer;
 use crate::tools::bench::median;
 use crate::tools::bench_flare::FLARE_PASSES;
-use crate::tools::bezier_ghosts::{self, primitive_light, BezierGhostsShader, DrawnGhost};
+use crate::tools::bezier_ghosts::{self, BezierGhostsShader, DrawnGhost};
 use std::time::Instant;
 
 /// What a model says of one ghost in one channel for one light. Positions in image pixels

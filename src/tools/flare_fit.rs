@@ -16,7 +16,7 @@ use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::bezier_ghost::{
     poly_eval, polyfit, BezierGhost, GhostPolynomials, Transfer, CIRCLE_CONTROL, PARAMS, PARAM_RANGES,
 };
-use crate::tools::bezier_ghosts::{primitive_light, DrawnGhost};
+use crate::{passes::flare::ghost_shape::primitive_light, tools::bezier_ghosts::DrawnGhost};
 
 /// A grey image of a ghost: `values` (light per frame pixel) row by row, its pixel (0, 0) at `origin_px` of the frame,
 /// each of its pixels `cell_px` frame pixels wide (a ghost larger than the frame is fitted on

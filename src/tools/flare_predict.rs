@@ -13,7 +13,8 @@ use crate::io::lens_file::FittedGhostSpec;
 use crate::optics::ghost_prediction::{
     brightness_scale, constellation_angle_deg, contrast_ratio, estimators, roll_rad, Estimators, ExposureSetting,
 };
-use crate::tools::bezier_ghosts::{primitive_light, DrawnGhost};
+use crate::passes::flare::ghost_shape::primitive_light;
+use crate::tools::bezier_ghosts::DrawnGhost;
 
 /// ln's offset in the log-average (sec. 9.1; Reinhard et al. 2002 use a small delta so that
 /// black pixels do not send the mean of logarithms to minus infinity).

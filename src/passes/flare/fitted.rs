@@ -19,6 +19,7 @@
 //! This is the twin of the fitted parts of glsl/flare/flare_lights.comp (`fitted_sprite`) and
 //! glsl/include/ghost_sprite.glsl (`fitted_distance`, `fitted_light`, the sorting).
 
+use super::ghost_shape::{primitive_light, search_signed_distance};
 use super::sprite::TILE_REACH_PX;
 use super::types::FlareConstants;
 use crate::gpu::shaders::bezier_ghost::{BEZIER_BOUNDS, BEZIER_COLOUR, BEZIER_ROLL, BEZIER_SHAPE, BEZIER_TRANSFER};
@@ -31,7 +32,6 @@ use crate::io::lens_file::FittedGhostSpec;
 use crate::model::camera::Camera;
 use crate::optics::bezier_ghost::{PARAMS, PARAM_NAMES, PARAM_RANGES};
 use crate::passes::TILE_SIZE;
-use crate::tools::bezier_ghosts::{primitive_light, search_signed_distance};
 
 /// How far (px) the 12-step search's distance may be from the exact one where a sprite is
 /// sorted against a tile (FITTED_MARGIN in glsl/include/ghost_sprite.glsl): the search is within
@@ -309,7 +309,7 @@ pub const SMOOTH: f32 = 1e-3;
 /// nodes `g` (ghost_sprite.glsl's fitted_smooth): its border and fades' ends over the tile's
 /// reach from its centre, the centre's light within [`SMOOTH`] of the peak of the corners' mean.
 pub fn smooth(t: &[f32], g: &[f32; 5]) -> bool {
-    use crate::tools::bezier_ghosts::transfer;
+    use super::ghost_shape::transfer;
     let reach = (TILE_REACH_PX + FITTED_MARGIN_PX) as f32;
     let d = g[4];
     let clear = d.abs() > reach && (d + t[3]).abs() > reach && (d - t[2]).abs() > reach;
@@ -339,7 +339,7 @@ pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
             let near_linear = linear(&g);
             if smooth(t, &g) {
                 // The corners' light interpolated bilinearly.
-                let corners: Vec<f32> = (0..4).map(|j| crate::tools::bezier_ghosts::transfer(g[j], t)).collect();
+                let corners: Vec<f32> = (0..4).map(|j| super::ghost_shape::transfer(g[j], t)).collect();
                 for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
                     for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
                         let f = [(x - origin[0]) as f32 / SPAN_PX, (y - origin[1]) as f32 / SPAN_PX];
@@ -359,7 +359,7 @@ pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
                     } else {
                         fitted_distance(w, q)
                     };
-                    let light = crate::tools::bezier_ghosts::transfer(d, t) as f64;
+                    let light = super::ghost_shape::transfer(d, t) as f64;
                     let sum = &mut sums[(y * width + x) as usize];
                     (0..3).for_each(|c| sum[c] += light * colour[c] as f64);
                 }

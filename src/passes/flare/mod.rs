@@ -21,6 +21,7 @@
 
 pub mod bins;
 pub mod fitted;
+pub mod ghost_shape;
 pub mod ghost_sprites;
 pub mod lights;
 pub mod sprite;
