@@ -103,6 +103,23 @@ fn check_yaml_size(text: &str) -> Result<(), String> {
     }
 }
 
+/// The most colour spaces a config may define: the ocio crate's reading grows as the square of
+/// their number (30,000 took 40 s, issue 34); the ACES studio config defines under 300.
+const MAX_COLOUR_SPACES: usize = 4096;
+
+/// Err naming the bound when YAML `text` defines more than [`MAX_COLOUR_SPACES`] colour spaces
+/// (`!<ColorSpace>` tags, counted in the text before any parse).
+fn check_colour_space_count(text: &str) -> Result<(), String> {
+    let count = text.matches("!<ColorSpace>").count();
+    if count > MAX_COLOUR_SPACES {
+        return Err(format!(
+            "it defines {count} colour spaces, more than the {MAX_COLOUR_SPACES} realcam reads (reading them takes time \
+             growing as the square of their number)"
+        ));
+    }
+    Ok(())
+}
+
 /// The files a config file names as the `src` of its file transforms (LUTs), found along its
 /// `search_path` (relative to the config's folder; absolute `src` as it is), where they exist:
 /// inputs no output may replace. Best effort: a config that does not parse names none (its
@@ -207,7 +224,9 @@ impl ColourConfig {
             // A text config (not an .ocioz archive) whose aliases would expand past the bound
             // is refused before the ocio crate, which copies every alias, reads it.
             if let Ok(text) = std::fs::read_to_string(path_or_uri) {
-                check_yaml_size(&text).map_err(|message| ColourConfigError::Load { config: name.clone(), message })?;
+                check_yaml_size(&text)
+                    .and_then(|()| check_colour_space_count(&text))
+                    .map_err(|message| ColourConfigError::Load { config: name.clone(), message })?;
             }
         }
         let config = ocio::Config::create_from_file(path_or_uri)
@@ -322,6 +341,25 @@ impl ColourConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_config_of_more_colour_spaces_than_the_bound_is_refused_before_it_is_read() {
+        // Issue 34: 30,000 colour spaces took the ocio crate 40 s (quadratic in their number).
+        let space = "  - !<ColorSpace>\n    name: s\n";
+        let text = format!("ocio_profile_version: 2\ncolorspaces:\n{}", space.repeat(MAX_COLOUR_SPACES + 1));
+        let dir = crate::io::test_dir("ocio-spaces");
+        let path = dir.join("many.ocio");
+        std::fs::write(&path, &text).unwrap();
+        let err = ColourConfig::load(path.to_str().unwrap()).map(|_| ()).unwrap_err().to_string();
+        assert!(
+            err.ends_with(
+                "it defines 4097 colour spaces, more than the 4096 realcam reads (reading them takes time growing as \
+                 the square of their number)"
+            ),
+            "{err}"
+        );
+        assert!(check_colour_space_count(&space.repeat(MAX_COLOUR_SPACES)).is_ok());
+    }
 
     #[test]
     fn the_aces_configs_spaces_have_realcams_primaries() {

@@ -99,6 +99,10 @@ impl Prescription {
         if specs.is_empty() {
             return Err(PrescriptionError::NoSurfaces { path: path.to_string() });
         }
+        if specs.len() > super::MAX_SURFACES {
+            let (count, max) = (specs.len(), super::MAX_SURFACES);
+            return Err(PrescriptionError::TooManySurfaces { path: path.to_string(), count, max });
+        }
         let invalid = |index: usize, message: String| PrescriptionError::InvalidSurface {
             path: path.to_string(),
             line: surface_header_line(text, index),
@@ -220,6 +224,18 @@ mod tests {
         let e = Prescription::parse_toml(text, "two.toml").unwrap_err();
         assert_eq!(e, PrescriptionError::StopCount { path: "two.toml".into(), indices: vec![0, 1] });
         assert!(e.to_string().contains("found 2"), "{e}");
+    }
+
+    #[test]
+    fn a_prescription_of_more_surfaces_than_any_lens_is_refused_before_any_work() {
+        // Issue 34: a lens file of 1,000 surfaces took 60 s and 1.45 GB (its ghosts are pairs of
+        // surfaces). 129 surfaces are refused by count, whatever they are.
+        let surface = "[[surface]]\nradius_mm = 50\nthickness_mm = 1\nn_d = 1.5\nsemi_diameter_mm = 10\n";
+        let text = format!("name = \"x\"\n{}", surface.repeat(MAX_SURFACES + 1));
+        assert_eq!(
+            Prescription::parse_toml(&text, "many.toml").unwrap_err().to_string(),
+            "many.toml: the prescription has 129 [[surface]] tables; realcam takes at most 128 (a photographic lens has under 60)"
+        );
     }
 
     #[test]
