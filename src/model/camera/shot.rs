@@ -177,35 +177,19 @@ impl ShotCamera {
             shot.keys.iter().flat_map(|k| k.tracks.iter().flat_map(|(_, t)| t.keys().iter().map(|k| k.0))).collect();
         key_frames.sort_by(f64::total_cmp);
         key_frames.dedup();
-        for &frame in &key_frames {
-            shot.make(frame, &InputCamera::default())?;
+        // The base is the camera of the first key's frame (of frame 0 without keys).
+        let mut base = None;
+        for &frame in key_frames.iter().chain(key_frames.is_empty().then_some(&0.0)) {
+            let (camera, _) = shot.make(frame, &InputCamera::default())?;
+            base.get_or_insert(camera);
         }
-        let first = key_frames.first().copied().unwrap_or(0.0);
-        shot.base = shot.make(first, &InputCamera::default())?.0;
+        shot.base = base.unwrap_or_else(|| shot.base.clone());
         Ok(shot)
-    }
-
-    /// A shot of one camera: `camera` on every frame, every setting as given.
-    pub fn fixed(camera: Camera) -> ShotCamera {
-        ShotCamera {
-            lens_file: LensFile::default_lens(),
-            request: CameraRequest::default(),
-            flags: ANIMATED.to_vec(),
-            keys: None,
-            aperture_mask: camera.aperture_mask.clone(),
-            base: camera,
-            warned: Mutex::new(Vec::new()),
-        }
     }
 
     /// The camera without any input's settings, at the keys' first frame.
     pub fn base(&self) -> &Camera {
         &self.base
-    }
-
-    /// Whether a camera was given whole ([`ShotCamera::fixed`]): no keys, no input's settings.
-    fn is_fixed(&self) -> bool {
-        self.flags.len() == ANIMATED.len() && self.keys.is_none()
     }
 
     pub fn keys(&self) -> Option<&CameraKeys> {
@@ -216,10 +200,6 @@ impl ShotCamera {
     /// keys' first frame) whose input header says `input`, its grain seeded by the frame
     /// ([`Camera::at_frame`]).
     pub fn camera(&self, frame: Option<i64>, input: &InputCamera) -> Result<FrameCamera, ShotError> {
-        if self.is_fixed() {
-            let camera = frame.map_or_else(|| self.base.clone(), |f| self.base.at_frame(f));
-            return Ok(FrameCamera { camera, warnings: Vec::new() });
-        }
         let at = match frame {
             Some(f) => f as f64,
             None => self.keys.as_ref().and_then(|k| k.tracks.first()).map_or(0.0, |(_, t)| t.keys()[0].0),
