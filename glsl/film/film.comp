@@ -46,6 +46,7 @@ layout(push_constant) uniform Push {
     float vignette_image_distance_mm;
     int vignette_entries;           // 0: cos^4
     int vignette_base;              // the vignette's first word in `table`
+    int band_top_px;                // a band's first row in the whole frame (the grain's row)
 } pc;
 
 #include "height_table.glsl"
@@ -60,7 +61,7 @@ uint hash(uint x) {
 
 // A standard normal value for (pixel, channel), Box-Muller on two hashed uniforms.
 float gaussian(ivec2 p, int c) {
-    uint h1 = hash(uint(p.x) * 73856093u ^ uint(p.y) * 19349663u ^ uint(c) * 83492791u ^ pc.seed);
+    uint h1 = hash(uint(p.x) * 73856093u ^ uint(p.y + pc.band_top_px) * 19349663u ^ uint(c) * 83492791u ^ pc.seed);
     uint h2 = hash(h1 ^ 0x9e3779b9u);
     float u1 = (float(h1 >> 8) + 0.5) / 16777216.0;
     float u2 = float(h2 >> 8) / 16777216.0;

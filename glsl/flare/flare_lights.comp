@@ -327,7 +327,9 @@ void main() {
         args[ARGS_LIT_TILES] = s_lit_total;
         // Without a light no sprite is made and the frame keeps its colour (the sprites add to
         // it in place): the binning and the sprites dispatch no group.
-        uvec3 tiles = uvec3(fc.tiles_x, fc.tiles_y, 1);
+        // The sprites are drawn on the band's tile rows (a band's: from fc.band_top_px).
+        int rows = fc.band_height_px > 0 ? (fc.band_height_px + TILE_SIZE - 1) / TILE_SIZE : fc.tiles_y;
+        uvec3 tiles = uvec3(fc.tiles_x, rows, 1);
         uvec3 sprites = n > 0u ? tiles : uvec3(0u, 1u, 1u);
         for (uint k = 0; k < 3; ++k) {
             args[ARGS_BIN_GROUPS + k] = k == 0u ? n * uint(fc.slots_per_light) : 1u;

@@ -182,7 +182,10 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
 }
 
 void main() {
-    ivec2 tile = ivec2(gl_WorkGroupID.xy);
+    // Tiles and pixels in the whole frame's coordinates; the image holds the band of pc.size.y
+    // rows from fc.band_top_px (the whole frame: 0), a multiple of TILE_SIZE, whose tile rows
+    // the dispatch covers.
+    ivec2 tile = ivec2(gl_WorkGroupID.xy) + ivec2(0, fc.band_top_px / TILE_SIZE);
     ivec2 origin = tile * TILE_SIZE;
     ivec2 p = origin + ivec2(gl_LocalInvocationID.xy);
     vec2 q = vec2(p) + 0.5;
@@ -224,13 +227,14 @@ void main() {
         barrier();
         shade_listed(p, q, sum);
     }
-    if (outside(p, pc.size)) return;
-    vec4 c = finite_or_zero(imageLoad(color, p));
+    ivec2 texel = p - ivec2(0, fc.band_top_px);
+    if (outside(texel, pc.size)) return;
+    vec4 c = finite_or_zero(imageLoad(color, texel));
     // The light's own pixels give up what its starburst and halo took.
     int light = int(tile_data[(uint(tile.y) * uint(fc.tiles_x) + uint(tile.x)) * TILE_WORDS + TILE_LIGHT]);
     if (light >= 0 && max(c.r, max(c.g, c.b)) >= fc.threshold) {
         uint lb = uint(light) * LIGHT_WORDS + LIGHT_MOVED;
         c.rgb *= vec3(1.0) - vec3(light_data[lb], light_data[lb + 1], light_data[lb + 2]);
     }
-    imageStore(color, p, vec4(c.rgb + vec3(s_covering[0], s_covering[1], s_covering[2]) + sum, c.a));
+    imageStore(color, texel, vec4(c.rgb + vec3(s_covering[0], s_covering[1], s_covering[2]) + sum, c.a));
 }

@@ -143,6 +143,8 @@ struct FlareConstants {
     float curvature;
     float aperture_area;   // area of the aperture of circumradius 1
     int fitted_count;      // fitted ghosts in the table, after the ghost_count matrix ghosts
+    int band_top_px;       // the image is the band of the frame from this row (0: the frame)
+    int band_height_px;    // the band's rows (0: the frame's); a multiple of TILE_SIZE but the last
 };
 
 // The pixel's square [p, p + 1]^2 against the ray o + t d, t in [t0, t1]: the part inside.

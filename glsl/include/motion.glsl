@@ -34,11 +34,12 @@ struct Shutter {
     float roll_x;
     float roll_y;
     float roll_c;
+    int band_top_px;   // the images are the band of the frame from this row (0: the frame)
 };
 
-// The open time of the pixel whose centre is q.
+// The open time of the pixel whose centre is q (in the band's pixels; its row in the frame's).
 vec2 shutter_window(Shutter s, vec2 q) {
-    float offset = s.roll_x * q.x + s.roll_y * q.y + s.roll_c;
+    float offset = s.roll_x * q.x + s.roll_y * (q.y + float(s.band_top_px)) + s.roll_c;
     return vec2(s.open_frames + offset, s.close_frames + offset);
 }
 

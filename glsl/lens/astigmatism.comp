@@ -17,6 +17,7 @@ layout(push_constant) uniform Push {
     float pixel_pitch_mm;
     int entries;
     int direction;   // 0: tangential, 1: sagittal
+    int band_top_px; // the image is the band of the frame from this row (centre_px: the frame's)
 } pc;
 
 #include "height_table.glsl"
@@ -25,10 +26,13 @@ float blur_mm(float h_mm) { return height_table_lookup(1 + pc.direction, pc.entr
 
 vec4 load_clamped(ivec2 q) { return imageLoad(color_in, clamp(q, ivec2(0), pc.size - 1)); }
 
+// At x in the whole frame's pixels; the image is the band from row pc.band_top_px (the frame:
+// 0), so a band weighs its texels exactly as the whole frame's render.
 vec4 bilinear(vec2 x) {
     vec2 t = x - 0.5;
     ivec2 i = ivec2(floor(t));
     vec2 f = t - vec2(i);
+    i.y -= pc.band_top_px;
     return mix(mix(load_clamped(i), load_clamped(i + ivec2(1, 0)), f.x),
                mix(load_clamped(i + ivec2(0, 1)), load_clamped(i + ivec2(1, 1)), f.x), f.y);
 }
@@ -36,7 +40,8 @@ vec4 bilinear(vec2 x) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    vec2 d = vec2(p) + 0.5 - pc.centre_px;
+    ivec2 pw = p + ivec2(0, pc.band_top_px);
+    vec2 d = vec2(pw) + 0.5 - pc.centre_px;
     float h_px = length(d);
     float length_px = blur_mm(h_px * pc.pixel_pitch_mm) / pc.pixel_pitch_mm;
     if (length_px <= 0.0 || h_px == 0.0) {
@@ -51,7 +56,7 @@ void main() {
     vec4 sum = vec4(0.0);
     for (int i = 0; i < n; ++i) {
         float s = ((float(i) + 0.5) / float(n) - 0.5) * length_px;
-        sum += bilinear(vec2(p) + 0.5 + s * axis);
+        sum += bilinear(vec2(pw) + 0.5 + s * axis);
     }
     imageStore(color_out, p, finite_or_zero(sum / float(n)));
 }

@@ -24,7 +24,7 @@ layout(push_constant) uniform Push {
     float pixel_pitch_mm;
     int entries;
     float max_coma_px;   // the table's largest |tangential coma| in px (sets the sample counts)
-    float pad;
+    int band_top_px;     // the image is the band of the frame from this row (centre_px: the frame's)
 } pc;
 
 #include "height_table.glsl"
@@ -36,10 +36,13 @@ float coma_c_px(float h_px) {
 
 vec4 load_clamped(ivec2 q) { return imageLoad(color_in, clamp(q, ivec2(0), pc.size - 1)); }
 
+// At x in the whole frame's pixels; the image is the band from row pc.band_top_px (the frame:
+// 0), so a band weighs its texels exactly as the whole frame's render.
 vec4 bilinear(vec2 x) {
     vec2 t = x - 0.5;
     ivec2 i = ivec2(floor(t));
     vec2 f = t - vec2(i);
+    i.y -= pc.band_top_px;
     return mix(mix(load_clamped(i), load_clamped(i + ivec2(1, 0)), f.x),
                mix(load_clamped(i + ivec2(0, 1)), load_clamped(i + ivec2(1, 1)), f.x), f.y);
 }
@@ -61,7 +64,7 @@ vec2 displacement(vec2 q, float a, float b) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    vec2 x = vec2(p) + 0.5 - pc.centre_px;
+    vec2 x = vec2(p + ivec2(0, pc.band_top_px)) + 0.5 - pc.centre_px;
     // Samples for the largest comet that can reach p (comets near p are about as large).
     float h_p = length(x);
     float c_max = max(abs(coma_c_px(h_p)),

@@ -16,6 +16,7 @@ layout(push_constant) uniform Push {
     vec2 centre_px;
     float pixel_pitch_mm;
     int entries;
+    int band_top_px;   // the image is the band of the frame from this row (centre_px: the frame's)
 } pc;
 
 #include "height_table.glsl"
@@ -29,10 +30,13 @@ float percent(int channel, float r_mm) {
 
 vec4 load_clamped(ivec2 q) { return imageLoad(color_in, clamp(q, ivec2(0), pc.size - 1)); }
 
+// At x in the whole frame's pixels; the image is the band from row pc.band_top_px (the frame:
+// 0), so a band weighs its texels exactly as the whole frame's render.
 vec4 bilinear(vec2 x) {
     vec2 t = x - 0.5;
     ivec2 i = ivec2(floor(t));
     vec2 f = t - vec2(i);
+    i.y -= pc.band_top_px;
     return mix(mix(load_clamped(i), load_clamped(i + ivec2(1, 0)), f.x),
                mix(load_clamped(i + ivec2(0, 1)), load_clamped(i + ivec2(1, 1)), f.x), f.y);
 }
@@ -40,7 +44,7 @@ vec4 bilinear(vec2 x) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (outside(p, pc.size)) return;
-    vec2 d = vec2(p) + 0.5 - pc.centre_px;
+    vec2 d = vec2(p + ivec2(0, pc.band_top_px)) + 0.5 - pc.centre_px;
     float real_mm = length(d) * pc.pixel_pitch_mm;
     vec4 out_color = imageLoad(color_in, p);
     for (int c = 0; c < 3; ++c) {

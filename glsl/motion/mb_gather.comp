@@ -52,12 +52,15 @@ void sample_line(inout Layers l, ivec2 p, float z_x, vec2 win, vec2 dir, float r
     int n = pc.samples_per_line;
     if (reach <= 0.5 || n <= 0) return;
     float spacing = (reach - 0.5) / float(n);
-    float jitter = motion_jitter(p, k);
+    // In the whole frame's rows (a band's from its first row): the same jitter and the same
+    // rounding of the sample positions as the whole frame's render.
+    ivec2 band = ivec2(0, pc.shutter.band_top_px);
+    float jitter = motion_jitter(p + band, k);
     float total = shutter_total(pc.shutter);
     for (int i = 0; i < n; ++i) {
         precise float r = 0.5 + (float(i) + jitter) * spacing;
-        precise vec2 at = vec2(p) + 0.5 + r * dir;
-        ivec2 y = clamp(ivec2(floor(at)), ivec2(0), pc.size - 1);
+        precise vec2 at = vec2(p + band) + 0.5 + r * dir;
+        ivec2 y = clamp(ivec2(floor(at)) - band, ivec2(0), pc.size - 1);
         vec2 o = vec2(p - y);
         vec4 v = texel_velocity(y);
         float light = path_coverage(o, v.xy, v.zw, win, pc.shutter.ramp_frames) / total;

@@ -44,7 +44,9 @@ vec4 hidden(ivec2 p) {
         int steps = int(ceil(reach));
         for (int k = 1; k <= steps; ++k) {
             for (int side = 0; side < 2; ++side) {
-                ivec2 q = ivec2(floor(vec2(p) + 0.5 + (side == 0 ? 1.0 : -1.0) * float(k) * dir));
+                // In the frame's rows (a band's from its first row), as the frame's render.
+                ivec2 band = ivec2(0, pc.shutter.band_top_px);
+                ivec2 q = ivec2(floor(vec2(p + band) + 0.5 + (side == 0 ? 1.0 : -1.0) * float(k) * dir)) - band;
                 if (outside(q, pc.size)) continue;
                 if (depth_classes(z, imageLoad(depth_m, q).r).z >= 1.0) {
                     return finite_or_zero(imageLoad(color_in, q));

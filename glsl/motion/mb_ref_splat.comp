@@ -27,8 +27,10 @@ void main() {
     vec4 v = imageLoad(velocity, y);
     vec2 move = pc.t_frames >= 0.0 ? pc.t_frames * clamp_speed(v.xy, pc.max_speed_px)
                                    : -pc.t_frames * clamp_speed(v.zw, pc.max_speed_px);
-    precise vec2 at = vec2(y) + 0.5 + move;
-    ivec2 l = ivec2(floor(at));
+    // Where it lands, in the frame's rows (a band's from its first row), as the frame's render.
+    ivec2 band = ivec2(0, pc.shutter.band_top_px);
+    precise vec2 at = vec2(y + band) + 0.5 + move;
+    ivec2 l = ivec2(floor(at)) - band;
     if (outside(l, pc.size)) return;
     vec2 win = shutter_window(pc.shutter, vec2(l) + 0.5);
     if (pc.t_frames < win.x || pc.t_frames > win.y) return;

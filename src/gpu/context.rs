@@ -22,6 +22,9 @@ pub struct GpuOptions {
     /// Where the pipeline cache lives; `None` uses `$REALCAM_CACHE_DIR`, then `$XDG_CACHE_HOME/realcam`,
     /// then `~/.cache/realcam`. An empty path disables the persistent cache.
     pub pipeline_cache_dir: Option<PathBuf>,
+    /// At most this much GPU memory for a frame's images (`--max-gpu-memory`); a frame that needs
+    /// more is rendered in bands. `None`: the device's local heap.
+    pub max_memory_bytes: Option<u64>,
 }
 
 impl GpuOptions {
@@ -29,7 +32,7 @@ impl GpuOptions {
     pub fn from_env() -> Self {
         let validation = std::env::var("REALCAM_VALIDATE").is_ok_and(|v| v != "0" && !v.is_empty());
         let device = std::env::var("REALCAM_DEVICE").ok().filter(|d| !d.is_empty());
-        GpuOptions { validation, device, pipeline_cache_dir: None }
+        GpuOptions { validation, device, pipeline_cache_dir: None, max_memory_bytes: None }
     }
 }
 
@@ -87,7 +90,7 @@ pub(crate) struct Shared {
     pub timestamps: bool,
     /// The largest width or height of a 2D image (maxImageDimension2D).
     pub max_image_dimension_px: u32,
-    /// The size of the largest device-local memory heap.
+    /// The size of the largest device-local memory heap, or the user's budget when smaller.
     pub device_local_bytes: u64,
     /// Compute pipelines created so far (see [`Gpu::pipelines_created`]).
     pub pipelines_created: AtomicU64,
@@ -225,7 +228,10 @@ impl Gpu {
         let timestamps =
             families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
 
-        let device_local_bytes = Self::device_local_bytes(&instance, physical_device);
+        let device_local_bytes = match (Self::device_local_bytes(&instance, physical_device), options.max_memory_bytes) {
+            (heap, Some(budget)) if heap == 0 || budget < heap => budget,
+            (heap, _) => heap,
+        };
         let host_image_formats = Self::host_image_formats(&instance, physical_device, &info);
         log::info!("GPU: {info}");
         let shared = Shared {
@@ -459,6 +465,12 @@ impl Gpu {
             return Err(GpuError::TooLarge { device: s.info.name.clone(), width, height, max_px, bytes, heap });
         }
         Ok(())
+    }
+
+    /// The GPU memory a frame's images may take (bytes): the device's local heap, or less when
+    /// [`GpuOptions::max_memory_bytes`] says so; 0 when the device does not say.
+    pub fn memory_budget_bytes(&self) -> u64 {
+        self.shared.device_local_bytes
     }
 
     /// The largest width or height of an image on this device (maxImageDimension2D).

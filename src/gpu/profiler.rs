@@ -31,6 +31,19 @@ impl Profile {
         (!hits.is_empty()).then(|| hits.iter().map(|p| p.gpu_ms).sum())
     }
 
+    /// Adds `other`'s times to these (banded rendering: a frame's bands): each pass's GPU time
+    /// to the first of this profile's of the same name (or as a pass of its own), and the
+    /// submit's wall time.
+    pub fn add(&mut self, other: &Profile) {
+        for pass in &other.passes {
+            match self.passes.iter_mut().find(|p| p.name == pass.name) {
+                Some(p) => p.gpu_ms += pass.gpu_ms,
+                None => self.passes.push(pass.clone()),
+            }
+        }
+        self.submit_wall_ms += other.submit_wall_ms;
+    }
+
     /// A plain-text table, one line per pass.
     pub fn table(&self) -> String {
         let mut out = format!("GPU time per pass on {}:\n", self.device);

@@ -42,6 +42,11 @@ impl ApertureShape {
             .iter()
             .map(|&(x, y)| ((x - centre_px[0]).powi(2) + (y - centre_px[1]).powi(2)).sqrt())
             .fold(0.0, f64::max);
+        self.cats_eye_per_px_at(corner)
+    }
+
+    /// The same with the farthest corner `corner` px from the centre.
+    pub fn cats_eye_per_px_at(&self, corner: f64) -> f64 {
         if corner > 0.0 {
             self.cats_eye.clamp(0.0, 1.0) / corner
         } else {

@@ -26,6 +26,19 @@ pub struct Frame {
     /// The colour space of `color` (and of the output): the colour file's `chromaticities`,
     /// else Rec.709 (OpenEXR's default); the caller may set another (`--colorspace`).
     pub working_space: crate::optics::colour::Chromaticities,
+    /// When this frame is a band of a larger one (banded rendering): where it lies in it.
+    pub band: Option<BandPlace>,
+}
+
+/// Where a band lies in the frame it was cut from: what a pass whose result depends on the
+/// absolute pixel (the film's grain) or on the whole frame (the CoC's safety clamp) reads
+/// instead of the band's own rows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BandPlace {
+    /// The band's first row in the whole frame.
+    pub top_px: u32,
+    /// The whole frame's height.
+    pub full_height_px: u32,
 }
 
 impl Frame {
@@ -67,6 +80,7 @@ impl Frame {
             display_window: passes.display_window,
             data_origin: passes.data_origin,
             working_space: passes.chromaticities.unwrap_or(crate::optics::colour::Chromaticities::REC709),
+            band: None,
         }
     }
 
@@ -84,6 +98,7 @@ impl Frame {
             display_window: (0, 0, width, height),
             data_origin: (0, 0),
             working_space: crate::optics::colour::Chromaticities::REC709,
+            band: None,
         }
     }
 
@@ -112,16 +127,75 @@ impl Frame {
         )
     }
 
-    /// Distance (px) from the optical centre to the frame's farthest corner.
+    /// Distance (px) from the optical centre to the frame's farthest corner (the whole frame's,
+    /// for a band).
     pub fn farthest_corner_px(&self) -> f64 {
-        let (cx, cy) = (self.centre_px[0], self.centre_px[1]);
-        let dx = cx.max(self.width as f64 - cx);
-        let dy = cy.max(self.height as f64 - cy);
+        let (cx, cy) = (self.centre_px[0], self.centre_px[1] + self.band_top_px() as f64);
+        let (w, h) = self.full_size();
+        let dx = cx.max(w as f64 - cx);
+        let dy = cy.max(h as f64 - cy);
         (dx * dx + dy * dy).sqrt()
     }
 
     /// Width and height of the display window (what the sensor maps to).
     pub fn display_size(&self) -> (u32, u32) {
         (self.display_window.2, self.display_window.3)
+    }
+
+    /// The whole frame's size (px): this frame's, or the frame it is a band of.
+    pub fn full_size(&self) -> (u32, u32) {
+        (self.width, self.band.map_or(self.height, |b| b.full_height_px))
+    }
+
+    /// The band's first row in the whole frame (0 for a whole frame).
+    pub fn band_top_px(&self) -> u32 {
+        self.band.map_or(0, |b| b.top_px)
+    }
+
+    /// This frame's size and settings with `color` and no depth or velocity (banded rendering's
+    /// second round, which reads only the colour).
+    pub fn with_colour_only(&self, color: Vec<f32>) -> Frame {
+        Frame {
+            color,
+            depth_m: Vec::new(),
+            velocity_px: None,
+            velocity_prev_px: None,
+            ..Frame::new(self.width, self.height, Vec::new(), Vec::new())
+        }
+        .with_settings_of(self)
+    }
+
+    fn with_settings_of(self, other: &Frame) -> Frame {
+        Frame {
+            velocity_format: other.velocity_format,
+            centre_px: other.centre_px,
+            display_window: other.display_window,
+            data_origin: other.data_origin,
+            working_space: other.working_space,
+            band: other.band,
+            ..self
+        }
+    }
+
+    /// Rows `top..bottom` of this (whole) frame as a frame of their own: the same display window
+    /// and optical centre (moved up by `top` rows), the data window's origin moved down.
+    pub fn band_rows(&self, top: u32, bottom: u32) -> Frame {
+        let (w, full_h) = self.full_size();
+        let bottom = bottom.min(self.height);
+        let rows = |data: &[f32], per_px: usize| data[(top * w) as usize * per_px..(bottom * w) as usize * per_px].to_vec();
+        Frame {
+            width: w,
+            height: bottom - top,
+            color: rows(&self.color, 4),
+            depth_m: if self.depth_m.is_empty() { Vec::new() } else { rows(&self.depth_m, 1) },
+            velocity_px: self.velocity_px.as_deref().map(|v| rows(v, 2)),
+            velocity_prev_px: self.velocity_prev_px.as_deref().map(|v| rows(v, 2)),
+            velocity_format: self.velocity_format,
+            centre_px: [self.centre_px[0], self.centre_px[1] - top as f64],
+            display_window: self.display_window,
+            data_origin: (self.data_origin.0, self.data_origin.1 + top as i32),
+            working_space: self.working_space,
+            band: Some(BandPlace { top_px: self.band_top_px() + top, full_height_px: full_h }),
+        }
     }
 }

@@ -106,6 +106,14 @@ pub trait Pass: Sized + Send + Sync + 'static {
     /// images it needs from `images` and replaces those it writes.
     fn record(&self, rec: &mut Recorder, images: &mut FrameImages, params: &Self::Params) -> GpuResult<()>;
 
+    /// How far (px) an output pixel of a run of `params` reads from it in the run's input: the
+    /// apron a band of the frame needs for this pass (banded rendering, src/pipeline/bands.rs).
+    /// `None`: the whole frame (the flare, whose lights are found over all of it). Default 0,
+    /// for passes that read only their own pixel.
+    fn reach_px(_params: &Self::Params) -> Option<f64> {
+        Some(0.0)
+    }
+
     /// Create now the pipelines a run of `params` will need that [`Pass::new`] could not (those
     /// specialised per run), so they compile beside the other passes' rather than while the
     /// frame is recorded. Optional: a pipeline not prepared is created on its first dispatch.
@@ -152,6 +160,7 @@ pub struct PassEntry {
     plan: fn(&PlanInput<'_>) -> PlannedPass,
     create: fn(&Gpu) -> GpuResult<Box<dyn RecordPass>>,
     likely: fn(&Camera) -> bool,
+    reach: fn(&(dyn Any + Send + Sync)) -> Option<f64>,
 }
 
 /// The entry of pass `P`.
@@ -162,7 +171,12 @@ pub const fn entry<P: Pass>() -> PassEntry {
         plan: plan_erased::<P>,
         create: create_erased::<P>,
         likely: P::likely,
+        reach: reach_erased::<P>,
     }
+}
+
+fn reach_erased<P: Pass>(params: &(dyn Any + Send + Sync)) -> Option<f64> {
+    params.downcast_ref::<P::Params>().map_or(Some(0.0), P::reach_px)
 }
 
 fn plan_erased<P: Pass>(input: &PlanInput<'_>) -> PlannedPass {
@@ -233,6 +247,11 @@ impl PassEntry {
     pub fn likely(&self, camera: &Camera) -> bool {
         (self.likely)(camera)
     }
+
+    /// [`Pass::reach_px`] of one run of this pass.
+    pub fn reach_px(&self, params: &(dyn Any + Send + Sync)) -> Option<f64> {
+        (self.reach)(params)
+    }
 }
 
 /// One pass of a plan: whether and how often it runs, why, and each run's parameters.
@@ -265,6 +284,12 @@ impl PlannedPass {
 
     pub fn params_mut<P: Pass>(&mut self) -> impl Iterator<Item = &mut P::Params> {
         self.runs.iter_mut().filter_map(|r| r.downcast_mut::<P::Params>())
+    }
+
+    /// Run no more (banded rendering: a round of bands runs some of the passes).
+    pub fn clear_runs(&mut self, why: impl Into<String>) {
+        self.runs.clear();
+        self.why = why.into();
     }
 
     /// Make pass `P` run with these parameters (tests that force a pass the planner skipped).
@@ -398,9 +423,16 @@ pub mod twin {
 
     /// Bilinear sample of an RGBA image at `(x, y)`, edge texels continuing beyond the frame.
     pub fn bilinear(image: &HostImage, x: f32, y: f32) -> [f32; 4] {
+        bilinear_in_band(image, x, y, 0)
+    }
+
+    /// [`bilinear`] at (x, y) in the whole frame's pixels of an image that is the band of the
+    /// frame from row `top` (as the shaders that take `band_top_px`).
+    pub fn bilinear_in_band(image: &HostImage, x: f32, y: f32, top: i32) -> [f32; 4] {
         let (tx, ty) = (x - 0.5, y - 0.5);
         let (ix, iy) = (tx.floor() as i32, ty.floor() as i32);
         let (fx, fy) = (tx - ix as f32, ty - iy as f32);
+        let iy = iy - top;
         let (a, b) = (image.clamped(ix, iy), image.clamped(ix + 1, iy));
         let (c, d) = (image.clamped(ix, iy + 1), image.clamped(ix + 1, iy + 1));
         std::array::from_fn(|k| {

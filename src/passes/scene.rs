@@ -27,9 +27,11 @@ pub fn coc_clamp_px(camera: &Camera, pixel_pitch_mm: f64, frame: &Frame) -> f64 
     camera.max_coc.px(pixel_pitch_mm).min(frame_cover_px(frame))
 }
 
-/// Twice the diagonal of the frame's data window (px).
+/// Twice the diagonal of the frame's data window (px); of the whole frame for a band, so that
+/// every band clamps as the whole frame does.
 fn frame_cover_px(frame: &Frame) -> f64 {
-    2.0 * (frame.width as f64).hypot(frame.height as f64)
+    let (w, h) = frame.full_size();
+    2.0 * (w as f64).hypot(h as f64)
 }
 
 /// The input of every pass's plan.
@@ -60,6 +62,9 @@ pub struct SceneFacts {
     pub sa_full_strength_coc_px: f64,
     /// Longitudinal colour: the red and blue channels' CoC offsets (px), when the lens has it.
     pub channel_offsets_px: Option<[f64; 2]>,
+    /// How far the pixels move while the shutter is open, when the frame has velocities and
+    /// motion blur is on.
+    pub motion: Option<super::motion::blur::MotionExtent>,
 }
 
 impl SceneFacts {
@@ -100,6 +105,10 @@ impl SceneFacts {
             clamp_is_frame_cover: max_coc_px < camera.max_coc.px(pitch_mm),
             sa_full_strength_coc_px: crate::optics::spherical::FULL_STRENGTH_COC_MM / pitch_mm,
             channel_offsets_px,
+            motion: match camera.motion.mode {
+                crate::model::camera::MotionBlurMode::Off => None,
+                _ => frame.velocity_rgba().map(|v| super::motion::blur::motion_extent(&v, &camera.motion)),
+            },
         }
     }
 
@@ -144,6 +153,12 @@ fn offsets_visible([r, b]: [f64; 2]) -> bool {
 impl<'a> PlanInput<'a> {
     pub fn new(frame: &'a Frame, camera: &'a Camera) -> PlanInput<'a> {
         PlanInput { frame, camera, facts: SceneFacts::new(frame, camera) }
+    }
+
+    /// A band of a frame with the whole frame's facts (banded rendering: every band plans from
+    /// the whole frame's CoC range and clamp).
+    pub fn with_facts(frame: &'a Frame, camera: &'a Camera, facts: SceneFacts) -> PlanInput<'a> {
+        PlanInput { frame, camera, facts }
     }
 
     /// The runs of the depth of field: one for all channels, or, when longitudinal colour is

@@ -31,6 +31,14 @@ pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
     Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning }
 }
 
+/// The plan of `band`, a band of a frame whose plan is `whole`: the passes plan from the band's
+/// pixels, size and optical centre but from the whole frame's facts (its CoC range and clamp).
+pub fn plan_band(band: &Frame, camera: &Camera, whole: &Plan) -> Plan {
+    let input = PlanInput::with_facts(band, camera, whole.facts.clone());
+    let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
+    Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning: None }
+}
+
 /// The camera of a long exposure's frames (Kyaw 2013 sec. 7.4): `camera` up to the sensor. The
 /// frames' light is averaged as sensor values (after the exposure gain, before the grain and
 /// the film curve, which only the film pass applies), and [`film_plan`] then exposes the average
@@ -103,6 +111,22 @@ impl Plan {
     pub fn force<P: Pass>(&mut self, params: P::Params) {
         if let Some(p) = self.passes.iter_mut().find(|p| p.name == P::NAME) {
             p.set_runs::<P>(vec![params], "forced");
+        }
+    }
+
+    /// Make pass `P` run with these parameters, and why.
+    pub fn set_runs<P: Pass>(&mut self, runs: Vec<P::Params>, why: impl Into<String>) {
+        if let Some(p) = self.passes.iter_mut().find(|p| p.name == P::NAME) {
+            p.set_runs::<P>(runs, why);
+        }
+    }
+
+    /// Keep only the runs of the passes at `range` of the pass order (banded rendering's rounds).
+    pub fn keep_only(&mut self, range: std::ops::Range<usize>) {
+        for (_, p) in self.passes.iter_mut().enumerate().filter(|(i, _)| !range.contains(i)) {
+            if p.runs() {
+                p.clear_runs(format!("{} (in another round of bands)", p.why));
+            }
         }
     }
 

@@ -30,9 +30,13 @@ pub struct Rendered {
 /// a new one per planned run (the recorder keeps each until the frame is submitted), depth,
 /// CoC and tile images, and the staging buffers up and down.
 fn estimated_gpu_bytes(frame: &Frame, plan: &Plan) -> u64 {
+    frame.width as u64 * frame.height as u64 * estimated_gpu_bytes_per_px(plan)
+}
+
+/// [`estimated_gpu_bytes`] per pixel of the frame.
+pub fn estimated_gpu_bytes_per_px(plan: &Plan) -> u64 {
     let runs = plan.passes.iter().map(|p| p.run_params().count() as u64).sum::<u64>();
-    let per_px = 16 * (2 + 2 * runs) + 4 + 4 + (16 + 4) + 16;
-    frame.width as u64 * frame.height as u64 * per_px
+    16 * (2 + 2 * runs) + 4 + 4 + (16 + 4) + 16
 }
 
 impl Renderer {

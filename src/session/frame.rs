@@ -9,6 +9,7 @@ use crate::io::{self, ExrWriteOptions, Image, ScenePasses};
 use crate::model::camera::{Camera, InputCamera, ShotCamera};
 use crate::model::frame::Frame;
 use crate::optics::colour::Chromaticities;
+use crate::pipeline::bands::FrameRender;
 use crate::pipeline::planner::{self, Plan};
 use anyhow::Result;
 use std::borrow::Cow;
@@ -192,7 +193,11 @@ pub fn render_loaded(settings: &RenderSettings, loaded: LoadedFrame, session: &m
         report.say(&format!("warning: {warning}{hint}"));
     }
 
-    let rendered = session.render(&mut frame, &plan)?;
+    let FrameRender { rendered, bands } =
+        session.render(&mut frame, &plan, &|band| planner::plan_band(band, &camera, &plan))?;
+    if let (true, Some(bands)) = (settings.explain, &bands) {
+        session.report().say(&format!("  in bands: {}", bands.why));
+    }
     if settings.profile {
         session.report().say(rendered.profile.table().trim_end_matches('\n'));
         if let Some(line) = session.take_startup() {

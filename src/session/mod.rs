@@ -29,7 +29,8 @@ use crate::io::Image;
 use crate::model::camera::{Camera, ShotCamera};
 use crate::model::frame::Frame;
 use crate::pipeline::planner::{self, Plan};
-use crate::pipeline::render::{Rendered, Renderer};
+use crate::pipeline::bands::{self, FrameRender};
+use crate::pipeline::render::Renderer;
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
@@ -153,9 +154,15 @@ impl Session {
         self.gpu.as_ref().map(|(gpu, _)| gpu)
     }
 
-    /// Renders `frame` by `plan` on the session's GPU, opened at the first call; Vulkan
-    /// validation messages are an error.
-    pub(crate) fn render(&mut self, frame: &mut Frame, plan: &Plan) -> Result<Rendered> {
+    /// Renders `frame` by `plan` on the session's GPU, opened at the first call, in bands when
+    /// the frame does not fit the device (each band planned by `plan_band`); Vulkan validation
+    /// messages are an error.
+    pub(crate) fn render(
+        &mut self,
+        frame: &mut Frame,
+        plan: &Plan,
+        plan_band: &dyn Fn(&Frame) -> Plan,
+    ) -> Result<FrameRender> {
         // The first frame: how its GPU was waited for, and when its pipelines began.
         let mut first = None;
         let opened = match self.gpu.take() {
@@ -170,7 +177,8 @@ impl Session {
         renderer.prepare(plan)?;
         let messages_before = gpu.validation_message_count();
         // The frame's colour is not needed after its upload: its memory takes the result.
-        let rendered = renderer.render_taking_colour(frame, plan, false)?;
+        let frame_render = bands::render_frame(gpu, renderer, frame, plan, plan_band)?;
+        let rendered = &frame_render.rendered;
         // The first frame: from the process's start to its submit, and what came between.
         if let (Some((waited, created)), Some(submitted), Some(start)) =
             (first, rendered.profile.submitted_at, PROCESS_START.get())
@@ -187,7 +195,7 @@ impl Session {
         if messages > 0 {
             bail!("{messages} Vulkan validation messages (see above)");
         }
-        Ok(rendered)
+        Ok(frame_render)
     }
 
     /// Exposes a long exposure's `average` of sensor values on `camera`'s film (its grain and
@@ -202,7 +210,7 @@ impl Session {
         if explain {
             self.report.say(&format!("the long exposure's {}", plan.explain()));
         }
-        let rendered = self.render(&mut frame, &plan)?;
+        let rendered = self.render(&mut frame, &plan, &|band| planner::film_plan(band, camera))?.rendered;
         Ok(Image { width, height, channels: 4, data: rendered.rgba })
     }
 }

@@ -16,6 +16,7 @@ pub fn gpu() -> Gpu {
         validation: true,
         device: std::env::var("REALCAM_DEVICE").ok(),
         pipeline_cache_dir: Some(std::env::temp_dir().join("realcam-test-pipeline-cache")),
+        max_memory_bytes: None,
     };
     Gpu::new(&options).unwrap_or_else(|e| panic!("opening the GPU with validation: {e}"))
 }

@@ -138,12 +138,12 @@ impl Recorder {
                 &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
             )
         };
-        // Copy writes -> compute reads.
+        // Copy writes -> compute reads (and writes: a step may update what was uploaded).
         self.buffer_barriers(&[vk::BufferMemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::COPY)
             .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
             .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
             .buffer(buffer.buffer)
             .offset(0)
             .size(vk::WHOLE_SIZE)]);

@@ -194,6 +194,11 @@ impl Pass for BokehGather {
     const NAME: &'static str = NAME;
     type Params = GatherParams;
 
+    /// The gather's disc: the largest CoC radius.
+    fn reach_px(p: &GatherParams) -> Option<f64> {
+        Some(p.push.radius_px as f64 + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<GatherParams> {
         let (f, camera) = (&input.facts, input.camera);
         if let Some(gated) = input.dof_method_gate(BokehMode::Reference) {
@@ -203,6 +208,10 @@ impl Pass for BokehGather {
         let max_abs_coc_px = f.max_abs_coc_px();
         let mut push =
             GatherPush::new(w, h, max_abs_coc_px, &camera.aperture, f.sa_full_strength_coc_px, input.frame.centre_px);
+        if input.frame.band.is_some() {
+            // A band's cat's eye grows towards the whole frame's farthest corner.
+            push.aperture.cats_eye_per_px = camera.aperture.cats_eye_per_px_at(input.frame.farthest_corner_px()) as f32;
+        }
         let (aperture, data) = ApertureData::new(
             push.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),

@@ -9,7 +9,7 @@ use crate::gpu::shaders::coc::{COC_ARGS_COUNT, COC_ARGS_DISPATCH, COC_ARGS_WORDS
 use crate::gpu::{Gpu, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 use crate::model::camera::{BokehMode, Camera};
 use crate::passes::barriers::{
-    args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write,
+    after_compute_write, args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write,
 };
 use crate::passes::scene::{Channel, PlanInput, VISIBLE_COC_PX};
 use crate::passes::twin::floats;
@@ -119,6 +119,11 @@ impl Pass for Coc {
     const NAME: &'static str = NAME;
     const INPUTS: &'static [Input] = &[Input::Depth];
     type Params = CocParams;
+
+    /// The anti-aliased-edge resolve reads a pixel's 3x3 neighbours.
+    fn reach_px(_p: &CocParams) -> Option<f64> {
+        Some(2.0)
+    }
 
     fn plan(input: &PlanInput<'_>) -> Decision<CocParams> {
         let (f, camera) = (&input.facts, input.camera);
@@ -236,11 +241,12 @@ impl Pass for Coc {
             // args (this dispatch's size, the count) and the edge list: written by coc.comp with
             //   atomics; read here as indirect arguments and by the shader.
             // coc: written by coc.comp; overwritten here at the listed pixels (write-after-write).
-            // depth, color: the upload's own barriers made them visible to compute reads (the
-            //   CoC pass runs before any pass that writes the colour).
-            rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&edge_pixels)]);
-            rec.image_barriers(&[write_after_write(&coc)]);
+            // depth: the upload's own barrier made it visible to compute reads.
+            // color: uploaded, or written by the motion blur when it runs before: wait for
+            //   that pass's writes.
             let color = images.color().clone();
+            rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&edge_pixels)]);
+            rec.image_barriers(&[write_after_write(&coc), after_compute_write(&color)]);
             let edges = CocEdgesBindings {
                 depth_m: &depth,
                 coc_px: &coc,

@@ -158,6 +158,11 @@ impl Pass for Diffraction {
     const INPUTS: &'static [Input] = &[Input::Depth];
     type Params = DiffractionParams;
 
+    /// The kernels' radius.
+    fn reach_px(p: &DiffractionParams) -> Option<f64> {
+        Some(p.push.radius_px as f64 + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<DiffractionParams> {
         let (f, camera) = (&input.facts, input.camera);
         if let Some(gated) = input.dof_method_gate(BokehMode::Diffraction) {

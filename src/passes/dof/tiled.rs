@@ -141,6 +141,12 @@ impl Pass for TiledDof {
     const NAME: &'static str = NAME;
     type Params = TiledDofParams;
 
+    /// The largest CoC radius, and three tiles beyond it: the tiles' dilation, a pyramid texel
+    /// (at most a tile at 1/16) and the composite's bilinear upsampling.
+    fn reach_px(p: &TiledDofParams) -> Option<f64> {
+        Some(p.max_abs_coc_px as f64 / 2.0 + 3.0 * TILE_SIZE as f64 + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<TiledDofParams> {
         let (f, camera) = (&input.facts, input.camera);
         if let Some(gated) = input.dof_method_gate(BokehMode::Tiled) {
@@ -157,6 +163,10 @@ impl Pass for TiledDof {
             input.frame.centre_px,
         );
         base.luminance_weights = input.frame.working_space.luminance_weights().map(|w| w as f32);
+        if input.frame.band.is_some() {
+            // A band's cat's eye grows towards the whole frame's farthest corner.
+            base.aperture.cats_eye_per_px = camera.aperture.cats_eye_per_px_at(input.frame.farthest_corner_px()) as f32;
+        }
         (base.aperture, base.aperture_data) = ApertureData::new(
             base.aperture.with_pitch(camera, f.pixel_pitch_mm),
             camera.aperture_mask.as_ref(),
@@ -384,13 +394,16 @@ impl TiledDof {
 
         // The classification -> everything after it: the args feed indirect dispatches
         // (DRAW_INDIRECT stage, indirect-command reads) and the counters; the lists and radii are
-        // read by the tile passes. `output` is written from scratch by the tile passes.
+        // read by the tile passes. `output` is written from scratch by the tile passes. `color`:
+        // written by the pass before (the motion blur) or uploaded; no step of this run has
+        // waited for those writes yet (the CoC pass reads the colour only at edges it resolves,
+        // and not at all with --keep-edge-depth), and the tile passes read it.
         rec.buffer_barriers(&[
             args_for_indirect(&r.args),
             buffer_after_compute_write(&r.tile_lists),
             buffer_after_compute_write(&r.tile_radius),
         ]);
-        rec.image_barriers(&[overwrite(&r.output)]);
+        rec.image_barriers(&[overwrite(&r.output), after_compute_write(&r.color)]);
         let lists_bindings =
             LevelListsBindings { args: &r.args, tile_radius: &r.tile_radius, level_lists: &r.level_lists };
         level_lists::record(&self.level_lists, rec, &lists_bindings, tiles)?;

@@ -68,6 +68,9 @@ pub struct FilmPush {
     pub vignette_entries: i32,
     /// The vignette's table's first word in the film's table buffer.
     pub vignette_base: i32,
+    /// A band's first row in the whole frame (banded rendering): the grain's rows are the
+    /// whole frame's.
+    pub band_top_px: i32,
 }
 
 impl FilmPush {
@@ -154,6 +157,7 @@ impl FilmPush {
             vignette_image_distance_mm: 0.0,
             vignette_entries: 0,
             vignette_base: 0,
+            band_top_px: 0,
         }
     }
 
@@ -167,7 +171,7 @@ impl FilmPush {
         let v = if value.is_finite() { value } else { 0.0 };
         let mut h = v * self.exposure_gain;
         if self.noise_sigma > 0.0 {
-            h += self.noise_sigma * h.max(0.0).sqrt() * gaussian(x, y, c, self.seed);
+            h += self.noise_sigma * h.max(0.0).sqrt() * gaussian(x, y.wrapping_add(self.band_top_px as u32), c, self.seed);
         }
         self.response(h, table)
     }
@@ -338,6 +342,7 @@ impl Pass for Film {
         let (mut push, mut table) = response_push(w, h, gain, film);
         push.noise_sigma = noise_sigma as f32;
         push.seed = camera.seed;
+        push.band_top_px = input.frame.band_top_px() as i32;
         // The vignette's falloff, where that pass runs, in this dispatch (see src/passes/lens/vignette.rs).
         let mut also = String::new();
         if let Some(v) = Vignette::plan(input).runs.into_iter().find(|v| v.in_film) {

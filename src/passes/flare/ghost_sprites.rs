@@ -99,7 +99,10 @@ impl Twin for GhostSpritesShader {
         let (tiles, lights, sprites) = (floats(b[2].words()), floats(b[3].words()), floats(b[4].words()));
         let total = b[5].words()[ARGS_LIGHTS as usize] as usize * fc.slots_per_light.max(0) as usize;
         let input = b[0].image().clone();
-        let (w, h) = ((groups[0] * TILE_SIZE).min(size[0] as u32), (groups[1] * TILE_SIZE).min(size[1] as u32));
+        // The sprites' light over the whole frame's tiles; the image is the band of size[1] rows
+        // from band_top_px (the whole frame: 0).
+        let top = fc.band_top_px.max(0) as u32;
+        let (w, h) = ((groups[0] * TILE_SIZE).min(size[0] as u32), (top + groups[1] * TILE_SIZE).min(top + size[1] as u32));
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
         for s in sprites.chunks_exact(SPRITE_WORDS as usize).take(total) {
             if s[SPRITE_KIND as usize] as u32 == KIND_FITTED {
@@ -121,9 +124,9 @@ impl Twin for GhostSpritesShader {
             }
         }
         let out = b[0].image_mut();
-        for y in 0..h {
+        for y in top..h {
             for x in 0..w {
-                let c = input.clamped(x as i32, y as i32);
+                let c = input.clamped(x as i32, (y - top) as i32);
                 let mut rgb = [c[0], c[1], c[2]].map(crate::passes::twin::finite_or_zero);
                 let tile = (y / TILE_SIZE) * fc.tiles_x as u32 + x / TILE_SIZE;
                 let light = tiles[(tile * TILE_WORDS + TILE_LIGHT) as usize];
@@ -132,7 +135,7 @@ impl Twin for GhostSpritesShader {
                     (0..3).for_each(|k| rgb[k] *= 1.0 - moved[k]);
                 }
                 let sum = sums[(y * w + x) as usize];
-                let texel = out.texel_mut(x, y);
+                let texel = out.texel_mut(x, y - top);
                 for k in 0..3 {
                     texel[k] = (rgb[k] as f64 + sum[k]) as f32;
                 }

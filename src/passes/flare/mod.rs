@@ -193,6 +193,9 @@ pub struct FlareParams {
     /// The ghosts in the table, in order.
     pub ghosts: Vec<GhostPath>,
     pub max_lights: u32,
+    /// Banded rendering: the whole frame's tile records ([`tiles::tile_records`]), uploaded
+    /// instead of summed from the band, so the lights are the whole frame's.
+    pub whole_frame_tiles: Option<std::sync::Arc<Vec<f32>>>,
 }
 
 impl FlareParams {
@@ -270,6 +273,8 @@ impl FlareParams {
             curvature: a.curvature as f32,
             aperture_area: a.area_factor() as f32,
             fitted_count: fitted_count as i32,
+            band_top_px: 0,
+            band_height_px: 0,
         };
         // The matrix ghosts' table, then the fitted ghosts'.
         let mut table = if chosen.is_empty() { Vec::new() } else { ghost_table(&chosen, g0) };
@@ -283,6 +288,7 @@ impl FlareParams {
             explicit: if explicit.is_empty() { vec![0.0] } else { explicit },
             ghosts: chosen.iter().map(|g| g.path).collect(),
             max_lights: MAX_LIGHTS,
+            whole_frame_tiles: None,
         }
     }
 
@@ -311,6 +317,11 @@ pub struct Flare {
 impl Pass for Flare {
     const NAME: &'static str = NAME;
     type Params = FlareParams;
+
+    /// The whole frame: the lights are found over all of it and their ghosts land anywhere.
+    fn reach_px(_p: &FlareParams) -> Option<f64> {
+        None
+    }
 
     fn plan(input: &PlanInput<'_>) -> Decision<FlareParams> {
         let (camera, frame) = (input.camera, input.frame);
@@ -409,7 +420,12 @@ impl Pass for Flare {
         let constants = rec.upload_buffer("flare constants", &constants_words(&p.constants))?;
         let ghost_table = rec.upload_buffer("flare ghost table", &p.ghost_table)?;
         let explicit = rec.upload_buffer("flare explicit lights", &p.explicit)?;
-        let tiles = rec.create_buffer("flare tiles", tile_count * TILE_WORDS as u64 * 4, storage)?;
+        // A band's tiles are the whole frame's, summed before (their upload records its own
+        // copy -> compute barrier); a frame's are summed here.
+        let tiles = match &p.whole_frame_tiles {
+            Some(whole) => rec.upload_buffer("flare tiles (the whole frame's)", whole)?,
+            None => rec.create_buffer("flare tiles", tile_count * TILE_WORDS as u64 * 4, storage)?,
+        };
         let lit = rec.create_buffer("flare lit tiles", tile_count * 4, storage)?;
         let lights = rec.create_buffer("flare lights", p.max_lights as u64 * LIGHT_WORDS as u64 * 4, storage)?;
         let sprite_slots = p.sprite_slots();
@@ -424,7 +440,9 @@ impl Pass for Flare {
         let args =
             rec.create_buffer("flare counts", ARGS_WORDS as u64 * 4, storage | vk::BufferUsageFlags::INDIRECT_BUFFER)?;
 
-        tiles::record(&self.tiles, rec, &color, &constants, &tiles, [tx, ty])?;
+        if p.whole_frame_tiles.is_none() {
+            tiles::record(&self.tiles, rec, &color, &constants, &tiles, [tx, ty])?;
+        }
         let light_bindings = FlareLightsBindings {
             constants: &constants,
             tiles: &tiles,

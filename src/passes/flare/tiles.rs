@@ -44,31 +44,40 @@ impl Twin for FlareTilesShader {
     fn cpu(size: &[i32; 2], groups: [u32; 3], b: &mut [HostData]) {
         let fc: FlareConstants = constants_of(&b[1]);
         let image = b[0].image().clone();
+        let records = tile_records(|x, y| image.clamped(x as i32, y as i32), [size[0] as u32, size[1] as u32], &fc);
         let tiles = b[2].words_mut();
-        for ty in 0..groups[1] {
-            for tx in 0..groups[0] {
-                // f32 sums in the shader's order (pixels row by row).
-                let mut sums = [0.0f32; 7];
-                for y in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(size[1] as u32) {
-                    for x in tx * TILE_SIZE..((tx + 1) * TILE_SIZE).min(size[0] as u32) {
-                        let c = &image.clamped(x as i32, y as i32)[..3];
-                        if light_weight(c, fc.threshold).is_some() {
-                            let c = [c[0], c[1], c[2]].map(|v| v.clamp(-FLARE_MAX_VALUE, FLARE_MAX_VALUE));
-                            let w = (c[0] + c[1] + c[2]).max(0.0);
-                            let values = [c[0], c[1], c[2], w * (x as f32 + 0.5), w * (y as f32 + 0.5), w, 1.0];
-                            sums.iter_mut().zip(values).for_each(|(s, v)| *s += v);
-                        }
+        let n = (groups[0] * groups[1]) as usize * TILE_WORDS as usize;
+        tiles[..n].iter_mut().zip(&records).for_each(|(t, r)| *t = r.to_bits());
+    }
+}
+
+/// The step's tile records of an image of `size` px whose pixel (x, y) is `rgba(x, y)`, for the
+/// tile grid of `fc`: f32 sums in the shader's order (pixels row by row). Banded rendering sums
+/// the whole frame's here before its bands draw the flare.
+pub fn tile_records<'a>(rgba: impl Fn(u32, u32) -> &'a [f32], size: [u32; 2], fc: &FlareConstants) -> Vec<f32> {
+    let (tiles_x, tiles_y) = (fc.tiles_x.max(0) as u32, fc.tiles_y.max(0) as u32);
+    let mut tiles = vec![0.0f32; (tiles_x * tiles_y) as usize * TILE_WORDS as usize];
+    for ty in 0..tiles_y {
+        for tx in 0..tiles_x {
+            let mut sums = [0.0f32; 7];
+            for y in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(size[1]) {
+                for x in tx * TILE_SIZE..((tx + 1) * TILE_SIZE).min(size[0]) {
+                    let c = &rgba(x, y)[..3];
+                    if light_weight(c, fc.threshold).is_some() {
+                        let c = [c[0], c[1], c[2]].map(|v| v.clamp(-FLARE_MAX_VALUE, FLARE_MAX_VALUE));
+                        let w = (c[0] + c[1] + c[2]).max(0.0);
+                        let values = [c[0], c[1], c[2], w * (x as f32 + 0.5), w * (y as f32 + 0.5), w, 1.0];
+                        sums.iter_mut().zip(values).for_each(|(s, v)| *s += v);
                     }
                 }
-                let t = (ty * fc.tiles_x as u32 + tx) as usize * TILE_WORDS as usize;
-                for (k, s) in sums.iter().enumerate() {
-                    tiles[t + k] = s.to_bits();
-                }
-                tiles[t + TILE_LIGHT as usize] = (-1.0f32).to_bits();
             }
+            let t = (ty * tiles_x + tx) as usize * TILE_WORDS as usize;
+            tiles[t..t + 7].copy_from_slice(&sums);
+            tiles[t + TILE_LIGHT as usize] = -1.0;
         }
-        debug_assert_eq!((TILE_WX, TILE_WY, TILE_W, TILE_COUNT), (3, 4, 5, 6));
     }
+    debug_assert_eq!((TILE_WX, TILE_WY, TILE_W, TILE_COUNT), (3, 4, 5, 6));
+    tiles
 }
 
 /// Record the step: `tiles` gets one record per tile of `color`.

@@ -48,6 +48,11 @@ pub struct FlareConstants {
     pub aperture_area: f32,
     /// Fitted ghosts in the table, after the `ghost_count` matrix ghosts (`fitted`).
     pub fitted_count: i32,
+    /// The first row of the band drawn (banded rendering: the constants are the whole frame's,
+    /// the image a band of it); 0 for a whole frame.
+    pub band_top_px: i32,
+    /// The band's rows (0: the whole frame's): the sprites are drawn on its tiles only.
+    pub band_height_px: i32,
 }
 
 /// The constants a twin finds in its binding.

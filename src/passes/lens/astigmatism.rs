@@ -6,7 +6,7 @@ use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::HeightTable;
 use crate::passes::filter::{self, FilterBindings};
 use crate::passes::scene::PlanInput;
-use crate::passes::twin::{bilinear, finite_or_zero, floats};
+use crate::passes::twin::{bilinear_in_band, finite_or_zero, floats};
 use crate::passes::{height_table_lookup, Decision, FrameImages, Pass};
 
 pub const NAME: &str = "astigmatism";
@@ -21,6 +21,9 @@ pub struct AstigmatismPush {
     pub entries: i32,
     /// 0: tangential, 1: sagittal (set per dispatch).
     pub direction: i32,
+    /// The image is the band of the frame from this row (banded rendering; `centre_px` is in
+    /// the whole frame's pixels); 0 for the whole frame.
+    pub band_top_px: i32,
 }
 
 /// The table buffer: heights, tangential blur (mm), sagittal blur (mm).
@@ -53,7 +56,8 @@ impl Twin for AstigmatismShader {
         let pitch = push.pixel_pitch_mm;
         for y in 0..push.size[1] as u32 {
             for x in 0..push.size[0] as u32 {
-                let d = [x as f32 + 0.5 - push.centre_px[0], y as f32 + 0.5 - push.centre_px[1]];
+                let (top, yw) = (push.band_top_px, y as i32 + push.band_top_px);
+                let d = [x as f32 + 0.5 - push.centre_px[0], yw as f32 + 0.5 - push.centre_px[1]];
                 let h_px = (d[0] * d[0] + d[1] * d[1]).sqrt();
                 let column = 1 + push.direction as usize;
                 let length_px = height_table_lookup(&table, column, push.entries as usize, h_px * pitch) / pitch;
@@ -68,7 +72,7 @@ impl Twin for AstigmatismShader {
                 let mut sum = [0.0f32; 4];
                 for i in 0..n {
                     let s = ((i as f32 + 0.5) / n as f32 - 0.5) * length_px;
-                    let v = bilinear(&input, x as f32 + 0.5 + s * axis[0], y as f32 + 0.5 + s * axis[1]);
+                    let v = bilinear_in_band(&input, x as f32 + 0.5 + s * axis[0], yw as f32 + 0.5 + s * axis[1], top);
                     for k in 0..4 {
                         sum[k] += v[k];
                     }
@@ -95,6 +99,13 @@ impl Pass for Astigmatism {
     const NAME: &'static str = NAME;
     type Params = AstigmatismParams;
 
+    /// The longest blur of the tables (mm on the film, tangential or sagittal).
+    fn reach_px(p: &AstigmatismParams) -> Option<f64> {
+        let n = p.push.entries.max(0) as usize;
+        let mm = p.table.get(n..).unwrap_or(&[]).iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
+        Some(mm / p.push.pixel_pitch_mm.max(1e-9) as f64 + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<AstigmatismParams> {
         match &input.camera.astigmatism {
             Some((t, s)) if !(t.is_zero() && s.is_zero()) => {
@@ -107,10 +118,11 @@ impl Pass for Astigmatism {
                 );
                 let push = AstigmatismPush {
                     size: [frame.width as i32, frame.height as i32],
-                    centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+                    centre_px: [frame.centre_px[0] as f32, (frame.centre_px[1] + frame.band_top_px() as f64) as f32],
                     pixel_pitch_mm: pitch_mm as f32,
                     entries: t.image_height_mm.len() as i32,
                     direction: 0,
+                    band_top_px: frame.band_top_px() as i32,
                 };
                 Decision::run(AstigmatismParams { push, table: table_data(t, s) }, why)
             }

@@ -21,7 +21,9 @@ pub struct ComaPush {
     pub entries: i32,
     /// Largest |tangential coma| of the table in px.
     pub max_coma_px: f32,
-    pub pad: f32,
+    /// The image is the band of the frame from this row (banded rendering; `centre_px` is in
+    /// the whole frame's pixels); 0 for the whole frame.
+    pub band_top_px: i32,
 }
 
 impl ComaPush {
@@ -32,7 +34,7 @@ impl ComaPush {
             pixel_pitch_mm: pixel_pitch_mm as f32,
             entries: coma_mm.image_height_mm.len() as i32,
             max_coma_px: (coma_mm.max_abs() / pixel_pitch_mm) as f32,
-            pad: 0.0,
+            band_top_px: 0,
         }
     }
 
@@ -82,6 +84,7 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaPush, table: &[f32]) -> Vec<f32> {
         let (tx, ty) = (x - 0.5, y - 0.5);
         let (ix, iy) = (tx.floor() as i32, ty.floor() as i32);
         let (fx, fy) = (tx - ix as f32, ty - iy as f32);
+        let iy = iy - params.band_top_px;
         let (a, b, c, d) = (load(ix, iy), load(ix + 1, iy), load(ix, iy + 1), load(ix + 1, iy + 1));
         std::array::from_fn(|k| {
             let top = a[k] + (b[k] - a[k]) * fx;
@@ -92,7 +95,7 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaPush, table: &[f32]) -> Vec<f32> {
     let mut out = vec![0.0f32; rgba.len()];
     for py in 0..h {
         for px in 0..w {
-            let x = [px as f32 + 0.5 - params.centre_px[0], py as f32 + 0.5 - params.centre_px[1]];
+            let x = [px as f32 + 0.5 - params.centre_px[0], (py + params.band_top_px) as f32 + 0.5 - params.centre_px[1]];
             let o = (py * w + px) as usize * 4;
             let h_p = (x[0] * x[0] + x[1] * x[1]).sqrt();
             let c_max = params
@@ -172,6 +175,11 @@ impl Pass for Coma {
     const NAME: &'static str = NAME;
     type Params = ComaParams;
 
+    /// The comet: three times the sagittal coma, the tangential coma's length, and a pixel.
+    fn reach_px(p: &ComaParams) -> Option<f64> {
+        Some(3.0 * p.push.max_coma_px.abs() as f64 + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<ComaParams> {
         let (frame, pitch_mm) = (input.frame, input.facts.pixel_pitch_mm);
         let Some(t) = &input.camera.coma else {
@@ -188,7 +196,8 @@ impl Pass for Coma {
             "the lens's coma table: comets up to {longest_px:.1} px long in the frame at f/{}",
             input.camera.lens.f_number
         );
-        let push = ComaPush::new([frame.width, frame.height], frame.centre_px, pitch_mm, t);
+        let centre_px = [frame.centre_px[0], frame.centre_px[1] + frame.band_top_px() as f64];
+        let push = ComaPush { band_top_px: frame.band_top_px() as i32, ..ComaPush::new([frame.width, frame.height], centre_px, pitch_mm, t) };
         Decision::run(ComaParams { push, table: table_data(t) }, why)
     }
 

@@ -5,7 +5,7 @@ use crate::gpu::{Gpu, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::optics::distortion::DistortionTables;
 use crate::passes::filter::{self, FilterBindings};
 use crate::passes::scene::PlanInput;
-use crate::passes::twin::{bilinear, finite_or_zero, floats};
+use crate::passes::twin::{bilinear_in_band, finite_or_zero, floats};
 use crate::passes::{height_table_lookup, Decision, FrameImages, Pass};
 
 pub const NAME: &str = "distortion";
@@ -18,6 +18,9 @@ pub struct DistortionPush {
     pub centre_px: [f32; 2],
     pub pixel_pitch_mm: f32,
     pub entries: i32,
+    /// The image is the band of the frame from this row (banded rendering; `centre_px` is in
+    /// the whole frame's pixels); 0 for the whole frame.
+    pub band_top_px: i32,
 }
 
 /// The table buffer: heights, then green, red-extra and blue-extra percent.
@@ -36,13 +39,13 @@ pub fn distortion_cpu(rgba: &[f32], params: &DistortionPush, tables: &Distortion
     let mut out = rgba.to_vec();
     for y in 0..h {
         for x in 0..w {
-            let d = [x as f64 + 0.5 - params.centre_px[0] as f64, y as f64 + 0.5 - params.centre_px[1] as f64];
+            let d = [x as f64 + 0.5 - params.centre_px[0] as f64, (y + params.band_top_px) as f64 + 0.5 - params.centre_px[1] as f64];
             let real_mm = (d[0] * d[0] + d[1] * d[1]).sqrt() * params.pixel_pitch_mm as f64;
             for c in 0..3 {
                 let r = tables.ideal_height_mm(c, real_mm);
                 let scale = if real_mm > 0.0 { r / real_mm } else { 1.0 };
                 let sx = params.centre_px[0] as f64 + d[0] * scale - 0.5;
-                let sy = params.centre_px[1] as f64 + d[1] * scale - 0.5;
+                let sy = params.centre_px[1] as f64 + d[1] * scale - 0.5 - params.band_top_px as f64;
                 let (ix, iy) = (sx.floor() as i32, sy.floor() as i32);
                 let (fx, fy) = ((sx - ix as f64) as f32, (sy - iy as f64) as f32);
                 let top = load(ix, iy, c) + (load(ix + 1, iy, c) - load(ix, iy, c)) * fx;
@@ -81,7 +84,8 @@ impl Twin for DistortionShader {
         let out = b[1].image_mut();
         for y in 0..push.size[1] as u32 {
             for x in 0..push.size[0] as u32 {
-                let d = [x as f32 + 0.5 - push.centre_px[0], y as f32 + 0.5 - push.centre_px[1]];
+                let top = push.band_top_px;
+                let d = [x as f32 + 0.5 - push.centre_px[0], (y as i32 + top) as f32 + 0.5 - push.centre_px[1]];
                 let real_mm = (d[0] * d[0] + d[1] * d[1]).sqrt() * push.pixel_pitch_mm;
                 let mut texel: [f32; 4] = input.clamped(x as i32, y as i32).try_into().unwrap_or([0.0; 4]);
                 for (c, value) in texel.iter_mut().enumerate().take(3) {
@@ -95,7 +99,7 @@ impl Twin for DistortionShader {
                         }
                     }
                     let scale = if real_mm > 0.0 { r / real_mm } else { 1.0 };
-                    *value = bilinear(&input, push.centre_px[0] + d[0] * scale, push.centre_px[1] + d[1] * scale)[c];
+                    *value = bilinear_in_band(&input, push.centre_px[0] + d[0] * scale, push.centre_px[1] + d[1] * scale, top)[c];
                 }
                 out.texel_mut(x, y).copy_from_slice(&texel.map(finite_or_zero));
             }
@@ -119,6 +123,18 @@ impl Pass for Distortion {
     const NAME: &'static str = NAME;
     type Params = DistortionParams;
 
+    /// The largest shift the tables give (green's percent plus the larger colour's) at the
+    /// frame's farthest corner from the centre, and the bilinear lookup's pixel.
+    fn reach_px(p: &DistortionParams) -> Option<f64> {
+        let n = p.push.entries.max(0) as usize;
+        let column = |k: usize| p.table.get(k * n..(k + 1) * n).unwrap_or(&[]).iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
+        let percent = column(1) + column(2).max(column(3));
+        let [w, h] = p.push.size.map(|s| s as f64);
+        let [cx, cy] = p.push.centre_px.map(|c| c as f64);
+        let corner_px = cx.max(w - cx).hypot(cy.max(h - cy));
+        Some(percent / 100.0 * corner_px + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<DistortionParams> {
         match &input.camera.distortion {
             Some(tables) if !tables.is_zero() => {
@@ -137,9 +153,10 @@ impl Pass for Distortion {
                 );
                 let push = DistortionPush {
                     size: [frame.width as i32, frame.height as i32],
-                    centre_px: [frame.centre_px[0] as f32, frame.centre_px[1] as f32],
+                    centre_px: [frame.centre_px[0] as f32, (frame.centre_px[1] + frame.band_top_px() as f64) as f32],
                     pixel_pitch_mm: input.facts.pixel_pitch_mm as f32,
                     entries: tables.green_percent.image_height_mm.len() as i32,
+                    band_top_px: frame.band_top_px() as i32,
                 };
                 Decision::run(DistortionParams { push, table: table_data(tables) }, why)
             }

@@ -61,26 +61,14 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
             Decision::not_chosen()
         });
     }
-    let Some(rgba) = frame.velocity_rgba() else {
+    let (Some(rgba), Some(extent)) = (frame.velocity_rgba(), input.facts.motion) else {
         return Err(Decision::skip("no velocity pass"));
     };
     let timing = &motion.timing;
     let open = timing.open_length_frames();
     let max_speed_px = (motion.max_blur_px / open.max(1e-9)) as f32;
-    let (earliest, latest) = timing.extent_frames();
-    let (t_fwd, t_back) = (latest.max(0.0), (-earliest).max(0.0));
-    let (mut speed_px, mut reach_px, mut blur_px) = (0.0f64, 0.0f64, 0.0f64);
-    for v in rgba.chunks_exact(4) {
-        let v = clamped_velocity(v, max_speed_px);
-        let (next, prev) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
-        speed_px = speed_px.max(next).max(prev);
-        reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
-        // The longest path over one line's open time (both halves when it straddles the frame time).
-        let (o, c) = (timing.open_frames, timing.close_frames);
-        blur_px = blur_px.max(next * c.max(0.0) - next * o.max(0.0) + prev * (-o).max(0.0) - prev * (-c).max(0.0));
-    }
+    let MotionExtent { speed_px, reach_px, blur_px } = extent;
     let rolling = if timing.readout_frames > 0.0 {
-        reach_px = reach_px.max(speed_px * timing.readout_frames);
         format!(
             ", rolling shutter reading out {} in {:.4} s ({:.3} frames)",
             timing.direction.name(),
@@ -130,10 +118,11 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
         (None, "; velocity and depth kept as stored at anti-aliased edges (--keep-edge-depth)".to_string())
     };
     let why = format!("{why}{edges_why}");
+    let (_, full_h) = frame.full_size();
     let plan = MotionPlan {
         width: w,
         height: h,
-        shutter: ShutterPush::new(timing, w, h),
+        shutter: ShutterPush::for_band(timing, w, full_h, frame.band_top_px()),
         max_speed_px,
         max_blur_px: blur_px,
         speed_px,
@@ -141,6 +130,41 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
         edges,
     };
     Ok((plan, why))
+}
+
+/// How far the frame's pixels move while the shutter is open (a fact both methods plan from,
+/// of the whole frame when a band is planned).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionExtent {
+    /// The fastest velocity after the clamp (px per frame).
+    pub speed_px: f64,
+    /// The farthest (px) a pixel's path reaches from it on either side of the frame time.
+    pub reach_px: f64,
+    /// The longest path (px) a pixel travels while its line's shutter is open.
+    pub blur_px: f64,
+}
+
+/// The [`MotionExtent`] of the velocities `rgba` (next x, y, previous x, y per pixel) under
+/// `motion`'s shutter and clamp.
+pub fn motion_extent(rgba: &[f32], motion: &crate::model::camera::Motion) -> MotionExtent {
+    let timing = &motion.timing;
+    let max_speed_px = (motion.max_blur_px / timing.open_length_frames().max(1e-9)) as f32;
+    let (earliest, latest) = timing.extent_frames();
+    let (t_fwd, t_back) = (latest.max(0.0), (-earliest).max(0.0));
+    let (mut speed_px, mut reach_px, mut blur_px) = (0.0f64, 0.0f64, 0.0f64);
+    for v in rgba.chunks_exact(4) {
+        let v = clamped_velocity(v, max_speed_px);
+        let (next, prev) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
+        speed_px = speed_px.max(next).max(prev);
+        reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
+        // The longest path over one line's open time (both halves when it straddles the frame time).
+        let (o, c) = (timing.open_frames, timing.close_frames);
+        blur_px = blur_px.max(next * c.max(0.0) - next * o.max(0.0) + prev * (-o).max(0.0) - prev * (-c).max(0.0));
+    }
+    if timing.readout_frames > 0.0 {
+        reach_px = reach_px.max(speed_px * timing.readout_frames);
+    }
+    MotionExtent { speed_px, reach_px, blur_px }
 }
 
 /// Why motion blur runs before the depth of field, in `--explain`.
@@ -166,6 +190,12 @@ impl Pass for MotionBlur {
     const NAME: &'static str = NAME;
     const INPUTS: &'static [Input] = &[Input::Depth, Input::Velocity];
     type Params = MotionBlurParams;
+
+    /// A pixel's four lines reach `max_reach_px`; its tile's neighbourhood `search_tiles` tiles
+    /// (of the tiles' largest velocities); the edge resolve a pixel's 3x3 neighbours.
+    fn reach_px(p: &MotionBlurParams) -> Option<f64> {
+        Some(p.motion.max_reach_px + ((p.search_tiles + 1) * TILE_SIZE as i32) as f64 + 2.0)
+    }
 
     fn plan(input: &PlanInput<'_>) -> Decision<MotionBlurParams> {
         let (motion, why) = match plan_motion(input, MotionBlurMode::Fast) {

@@ -14,11 +14,20 @@ pub struct ShutterPush {
     pub roll_x: f32,
     pub roll_y: f32,
     pub roll_c: f32,
+    /// The images are the band of the frame from this row (banded rendering; 0 for the whole
+    /// frame): a pixel's line, its jitter and its sample positions are its row's in the frame.
+    pub band_top_px: i32,
 }
 
 impl ShutterPush {
     /// The shutter of `timing` on a `width x height` frame.
     pub fn new(timing: &ShutterTiming, width: u32, height: u32) -> ShutterPush {
+        ShutterPush::for_band(timing, width, height, 0)
+    }
+
+    /// The shutter of a band whose first row is row `top_px` of a `width x height` frame: a
+    /// pixel's open time is its row's in the whole frame.
+    pub fn for_band(timing: &ShutterTiming, width: u32, height: u32, top_px: u32) -> ShutterPush {
         let (a, b, c) = timing.rolling_plane(width, height);
         ShutterPush {
             open_frames: timing.open_frames as f32,
@@ -27,12 +36,14 @@ impl ShutterPush {
             roll_x: a as f32,
             roll_y: b as f32,
             roll_c: c as f32,
+            band_top_px: top_px as i32,
         }
     }
 
-    /// The open time of the pixel whose centre is `q`.
+    /// The open time of the pixel whose centre is `q` (in the band's pixels; its row in the
+    /// frame's).
     pub fn window(&self, q: [f32; 2]) -> [f32; 2] {
-        let offset = self.roll_x * q[0] + self.roll_y * q[1] + self.roll_c;
+        let offset = self.roll_x * q[0] + self.roll_y * (q[1] + self.band_top_px as f32) + self.roll_c;
         [self.open_frames + offset, self.close_frames + offset]
     }
 

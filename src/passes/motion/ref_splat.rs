@@ -45,8 +45,9 @@ pub fn landing(pc: &MbRefSplatPush, y: [i32; 2], velocity: &[f32]) -> Option<usi
     } else {
         clamp_speed([velocity[2], velocity[3]], pc.max_speed_px).map(|c| -t * c)
     };
-    let at = [y[0] as f32 + 0.5 + v[0], y[1] as f32 + 0.5 + v[1]];
-    let l = [at[0].floor() as i32, at[1].floor() as i32];
+    let top = pc.shutter.band_top_px;
+    let at = [y[0] as f32 + 0.5 + v[0], (y[1] + top) as f32 + 0.5 + v[1]];
+    let l = [at[0].floor() as i32, at[1].floor() as i32 - top];
     if l[0] < 0 || l[1] < 0 || l[0] >= pc.size[0] || l[1] >= pc.size[1] {
         return None;
     }

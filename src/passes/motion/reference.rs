@@ -45,6 +45,11 @@ impl Pass for MotionReference {
     const INPUTS: &'static [Input] = &[Input::Depth, Input::Velocity];
     type Params = MotionReferenceParams;
 
+    /// Every pixel's path over the open time, and the edge resolve's 3x3 neighbours.
+    fn reach_px(p: &MotionReferenceParams) -> Option<f64> {
+        Some(p.motion.max_reach_px + 2.0)
+    }
+
     fn plan(input: &PlanInput<'_>) -> Decision<MotionReferenceParams> {
         let (motion, why) = match plan_motion(input, MotionBlurMode::Reference) {
             Ok(p) => p,
