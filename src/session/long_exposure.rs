@@ -54,7 +54,9 @@ pub(super) fn render(
     let mut display_view = None;
     let mut failed = None;
     let mut skipped = 0;
-    let jobs = range.frames.iter().map(|&f| (f, patterns.at_frame(settings, f), exposure.has(f))).collect();
+    // Which frames the state holds, then each frame's settings as the reader comes to it.
+    let held: Vec<bool> = range.frames.iter().map(|&f| exposure.has(f)).collect();
+    let jobs = range.frames.iter().zip(held).map(|(&f, held)| (f, patterns.at_frame(settings, f), held));
     let stop = AtomicBool::new(false);
     let priority = IoPriority::default();
     let mut session = Session::opening(&settings.gpu, &sensor, report.clone());
