@@ -484,48 +484,26 @@ pub fn write_file(field: &'static str, path: &Path, bytes: &[u8]) -> Result<(), 
 }
 
 /// Removes this process's temporaries on SIGINT, SIGTERM and SIGHUP, then ends the process
-/// by that signal as it would have without this. Call it first thing in `main`, before any
-/// thread starts: the signals are blocked in the calling thread (and so in every thread it
-/// starts later) and taken by a thread of their own.
+/// by that signal as it would have without this: signal-hook's handler wakes a thread of its
+/// own, which removes them and then acts as the signal's default. Call it first thing in
+/// `main`; it returns once the signals are taken (or left as they were, if no thread starts).
 pub fn remove_temporaries_on_signals() {
-    const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
-    // SAFETY: plain signal-set manipulation on a local set; pthread_sigmask on this thread.
-    let set = unsafe {
-        let mut set: libc::sigset_t = std::mem::zeroed();
-        libc::sigemptyset(&mut set);
-        for s in SIGNALS {
-            libc::sigaddset(&mut set, s);
-        }
-        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
-            return;
-        }
-        set
-    };
-    let spawned = std::thread::Builder::new().name("realcam-signals".into()).spawn(move || loop {
-        let mut sig: libc::c_int = 0;
-        // SAFETY: waits for one of the blocked signals of `set`.
-        if unsafe { libc::sigwait(&set, &mut sig) } != 0 {
-            continue;
-        }
-        let live = std::mem::take(&mut *LIVE.lock().unwrap_or_else(|p| p.into_inner()));
-        for tmp in live {
-            let _ = std::fs::remove_file(tmp);
-        }
-        // SAFETY: restore the default action and deliver the signal to this thread, the only
-        // one where it is unblocked: the process ends as the signal asks.
-        unsafe {
-            libc::signal(sig, libc::SIG_DFL);
-            let mut one: libc::sigset_t = std::mem::zeroed();
-            libc::sigemptyset(&mut one);
-            libc::sigaddset(&mut one, sig);
-            libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
-            libc::raise(sig);
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let (taken, wait) = std::sync::mpsc::sync_channel(1);
+    let spawned = std::thread::Builder::new().name("realcam-signals".into()).spawn(move || {
+        // Taken on this thread, so that no handler is ever left without the thread it wakes.
+        let signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]);
+        let _ = taken.send(());
+        let Ok(mut signals) = signals else { return };
+        for signal in signals.forever() {
+            for tmp in std::mem::take(&mut *LIVE.lock().unwrap_or_else(|p| p.into_inner())) {
+                let _ = std::fs::remove_file(tmp);
+            }
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
         }
     });
-    if spawned.is_err() {
-        // No thread to take them: let the signals act as before.
-        // SAFETY: unblock the set blocked above on this thread.
-        unsafe { libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut()) };
+    if spawned.is_ok() {
+        let _ = wait.recv();
     }
 }
 
