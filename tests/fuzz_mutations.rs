@@ -1,5 +1,7 @@
 //! The fuzzing harness on the stable toolchain: a few thousand seeded mutations of the seed
-//! corpus (testdata/fuzz/*.exr, lenses/*.toml, films/*.toml) through the entry points that the
+//! corpus (testdata/fuzz/*.exr, lenses/*.toml, films/*.toml, and the sequence patterns and
+//! ranges, `--state` files, OpenColorIO configs and `--flare-lights` files made here) through
+//! the entry points that the
 //! cargo-fuzz targets in fuzz/ call (`realcam::tools::fuzz`), in this process. Every case must
 //! end without a panic, without an abort, without allocating more than the entry points'
 //! budget, and with no NaN/Inf in a successful result. The mutations are the same on every run
@@ -254,6 +256,63 @@ fn seeds(folder: &str, ext: &str) -> Seeds {
     files.into_iter().map(|p| (p.display().to_string(), std::fs::read(&p).unwrap())).collect()
 }
 
+/// Sequences as `fuzz::sequence` takes them: a path pattern, a newline, a frame range.
+const SEQUENCE_SEEDS: [&str; 5] = [
+    "shot/beauty.####.exr\n1001-1100",
+    "b.%04d.exr\n1-10x3,20,-4--2",
+    "render/frame_@@@.exr\n1003-1009:2",
+    "f_%d\n-3-3",
+    "still.exr\n1",
+];
+
+/// OpenColorIO configs: a linear space with aliases and an anchor, a matrix (ACEScg), a display
+/// with its curve, roles and a file rule; the second names a LUT.
+const OCIO_SEEDS: [&str; 2] = [
+    "ocio_profile_version: 2\n\
+     roles:\n  default: lin_rec709\n  scene_linear: lin_rec709\n\
+     file_rules:\n  - !<Rule> {name: Default, colorspace: default}\n\
+     displays:\n  sRGB:\n    - !<View> {name: Raw, colorspace: lin_rec709}\n    - !<View> {name: Display, colorspace: srgb}\n\
+     colorspaces:\n\
+     \x20 - !<ColorSpace>\n    name: lin_rec709\n    aliases: [linear, lin_srgb]\n    family: &fam Scene\n    encoding: scene-linear\n\
+     \x20 - !<ColorSpace>\n    name: acescg\n    family: *fam\n\
+     \x20   to_scene_reference: !<MatrixTransform> {matrix: [1.7051, -0.6218, -0.0833, 0, -0.1302, 1.1408, -0.0106, 0, -0.0240, -0.1290, 1.1530, 0, 0, 0, 0, 1]}\n\
+     \x20 - !<ColorSpace>\n    name: srgb\n    family: Display\n\
+     \x20   from_scene_reference: !<ExponentTransform> {value: [2.2, 2.2, 2.2, 1], direction: inverse}\n",
+    "ocio_profile_version: 2\nsearch_path: luts\n\
+     roles:\n  default: acescg\n\
+     displays:\n  sRGB:\n    - !<View> {name: Raw, colorspace: acescg}\n\
+     colorspaces:\n\
+     \x20 - !<ColorSpace>\n    name: acescg\n\
+     \x20   to_scene_reference: !<MatrixTransform> {matrix: [1.7051, -0.6218, -0.0833, 0, -0.1302, 1.1408, -0.0106, 0, -0.0240, -0.1290, 1.1530, 0, 0, 0, 0, 1]}\n\
+     \x20 - !<ColorSpace>\n    name: log\n\
+     \x20   to_scene_reference: !<FileTransform> {src: curve.spi1d, interpolation: linear}\n",
+];
+
+/// `--flare-lights` files: white and coloured lights, in and out of the frame, and none.
+const LIGHTS_SEEDS: [&str; 3] = [
+    "[\n  {\"x\": 100, \"y\": 50.5, \"energy\": 1000},\n  {\"x\": -20, \"y\": 3e2, \"rgb\": [1, 0.5, 0.25], \"area_px\": 4}\n]\n",
+    "[{\"x\": 0.5, \"y\": 0.5, \"rgb\": [0, 0, 1e6]}]\n",
+    "[]\n",
+];
+
+/// `texts` as seeds named `what` 0, 1, ...
+fn text_seeds(what: &str, texts: &[&str]) -> Seeds {
+    texts.iter().enumerate().map(|(i, t)| (format!("{what} {i}"), t.as_bytes().to_vec())).collect()
+}
+
+/// Long exposures' `--state` files: two frames of a 3x2 RGBA image, and no frame.
+fn state_seeds() -> Seeds {
+    use realcam::model::long_exposure::LongExposure;
+    let image = |v: f32| realcam::io::Image { width: 3, height: 2, channels: 4, data: vec![v; 24] };
+    let mut two = LongExposure::new("camera settings");
+    two.add(1001, &image(0.25)).unwrap();
+    two.add(1003, &image(4.0)).unwrap();
+    vec![
+        ("state of 2 frames".into(), two.to_bytes()),
+        ("state of no frame".into(), LongExposure::new("camera settings").to_bytes()),
+    ]
+}
+
 type Entry = fn(&[u8]) -> Result<fuzz::Outcome, fuzz::Violation>;
 
 /// Named files and their bytes.
@@ -309,11 +368,15 @@ fn seeded_mutations_neither_panic_nor_abort_nor_overallocate_nor_give_nan() {
     let lenses = seeds("lenses", "toml");
     let films = seeds("films", "toml");
     let prescriptions: Vec<_> = lenses.iter().filter(|(p, _)| p.contains("tessar")).cloned().collect();
-    let groups: [(&str, Entry, Seeds, usize, bool); 4] = [
+    let groups: [(&str, Entry, Seeds, usize, bool); 8] = [
         ("exr_passes", fuzz::exr_passes, seeds("testdata/fuzz", "exr"), 6000, false),
         ("lens_file", fuzz::lens_file, lenses, 6000, true),
         ("film_file", fuzz::film_file, films, 3000, true),
         ("prescription", fuzz::prescription, prescriptions, 1500, true),
+        ("sequence", fuzz::sequence, text_seeds("sequence", &SEQUENCE_SEEDS), 3000, true),
+        ("state_file", fuzz::state_file, state_seeds(), 2000, false),
+        ("ocio_config", fuzz::ocio_config, text_seeds("config", &OCIO_SEEDS), 1500, true),
+        ("flare_lights", fuzz::flare_lights, text_seeds("lights", &LIGHTS_SEEDS), 3000, true),
     ];
     let mut total = 0;
     for (name, entry, seeds, count, text) in groups {
@@ -327,7 +390,7 @@ fn seeded_mutations_neither_panic_nor_abort_nor_overallocate_nor_give_nan() {
     eprintln!("{total} cases in {:.1} s", start.elapsed().as_secs_f64());
     let decoder_panics = realcam::io::exr_read::DECODER_PANICS.load(Ordering::Relaxed);
     assert_eq!(decoder_panics, 0, "the exr crate panicked {decoder_panics} time(s) (caught, made errors)");
-    assert!(total >= 16_500);
+    assert!(total >= 26_000);
 }
 
 /// The seed EXRs of testdata/fuzz/ are what `write_fuzz_seeds` makes: written again into a

@@ -13,6 +13,7 @@
 //!   next run into the same folder removes those of dead processes of this host (the name
 //!   carries host and process id, so a folder shared by a render farm is safe).
 
+use super::sequence::FramePattern;
 use super::IoError;
 use std::ffi::OsStr;
 use std::io::Write;
@@ -139,14 +140,40 @@ fn resolved(path: &Path, dir: &Path, name: &OsStr) -> PathBuf {
 /// The files a run reads, each with what it is (`color pass`, `lens file`, ...), indexed so that
 /// an output can be looked up among the thousands of files of a sequence: by real path (the
 /// folder's real path and the name, or the whole real path of a symbolic link) and, for the
-/// files that exist, by device and inode (hard links).
+/// files that exist, by device and inode (hard links). A sequence's numbered files are kept as
+/// their pattern and the frames, and each file as two 32-bit hashes (8 bytes a file, 8 MB for
+/// a million frames); a hash that matches is confirmed on the file itself.
 #[derive(Default)]
 pub struct InputFiles {
+    /// The files added one by one: what each is, its path.
     files: Vec<(&'static str, PathBuf)>,
-    by_path: std::collections::HashMap<PathBuf, usize>,
-    by_inode: std::collections::HashMap<(u64, u64), usize>,
-    /// Real paths of the folders seen (None: the folder does not resolve).
+    /// The numbered files: what they are and their pattern, each for every frame of `frames`.
+    sequences: Vec<(&'static str, FramePattern)>,
+    frames: Vec<i64>,
+    /// (hash of the real path, file) and (hash of device and inode, file); a file is an index
+    /// of `files`, or [`SEQUENCE_BIT`] and a position among the numbered files.
+    by_path: Vec<(u32, u32)>,
+    by_inode: Vec<(u32, u32)>,
+    /// Whether the two lists are sorted (they are, from the first look-up).
+    sorted: bool,
+    /// Real paths of the folders seen (None: the folder does not resolve); at most
+    /// [`MAX_FOLDERS`] at once.
     folders: std::collections::HashMap<PathBuf, Option<PathBuf>>,
+}
+
+/// The bit of an [`InputFiles`] file number that marks a numbered file.
+const SEQUENCE_BIT: u32 = 1 << 31;
+
+/// How many folders' real paths [`InputFiles`] keeps (a frame number in the folder's name
+/// would otherwise keep one per frame).
+const MAX_FOLDERS: usize = 4096;
+
+/// A 32-bit hash of `value` (the same in every run).
+fn hash32(value: &impl std::hash::Hash) -> u32 {
+    use std::hash::Hasher;
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    value.hash(&mut hasher);
+    hasher.finish() as u32
 }
 
 impl InputFiles {
@@ -161,23 +188,56 @@ impl InputFiles {
 
     /// Adds the file `path`, which is `what`.
     pub fn add(&mut self, what: &'static str, path: PathBuf) {
-        let index = self.files.len();
-        let (real, id) = self.identify(&path);
-        self.by_path.entry(real).or_insert(index);
-        if let Some(id) = id {
-            self.by_inode.entry(id).or_insert(index);
-        }
+        let index = self.files.len() as u32;
+        self.index(&path, index);
         self.files.push((what, path));
+    }
+
+    /// Adds the file of each of `frames` that `pattern` names, which are `what`. Every
+    /// sequence of a set has the same frames (one copy of them is kept); other frames are
+    /// added file by file.
+    pub fn add_frames(&mut self, what: &'static str, pattern: &FramePattern, frames: &[i64]) {
+        if self.sequences.is_empty() {
+            self.frames = frames.to_vec();
+        } else if self.frames != frames {
+            frames.iter().for_each(|&f| self.add(what, pattern.path(f)));
+            return;
+        }
+        let first = self.sequences.len() * self.frames.len();
+        self.sequences.push((what, pattern.clone()));
+        for (k, &frame) in frames.iter().enumerate() {
+            self.index(&pattern.path(frame), SEQUENCE_BIT | (first + k) as u32);
+        }
+    }
+
+    /// Indexes the file `path` as `file`.
+    fn index(&mut self, path: &Path, file: u32) {
+        let (real, id) = self.identify(path);
+        self.by_path.push((hash32(&real), file));
+        if let Some(id) = id {
+            self.by_inode.push((hash32(&id), file));
+        }
+        self.sorted = false;
+    }
+
+    /// What `file` (a number of [`InputFiles::index`]) is, and its path.
+    fn file(&self, file: u32) -> (&'static str, PathBuf) {
+        if file & SEQUENCE_BIT == 0 {
+            return self.files[file as usize].clone();
+        }
+        let position = (file & !SEQUENCE_BIT) as usize;
+        let (what, pattern) = &self.sequences[position / self.frames.len()];
+        (what, pattern.path(self.frames[position % self.frames.len()]))
     }
 
     /// How many files.
     pub fn len(&self) -> usize {
-        self.files.len()
+        self.files.len() + self.sequences.len() * self.frames.len()
     }
 
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
-        self.files.is_empty()
+        self.len() == 0
     }
 
     /// The real path of `path` (which need not exist: its folder's real path and its name; a
@@ -209,16 +269,38 @@ impl InputFiles {
             return real.as_ref().map(|d| d.join(name));
         }
         let real = std::fs::canonicalize(dir).ok();
+        if self.folders.len() >= MAX_FOLDERS {
+            self.folders.clear();
+        }
         self.folders.insert(dir.to_path_buf(), real.clone());
         real.map(|d| d.join(name))
+    }
+
+    /// The first file (in the order added) whose hash in `list` is `hash` and that `same`
+    /// confirms.
+    fn find(&mut self, by_inode: bool, hash: u32, same: impl Fn(&(PathBuf, Option<(u64, u64)>)) -> bool) -> Option<u32> {
+        let list = if by_inode { &self.by_inode } else { &self.by_path };
+        let start = list.partition_point(|e| e.0 < hash);
+        let candidates: Vec<u32> = list[start..].iter().take_while(|e| e.0 == hash).map(|e| e.1).collect();
+        candidates.into_iter().find(|&file| {
+            let path = self.file(file).1;
+            same(&self.identify(&path))
+        })
     }
 
     /// Refuses `path` as the output named by `field` when it is one of these files; else its
     /// real path.
     pub fn check_output(&mut self, field: &'static str, path: &Path) -> Result<PathBuf, IoError> {
+        if !self.sorted {
+            self.by_path.sort_unstable();
+            self.by_inode.sort_unstable();
+            self.sorted = true;
+        }
         let (real, id) = self.identify(path);
-        let found = self.by_path.get(&real).or_else(|| id.and_then(|id| self.by_inode.get(&id)));
-        match found.map(|&i| &self.files[i]) {
+        let found = self
+            .find(false, hash32(&real), |(other, _)| *other == real)
+            .or_else(|| id.and_then(|id| self.find(true, hash32(&id), |(_, other)| *other == Some(id))));
+        match found.map(|file| self.file(file)) {
             Some((what, input)) => Err(IoError::Output {
                 field,
                 path: path.to_path_buf(),
@@ -402,48 +484,26 @@ pub fn write_file(field: &'static str, path: &Path, bytes: &[u8]) -> Result<(), 
 }
 
 /// Removes this process's temporaries on SIGINT, SIGTERM and SIGHUP, then ends the process
-/// by that signal as it would have without this. Call it first thing in `main`, before any
-/// thread starts: the signals are blocked in the calling thread (and so in every thread it
-/// starts later) and taken by a thread of their own.
+/// by that signal as it would have without this: signal-hook's handler wakes a thread of its
+/// own, which removes them and then acts as the signal's default. Call it first thing in
+/// `main`; it returns once the signals are taken (or left as they were, if no thread starts).
 pub fn remove_temporaries_on_signals() {
-    const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
-    // SAFETY: plain signal-set manipulation on a local set; pthread_sigmask on this thread.
-    let set = unsafe {
-        let mut set: libc::sigset_t = std::mem::zeroed();
-        libc::sigemptyset(&mut set);
-        for s in SIGNALS {
-            libc::sigaddset(&mut set, s);
-        }
-        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
-            return;
-        }
-        set
-    };
-    let spawned = std::thread::Builder::new().name("realcam-signals".into()).spawn(move || loop {
-        let mut sig: libc::c_int = 0;
-        // SAFETY: waits for one of the blocked signals of `set`.
-        if unsafe { libc::sigwait(&set, &mut sig) } != 0 {
-            continue;
-        }
-        let live = std::mem::take(&mut *LIVE.lock().unwrap_or_else(|p| p.into_inner()));
-        for tmp in live {
-            let _ = std::fs::remove_file(tmp);
-        }
-        // SAFETY: restore the default action and deliver the signal to this thread, the only
-        // one where it is unblocked: the process ends as the signal asks.
-        unsafe {
-            libc::signal(sig, libc::SIG_DFL);
-            let mut one: libc::sigset_t = std::mem::zeroed();
-            libc::sigemptyset(&mut one);
-            libc::sigaddset(&mut one, sig);
-            libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
-            libc::raise(sig);
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let (taken, wait) = std::sync::mpsc::sync_channel(1);
+    let spawned = std::thread::Builder::new().name("realcam-signals".into()).spawn(move || {
+        // Taken on this thread, so that no handler is ever left without the thread it wakes.
+        let signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]);
+        let _ = taken.send(());
+        let Ok(mut signals) = signals else { return };
+        for signal in signals.forever() {
+            for tmp in std::mem::take(&mut *LIVE.lock().unwrap_or_else(|p| p.into_inner())) {
+                let _ = std::fs::remove_file(tmp);
+            }
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
         }
     });
-    if spawned.is_err() {
-        // No thread to take them: let the signals act as before.
-        // SAFETY: unblock the set blocked above on this thread.
-        unsafe { libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut()) };
+    if spawned.is_ok() {
+        let _ = wait.recv();
     }
 }
 

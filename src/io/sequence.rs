@@ -9,6 +9,7 @@
 //! (both ends included) or a stepped span `1001-1100x2` (or `1001-1100:2`, Open Job
 //! Description's range expressions, which its chunks of a stepped range are written in);
 //! negative frames as `-10--5` or `-3-3`. Frames are kept in the order given; a frame listed twice is refused.
+//! A range of a million frames takes 8 MB (16 MB while it is checked).
 
 use std::path::{Path, PathBuf};
 
@@ -128,7 +129,6 @@ impl FrameRange {
     pub fn parse(text: &str) -> Result<FrameRange, SequenceError> {
         let refuse = |reason: String| SequenceError::Range { range: text.to_string(), reason };
         let mut frames: Vec<i64> = Vec::new();
-        let mut seen = std::collections::HashSet::new();
         for item in text.split(',') {
             let item = item.trim();
             if item.is_empty() {
@@ -160,17 +160,21 @@ impl FrameRange {
             if count + frames.len() as u128 > MAX_FRAMES as u128 {
                 return Err(refuse(format!("more than {MAX_FRAMES} frames")));
             }
+            frames.reserve_exact(count as usize);
             let mut frame = first;
             while frame <= last {
-                if !seen.insert(frame) {
-                    return Err(refuse(format!("frame {frame} is listed twice")));
-                }
                 frames.push(frame);
                 match frame.checked_add(step) {
                     Some(next) => frame = next,
                     None => break,
                 }
             }
+        }
+        // A frame listed twice (the smallest such), found in a sorted copy: 8 bytes a frame.
+        let mut sorted = frames.clone();
+        sorted.sort_unstable();
+        if let Some(pair) = sorted.windows(2).find(|pair| pair[0] == pair[1]) {
+            return Err(refuse(format!("frame {} is listed twice", pair[0])));
         }
         Ok(FrameRange { text: text.to_string(), frames })
     }

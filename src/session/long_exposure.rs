@@ -54,7 +54,11 @@ pub(super) fn render(
     let mut display_view = None;
     let mut failed = None;
     let mut skipped = 0;
-    let jobs = range.frames.iter().map(|&f| (f, patterns.at_frame(settings, f), exposure.has(f))).collect();
+    // Which frames the state holds, then each frame's settings as the reader comes to it.
+    let mut in_state = exposure.done().to_vec();
+    in_state.sort_unstable();
+    let held: Vec<bool> = range.frames.iter().map(|f| in_state.binary_search(f).is_ok()).collect();
+    let jobs = range.frames.iter().zip(held).map(|(&f, held)| (f, patterns.at_frame(settings, f), held));
     let stop = AtomicBool::new(false);
     let priority = IoPriority::default();
     let mut session = Session::opening(&settings.gpu, &sensor, report.clone());
@@ -141,7 +145,9 @@ fn read_state(path: &std::path::Path, range: &FrameRange, settings: &str) -> Res
     let context = || format!("--state \"{}\"", path.display());
     let bytes = std::fs::read(path).with_context(context)?;
     let exposure = LongExposure::from_bytes(&bytes).with_context(context)?;
-    if let Some(frame) = exposure.done().iter().find(|f| !range.frames.contains(f)) {
+    let mut frames = range.frames.clone();
+    frames.sort_unstable();
+    if let Some(frame) = exposure.done().iter().find(|f| frames.binary_search(f).is_err()) {
         bail!("{}: frame {frame} of the exposure is not in --frames \"{}\"", context(), range.text);
     }
     if let Some((there, here)) = first_difference(exposure.settings(), settings) {

@@ -37,15 +37,13 @@ pub fn render_sequence(
     }
     let started = Instant::now();
     let total = range.frames.len();
-    let jobs: Vec<(i64, RenderSettings, bool)> = range
-        .frames
-        .iter()
-        .map(|&frame| {
-            let one = patterns.at_frame(settings, frame);
-            let skip = sequence.skip_existing && complete_outputs(&one, frame, &*report);
-            (frame, one, skip)
-        })
-        .collect();
+    // Each frame's settings and skip check are made as the reader comes to it: nothing per
+    // frame is kept ahead (a million frames would take gigabytes before the first).
+    let jobs = range.frames.iter().map(|&frame| {
+        let one = patterns.at_frame(settings, frame);
+        let skip = sequence.skip_existing && complete_outputs(&one, frame, &*report);
+        (frame, one, skip)
+    });
     let fail_fast = sequence.fail_fast;
     let stop = AtomicBool::new(false);
     // The reading and writing threads yield to a GPU that runs on the CPU (io::sequence).
@@ -106,10 +104,21 @@ pub fn render_sequence(
         ));
     }
     if !tally.failed.is_empty() {
-        let list: Vec<String> = tally.failed.iter().map(i64::to_string).collect();
-        bail!("{} of {total} frames failed: {}", tally.failed.len(), list.join(", "));
+        bail!("{} of {total} frames failed: {}", tally.failed.len(), frame_list(&tally.failed));
     }
     Ok(())
+}
+
+/// The most frames a message lists; the others are counted.
+const LISTED_FRAMES: usize = 20;
+
+/// `frames` as a list for a message: the first [`LISTED_FRAMES`], then how many more.
+fn frame_list(frames: &[i64]) -> String {
+    let listed: Vec<String> = frames.iter().take(LISTED_FRAMES).map(i64::to_string).collect();
+    match frames.len().saturating_sub(LISTED_FRAMES) {
+        0 => listed.join(", "),
+        more => format!("{} and {more} more", listed.join(", ")),
+    }
 }
 
 /// Whether every output of `one` (frame `frame`) exists and reads back whole, for
@@ -161,13 +170,14 @@ pub(super) struct ReadFrame {
     pub loaded: Option<Result<LoadedFrame>>,
 }
 
-/// Reads the frames of `jobs` (frame, its settings, whether to skip it) in order on a thread of
+/// Reads the frames of `jobs` (frame, its settings, whether to skip it; made as they are
+/// reached) in order on a thread of
 /// `scope`, at most two frames ahead of the receiver (one in the channel, one being read), so
 /// that the next frame's EXRs are read while the GPU renders this one; each frame through its
 /// camera of `shot`, made `adapt(camera)`. Stops when `stop` is set or the receiver is gone.
 pub(super) fn read_ahead<'scope>(
     scope: &'scope std::thread::Scope<'scope, '_>,
-    jobs: Vec<(i64, RenderSettings, bool)>,
+    jobs: impl Iterator<Item = (i64, RenderSettings, bool)> + Send + 'scope,
     shot: &'scope ShotCamera,
     adapt: fn(&Camera) -> Camera,
     stop: &'scope AtomicBool,

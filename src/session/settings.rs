@@ -171,7 +171,7 @@ impl Patterns {
         ];
         for (what, pattern, path) in passes {
             match (pattern, path) {
-                (Some(pattern), _) => range.frames.iter().for_each(|&f| inputs.add(what, pattern.path(f))),
+                (Some(pattern), _) => inputs.add_frames(what, pattern, &range.frames),
                 (None, Some(path)) => inputs.add(what, path.clone()),
                 (None, None) => {}
             }

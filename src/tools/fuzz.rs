@@ -1,5 +1,6 @@
 //! Entry points for fuzzing: the cargo-fuzz targets in `fuzz/` (nightly) and the seeded
-//! mutation test `tests/fuzz_mutations.rs` (stable, in CI) call the same functions. Each takes
+//! mutation test `tests/fuzz_mutations.rs` (stable, in CI) call the same functions (the
+//! sequence, state, OpenColorIO and flare-lights ones only the latter, so far). Each takes
 //! arbitrary bytes and runs a reader or parser as realcam runs it. Refusing the input with an
 //! error is fine; what is not ([`Violation`]) is a successful result with NaN or Inf where
 //! realcam promises finite numbers. Panics, aborts and allocations beyond [`BUDGET`] are the
@@ -164,6 +165,103 @@ pub fn prescription(bytes: &[u8]) -> Result<Outcome, Violation> {
     }
     if let Ok(derived) = report.lens_file_with_tables(Path::new("derived.toml")) {
         lens_file(derived.as_bytes())?;
+    }
+    Ok(Accepted)
+}
+
+/// A sequence: the first line a path pattern (any bytes), the rest a frame range. The pattern's
+/// path of a frame must be its prefix, the number and its suffix; the range must hold at most
+/// [`MAX_FRAMES`](crate::io::sequence::MAX_FRAMES) frames, none twice, and split into chunks.
+pub fn sequence(bytes: &[u8]) -> Result<Outcome, Violation> {
+    use crate::io::sequence::{FramePattern, FrameRange, MAX_FRAMES};
+    use std::os::unix::ffi::OsStrExt;
+    let (text, range) = match bytes.iter().position(|&b| b == b'\n') {
+        Some(at) => (&bytes[..at], &bytes[at + 1..]),
+        None => (bytes, &b""[..]),
+    };
+    let pattern = FramePattern::parse(Path::new(std::ffi::OsStr::from_bytes(text)));
+    let Ok(range) = FrameRange::parse(&String::from_utf8_lossy(range)) else { return Ok(Refused) };
+    if range.frames.len() > MAX_FRAMES {
+        return Err(format!("a range of {} frames was accepted", range.frames.len()));
+    }
+    let mut sorted = range.frames.clone();
+    sorted.sort_unstable();
+    if let Some(pair) = sorted.windows(2).find(|p| p[0] == p[1]) {
+        return Err(format!("frame {} was accepted twice", pair[0]));
+    }
+    let chunked: usize = (0..range.frames.len().div_ceil(1000) as u64)
+        .map(|i| range.chunk(i, 1000).map(|c| c.frames.len()).unwrap_or(0))
+        .sum();
+    if chunked != range.frames.len() {
+        return Err(format!("chunks of 1000 hold {chunked} of the {} frames", range.frames.len()));
+    }
+    let Ok(Some(pattern)) = pattern else { return Ok(Refused) };
+    for &frame in range.frames.iter().take(100).chain(&[i64::MIN, i64::MAX]) {
+        let path = pattern.path(frame);
+        let bytes = path.as_os_str().as_bytes();
+        // Its digits (a negative frame's sign may come before padding zeros: -004).
+        let number = frame.unsigned_abs().to_string();
+        // The token (at least one byte) becomes the number, padded to at most 20 bytes.
+        let longest = text.len() + (number.len() + 1).max(20);
+        if bytes.len() > longest || !bytes.windows(number.len()).any(|w| w == number.as_bytes()) {
+            return Err(format!("frame {frame} has the path {}", path.display()));
+        }
+    }
+    Ok(Accepted)
+}
+
+/// A long exposure's `--state` file: read, and its exposure (the average of its frames) every
+/// value finite; written again, it reads back the same.
+pub fn state_file(bytes: &[u8]) -> Result<Outcome, Violation> {
+    use crate::model::long_exposure::LongExposure;
+    let Ok(exposure) = LongExposure::from_bytes(bytes) else { return Ok(Refused) };
+    if let Ok(image) = exposure.image() {
+        finite("an exposure value", image.data.iter().map(|&v| f64::from(v)))?;
+    }
+    let again = LongExposure::from_bytes(&exposure.to_bytes()).map_err(|e| format!("written again: {e}"))?;
+    if again.done() != exposure.done() || again.settings() != exposure.settings() {
+        return Err("the state reads back otherwise".into());
+    }
+    Ok(Accepted)
+}
+
+/// An OpenColorIO config: the LUTs it names found, loaded as `--config` loads it, its first
+/// colour space made the working space (primaries finite) and its default display and view
+/// made a processor.
+pub fn ocio_config(bytes: &[u8]) -> Result<Outcome, Violation> {
+    let path = scratch_path("ocio");
+    std::fs::write(&path, bytes).map_err(|e| format!("cannot write the scratch file: {e}"))?;
+    let result = ocio_config_at(&path);
+    let _ = std::fs::remove_file(&path);
+    result
+}
+
+fn ocio_config_at(path: &Path) -> Result<Outcome, Violation> {
+    use crate::io::colour_config::ColourConfig;
+    let _ = crate::io::colour_config::config_lut_files(path);
+    let Ok(config) = ColourConfig::load(&path.to_string_lossy()) else { return Ok(Refused) };
+    if config.config.num_color_spaces() == 0 {
+        return Ok(Refused);
+    }
+    let space = config.config.color_space_name_by_index(0).to_string();
+    let Ok((_, c)) = config.working_space(&space) else { return Ok(Refused) };
+    finite("a primary", c.red.into_iter().chain(c.green).chain(c.blue).chain(c.white))?;
+    let _ = config.display_view(&space, None, None);
+    Ok(Accepted)
+}
+
+/// A `--flare-lights` file: read; every light's position, energy and area finite, energy and
+/// area not negative.
+pub fn flare_lights(bytes: &[u8]) -> Result<Outcome, Violation> {
+    let Ok(text) = std::str::from_utf8(bytes) else { return Ok(Refused) };
+    let Ok(lights) = crate::io::flare_lights::parse_flare_lights(text, Path::new("fuzz.json")) else {
+        return Ok(Refused);
+    };
+    for l in &lights {
+        finite("a light", [l.x_px, l.y_px, l.area_px].into_iter().chain(l.energy))?;
+        if l.area_px < 0.0 || l.energy.iter().any(|&e| e < 0.0) {
+            return Err(format!("a light of energy {:?} and area {} was accepted", l.energy, l.area_px));
+        }
     }
     Ok(Accepted)
 }
