@@ -140,37 +140,10 @@ pub struct GpuArgs {
     #[arg(long)]
     pub device: Option<String>,
     /// At most this much GPU memory for a frame (e.g. 512M, 2G, 1.5GB; default: the device's
-    /// memory); a frame that needs more is rendered in horizontal bands.
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    /// memory); `render` renders a frame that needs more in horizontal bands, the other
+    /// commands refuse it.
+    #[arg(long, value_name = "BYTES", value_parser = crate::model::settings::parse_bytes)]
     pub max_gpu_memory: Option<u64>,
-}
-
-/// A size in bytes: a number with an optional K, M, G or T (powers of 1000; a trailing B and
-/// an `i` for powers of 1024, as in 2GiB, are taken too).
-pub fn parse_bytes(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let value: f64 = number.parse().map_err(|_| format!("{text:?} is not a size: give bytes, or a number with K, M, G or T"))?;
-    let unit = unit.trim().to_ascii_uppercase();
-    let unit = unit.strip_suffix('B').unwrap_or(&unit);
-    let (unit, base) = match unit.strip_suffix('I') {
-        Some(u) => (u, 1024.0f64),
-        None => (unit, 1000.0),
-    };
-    let power = match unit {
-        "" => 0,
-        "K" => 1,
-        "M" => 2,
-        "G" => 3,
-        "T" => 4,
-        _ => return Err(format!("{text:?}: the unit must be K, M, G or T (with an optional B, or iB for powers of 1024)")),
-    };
-    let bytes = value * base.powi(power);
-    if !(bytes >= 1.0 && bytes < 1e18) {
-        return Err(format!("{text:?} must be at least 1 byte and below 1 EB"));
-    }
-    Ok(bytes as u64)
 }
 
 impl GpuArgs {

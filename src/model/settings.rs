@@ -19,6 +19,8 @@ pub enum SettingError {
     NotAFlareLight { text: String },
     #[error("{text:?} is not `none`, a diameter in px (64, 64px) or on the film in mm (1.2mm)")]
     NotACocLimit { text: String },
+    #[error("{text:?} is not a size in bytes from 1 byte to below 1 EB: a number with K, M, G or T (powers of 1000, an optional B), or KiB, MiB, GiB, TiB")]
+    NotBytes { text: String },
 }
 
 /// A clamp on the CoC diameter: `none`, pixels (`64`, `64px`) or mm on the film (`1.2mm`).
@@ -68,6 +70,27 @@ pub fn parse_size_px(text: &str) -> Result<(u32, u32), SettingError> {
     }
 }
 
+/// A size in bytes (`--max-gpu-memory`): a number with an optional K, M, G or T (powers of
+/// 1000, a trailing B allowed) or KiB, MiB, GiB, TiB (powers of 1024).
+pub fn parse_bytes(text: &str) -> Result<u64, SettingError> {
+    let bad = || SettingError::NotBytes { text: text.to_string() };
+    let t = text.trim();
+    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number.parse().map_err(|_| bad())?;
+    let unit = unit.trim().to_ascii_uppercase();
+    let (unit, base) = match unit.strip_suffix("IB") {
+        Some(u) if !u.is_empty() => (u, 1024.0f64),
+        _ => (unit.strip_suffix('B').unwrap_or(&unit), 1000.0),
+    };
+    let power = ["", "K", "M", "G", "T"].iter().position(|u| *u == unit).ok_or_else(bad)?;
+    let bytes = value * base.powi(power as i32);
+    if !(1.0..1e18).contains(&bytes) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
 /// An explicit flare light `X,Y,ENERGY[,AREA]`: its position in pixels (may be outside the
 /// frame), its white energy (scene value x pixels) and visible area (pixels, default 1).
 pub fn parse_flare_light(text: &str) -> Result<crate::model::flare::FlareLight, SettingError> {
@@ -91,6 +114,23 @@ pub fn parse_flare_light(text: &str) -> Result<crate::model::flare::FlareLight, 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sizes_in_bytes() {
+        assert_eq!(parse_bytes("2G"), Ok(2_000_000_000));
+        assert_eq!(parse_bytes("1.5GB"), Ok(1_500_000_000));
+        assert_eq!(parse_bytes("512m"), Ok(512_000_000));
+        assert_eq!(parse_bytes("2GiB"), Ok(2 * 1024 * 1024 * 1024));
+        assert_eq!(parse_bytes("100"), Ok(100));
+        assert_eq!(parse_bytes("1 KiB"), Ok(1024));
+        for bad in ["", "G", "2X", "0", "0.5", "1e3", "2 GiBs", "-1G", "2000000P", "iB"] {
+            assert_eq!(parse_bytes(bad), Err(SettingError::NotBytes { text: bad.to_string() }), "{bad:?}");
+        }
+        assert_eq!(
+            SettingError::NotBytes { text: "2X".into() }.to_string(),
+            "\"2X\" is not a size in bytes from 1 byte to below 1 EB: a number with K, M, G or T (powers of 1000, an optional B), or KiB, MiB, GiB, TiB"
+        );
+    }
 
     #[test]
     fn flare_lights_as_text() {

@@ -184,6 +184,50 @@ pub fn write_scene(dir: &Path, name: &str, scene: &SynthScene) -> Result<(), IoE
     write_exr_channels(&depth_path, scene.width, scene.height, &[("Z", &depth.data)], &opts)
 }
 
+/// The README demo `k` times as large (every length times `k`; each highlight still one pixel of
+/// the same value) with a velocity pass: the subject card moves 4k px per frame to the right,
+/// the near pillar 2k px per frame to the left, the rest stands still. For benchmarks at 1080p
+/// (k = 3), 4K (6) and 8K (12): `realcam synth --demo-scale K` writes
+/// `<dir>/demo_WxH_color.exr`, `_depth.exr` and `_vector.exr` (Blender's X,Y,Z,W); returns their
+/// paths.
+pub fn write_scaled_demo(dir: &Path, k: u32) -> Result<[std::path::PathBuf; 3], IoError> {
+    let demo = SynthScene::demo();
+    let scale = |p: &SynthPlane| SynthPlane {
+        x0: p.x0 * k,
+        y0: p.y0 * k,
+        x1: p.x1 * k,
+        y1: p.y1 * k,
+        checker_px: p.checker_px * k,
+        ..p.clone()
+    };
+    let scene = SynthScene {
+        width: demo.width * k,
+        height: demo.height * k,
+        planes: demo.planes.iter().map(scale).collect(),
+        highlights: demo.highlights.iter().map(|h| SynthHighlight { x: h.x * k, y: h.y * k, ..h.clone() }).collect(),
+        ..demo.clone()
+    };
+    let (w, h) = (scene.width, scene.height);
+    // Blender's vector pass, y up: X,Y the previous chord p[f-1] - p[f], Z,W the next chord
+    // negated, for a constant velocity v (px per frame, y down): (-vx, vy, -vx, vy).
+    let mut vector = [vec![0.0f32; (w * h) as usize], vec![0.0; (w * h) as usize]];
+    let movers = [(&demo.planes[2], 4.0 * k as f32), (&demo.planes[3], -2.0 * k as f32)];
+    for (plane, vx) in movers {
+        for y in plane.y0 * k..plane.y1 * k {
+            for x in plane.x0 * k..plane.x1 * k {
+                vector[0][(y * w + x) as usize] = -vx;
+            }
+        }
+    }
+    let name = format!("demo_{w}x{h}");
+    write_scene(dir, &name, &scene)?;
+    let opts = ExrWriteOptions { float32: true, ..ExrWriteOptions::default() };
+    let vector_path = dir.join(format!("{name}_vector.exr"));
+    let channels = [("X", &vector[0][..]), ("Y", &vector[1][..]), ("Z", &vector[0][..]), ("W", &vector[1][..])];
+    write_exr_channels(&vector_path, w, h, &channels, &opts)?;
+    Ok(["color", "depth", "vector"].map(|p| dir.join(format!("{name}_{p}.exr"))))
+}
+
 /// Every scene committed in testdata/, by file-name stem. `realcam synth` writes them; a test
 /// checks that the committed files are exactly what this generator makes.
 pub fn testdata_scenes() -> Vec<(&'static str, SynthScene)> {
@@ -203,6 +247,31 @@ pub fn testdata_scenes() -> Vec<(&'static str, SynthScene)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_scaled_demo_is_the_demo_k_times_as_large_and_its_subject_moves_4k_px_right() {
+        let dir = std::env::temp_dir().join(format!("realcam_scaled_demo_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let [color, depth, vector] = write_scaled_demo(&dir, 2).expect("written");
+        let sources = crate::io::PassSources {
+            depth_path: Some(depth),
+            velocity_path: Some(vector),
+            velocity_format: crate::io::VelocityFormat::Blender,
+            ..crate::io::PassSources::new(color)
+        };
+        let passes = crate::io::load_passes(&sources).expect("read back");
+        assert_eq!((passes.color.width, passes.color.height), (1280, 720));
+        let at = |x: u32, y: u32| (y * 1280 + x) as usize;
+        // The subject card (250..430 x 100..260 at 640x360) at 2 m moves 8 px per frame right,
+        // the pillar (40..130) at 0.8 m 4 px left, the far wall stands still.
+        let v = passes.velocity_px.as_ref().expect("a velocity pass").data.clone();
+        assert_eq!((passes.depth_m.data[at(680, 360)], v[2 * at(680, 360)], v[2 * at(680, 360) + 1]), (2.0, 8.0, 0.0));
+        assert_eq!((passes.depth_m.data[at(170, 360)], v[2 * at(170, 360)]), (0.8, -4.0));
+        assert_eq!((passes.depth_m.data[at(1000, 300)], v[2 * at(1000, 300)]), (8.0, 0.0));
+        // Each highlight is still one pixel of the demo's value: (470, 85) is 500 x white.
+        assert_eq!(passes.color.data[4 * at(940, 170)], 500.0);
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn render_is_deterministic() {

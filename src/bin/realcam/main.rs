@@ -103,6 +103,11 @@ enum Command {
         /// and the realcam flags of its shutter.
         #[arg(long, requires = "layered")]
         motion: bool,
+        /// Instead: the README demo K times as large with a velocity pass (the subject and the
+        /// near pillar moving), demo_WxH_color.exr, _depth.exr and _vector.exr: 3 gives 1920x1080,
+        /// 6 3840x2160, 12 7680x4320 (scripts/bench-gpu.sh).
+        #[arg(long, value_name = "K", conflicts_with = "layered", value_parser = clap::value_parser!(u32).range(1..=24))]
+        demo_scale: Option<u32>,
     },
 }
 
@@ -130,7 +135,7 @@ fn main() {
         Command::Compare { test, reference, highlights, fstop } => {
             compare::run(&test, &reference, highlights.as_deref().zip(fstop))
         }
-        Command::Synth { out, layered, size, motion } => synth::run(&out, layered, &size, motion),
+        Command::Synth { out, layered, size, motion, demo_scale } => synth::run(&out, layered, &size, motion, demo_scale),
         Command::WarmUp(args) => warm_up::run(&args),
     };
     if let Err(e) = result {

@@ -5,8 +5,14 @@ use realcam::tools::layered_scene::LayeredScene;
 use realcam::tools::synth::{testdata_scenes, write_scene};
 use std::path::Path;
 
-pub fn run(out: &Path, layered: Option<u64>, size: &str, motion: bool) -> Result<()> {
+pub fn run(out: &Path, layered: Option<u64>, size: &str, motion: bool, demo_scale: Option<u32>) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    if let Some(k) = demo_scale {
+        for p in realcam::tools::synth::write_scaled_demo(out, k)? {
+            println!("wrote {}", p.display());
+        }
+        return Ok(());
+    }
     if let Some(seed) = layered {
         let (width, height) = realcam::model::settings::parse_size_px(size).context("--size")?;
         if motion {
