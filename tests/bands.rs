@@ -170,3 +170,38 @@ fn bands_cover_the_frame_on_whole_tiles_and_each_fits_the_budget() {
         })
     );
 }
+
+/// Walch's fitted ghosts (the Tessar's fits, of 1280x720 frames) of two lights of 1e9, drawn band
+/// by band from the whole frame's lights: the bits of the whole frame's flare.
+#[test]
+fn fitted_ghosts_drawn_in_bands_have_the_bits_of_the_whole_frames() {
+    let (w, h) = (1280u32, 720u32);
+    let mut color: Vec<f32> =
+        (0..w * h).flat_map(|i| if (i % w / 16 + i / w / 16) % 2 == 0 { [0.1, 0.1, 0.1, 1.0] } else { [0.05; 4] }).collect();
+    for (lx, ly) in [(300u32, 200u32), (900, 500)] {
+        for y in ly - 1..=ly + 1 {
+            for x in lx - 1..=lx + 1 {
+                color[((y * w + x) * 4) as usize..][..3].copy_from_slice(&[1e9; 3]);
+            }
+        }
+    }
+    // Everything at the focus distance (the lens's longitudinal colour still defocuses red and
+    // blue a little).
+    let frame = Frame::new(w, h, color, vec![2.0; (w * h) as usize]);
+    let lens = LensFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/flare/tessar-walch-fitted.toml"))
+        .expect("the Tessar's fits");
+    let request = CameraRequest { f_number: Some(2.8), focus_distance_m: 2.0, grain: 0.05, ..CameraRequest::default() };
+    let camera = Camera::new(&lens, &request).expect("camera");
+    let whole = plan(&frame, &camera);
+    assert!(whole.runs("flare"), "{}", whole.explain());
+    assert!(whole.explain().contains("fitted"), "{}", whole.explain());
+    let (expected, _) = render_with(&frame, &camera, None);
+    let per_px = realcam::pipeline::render::estimated_gpu_bytes_per_px(&whole);
+    let apron = apron_px(&whole, 0..flare_index()).expect("no flare before the flare");
+    let (banded, bands) = render_with(&frame, &camera, Some(per_px * w as u64 * (2 * apron + 200) as u64));
+    assert_eq!(bands, 4);
+    let differing = expected.iter().zip(&banded).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+    assert_eq!(differing, 0, "{differing} of {} values differ from the whole frame's", expected.len());
+    // The ghosts reach rows far from both lights: the flare is drawn across the bands.
+    assert!(expected.iter().step_by(4).skip((650 * w) as usize).take(w as usize).any(|&r| r > 0.2));
+}

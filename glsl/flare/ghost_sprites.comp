@@ -127,7 +127,8 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
     // tile (ghost_sprite.glsl fitted_smooth) adds its corners' light to the tile's corner sums,
     // interpolated bilinearly at each pixel once for all of them; the others are shaded per
     // pixel from their distance, interpolated where near linear, searched where not.
-    vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE)) + 0.5;
+    // The tile's first pixel centre in the whole frame (a band's tiles start at its first row).
+    vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE) + uvec2(0, fc.band_top_px)) + 0.5;
     uint fitted = SPRITE_FITTED ? s_listed[3] : 0u;
     if (gl_LocalInvocationIndex < 12u) s_corner_sums[gl_LocalInvocationIndex] = 0.0;
     for (uint start = 0; start < fitted; start += FITTED_LIST) {
