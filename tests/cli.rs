@@ -1273,6 +1273,63 @@ fn a_frame_larger_than_the_device_takes_is_a_clear_error() {
     assert_listing(&dir, &["c.exr", "d.exr"]);
 }
 
+#[test]
+fn a_frame_beyond_the_gpu_memory_given_renders_in_bands_with_the_bytes_of_a_whole_render() {
+    // The README demo at f/2 (depth of field, flare, vignetting, the film) with grain: whole,
+    // then with 30 MB of GPU memory, where it needs about 47: the same output file bytes, and
+    // --explain says how it was cut.
+    let dir = TestDir::new("bands");
+    let mut args = scene_args(&dir, "demo", &SynthScene::demo());
+    args.extend(s(&["--fstop", "2", "--focus", "2", "--grain", "0.05", "--explain"]));
+    let whole = render(&dir, &args).success().describe();
+    assert!(!whole.contains("in bands"), "{whole}");
+    let expected = std::fs::read(dir.join("out.exr")).unwrap();
+    args.extend(s(&["--max-gpu-memory", "30M"]));
+    let banded = render(&dir, &args).success().describe();
+    assert_contains(&banded, "  in bands: the frame needs about 0.");
+    assert_contains(&banded, "GB of GPU memory and the device has 0.03 GB: ");
+    assert_contains(&banded, "rows above and below (the passes' reach)");
+    assert_eq!(std::fs::read(dir.join("out.exr")).unwrap(), expected, "the banded output's bytes");
+    // A budget that cannot hold one row of tiles with its aprons, and a size that is not one.
+    let last = args.len() - 1;
+    args[last] = "2M".into();
+    let err = render(&dir, &args).failure();
+    assert_contains(&err, "error: a band of 640 px by one tile row with aprons of");
+    assert_contains(&err, "more than the 2.0 MB the frame may use (the device's memory or --max-gpu-memory)");
+    args[last] = "2X".into();
+    let run = render(&dir, &args);
+    assert_eq!(run.code, Some(2), "{}", run.describe());
+    assert_contains(&run.stderr, "invalid value '2X' for '--max-gpu-memory <BYTES>': \"2X\" is not a size in bytes");
+}
+
+#[test]
+fn a_frame_taller_than_the_device_images_renders_in_bands() {
+    // 17,000 rows: more than the 16,384 an image may have on lavapipe.
+    let dir = TestDir::new("tall_frame");
+    let h = 17_000u32;
+    write_color_only(&dir.join("c.exr"), 4, h);
+    write_depth(&dir.join("d.exr"), 4, h, &vec![2.0; (4 * h) as usize]);
+    let out = render(
+        &dir,
+        &s(&[
+            "--color",
+            &dir.arg("c.exr"),
+            "--depth",
+            &dir.arg("d.exr"),
+            "--grain",
+            "0.05",
+            "--explain",
+            "-o",
+            &dir.arg("out.exr"),
+        ]),
+    )
+    .success()
+    .describe();
+    assert_contains(&out, "(and its images may be at most 16384 px high): 2 bands of");
+    let header = exr_header(&dir.join("out.exr"));
+    assert_eq!(header.layer_size.height(), h as usize);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad values and messages
 // ---------------------------------------------------------------------------------------------
