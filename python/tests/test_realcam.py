@@ -254,3 +254,17 @@ def test_the_gpu_works_without_the_gil():
     inside = [t for t in ticks if start + 0.01 < t < end - 0.01]
     assert end - start > 0.05, "the render was too quick to tell"
     assert len(inside) >= 3, f"{len(inside)} ticks during a render of {end - start:.3f} s"
+
+
+def test_a_frame_beyond_the_gpu_memory_given_renders_in_bands_with_the_same_pixels():
+    # The README demo at f/2 (depth of field, flare, the film, grain) on 30 MB of GPU memory,
+    # where it needs about 47: the frame in bands (as the command line's test shows with
+    # --explain), the pixels of the whole frame's render. On 2 MB not one row of tiles with its
+    # aprons fits: the command line's message.
+    passes = realcam.read_passes(str(TESTDATA / "demo_color.exr"), depth=str(TESTDATA / "demo_depth.exr"))
+    settings = dict(fstop=2, focus=2, grain=0.05)
+    whole = realcam.Camera(validate=True, **settings).render(**passes)
+    banded = realcam.Camera(validate=True, max_gpu_memory="30M", **settings).render(**passes)
+    assert np.array_equal(whole, banded)
+    with pytest.raises(realcam.RealcamError, match="a band of 640 px by one tile row with aprons of"):
+        realcam.Camera(validate=True, max_gpu_memory="2M", **settings).render(**passes)
