@@ -176,8 +176,9 @@ fn bands_cover_the_frame_on_whole_tiles_and_each_fits_the_budget() {
 #[test]
 fn fitted_ghosts_drawn_in_bands_have_the_bits_of_the_whole_frames() {
     let (w, h) = (1280u32, 720u32);
-    let mut color: Vec<f32> =
-        (0..w * h).flat_map(|i| if (i % w / 16 + i / w / 16) % 2 == 0 { [0.1, 0.1, 0.1, 1.0] } else { [0.05; 4] }).collect();
+    let mut color: Vec<f32> = (0..w * h)
+        .flat_map(|i| if (i % w / 16 + i / w / 16) % 2 == 0 { [0.1, 0.1, 0.1, 1.0] } else { [0.05; 4] })
+        .collect();
     for (lx, ly) in [(300u32, 200u32), (900, 500)] {
         for y in ly - 1..=ly + 1 {
             for x in lx - 1..=lx + 1 {

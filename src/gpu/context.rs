@@ -228,7 +228,8 @@ impl Gpu {
         let timestamps =
             families[queue_family as usize].timestamp_valid_bits > 0 && props.limits.timestamp_period > 0.0;
 
-        let device_local_bytes = match (Self::device_local_bytes(&instance, physical_device), options.max_memory_bytes) {
+        let device_local_bytes = match (Self::device_local_bytes(&instance, physical_device), options.max_memory_bytes)
+        {
             (heap, Some(budget)) if heap == 0 || budget < heap => budget,
             (heap, _) => heap,
         };

@@ -278,7 +278,12 @@ impl InputFiles {
 
     /// The first file (in the order added) whose hash in `list` is `hash` and that `same`
     /// confirms.
-    fn find(&mut self, by_inode: bool, hash: u32, same: impl Fn(&(PathBuf, Option<(u64, u64)>)) -> bool) -> Option<u32> {
+    fn find(
+        &mut self,
+        by_inode: bool,
+        hash: u32,
+        same: impl Fn(&(PathBuf, Option<(u64, u64)>)) -> bool,
+    ) -> Option<u32> {
         let list = if by_inode { &self.by_inode } else { &self.by_path };
         let start = list.partition_point(|e| e.0 < hash);
         let candidates: Vec<u32> = list[start..].iter().take_while(|e| e.0 == hash).map(|e| e.1).collect();

@@ -182,7 +182,8 @@ impl Frame {
     pub fn band_rows(&self, top: u32, bottom: u32) -> Frame {
         let (w, full_h) = self.full_size();
         let bottom = bottom.min(self.height);
-        let rows = |data: &[f32], per_px: usize| data[(top * w) as usize * per_px..(bottom * w) as usize * per_px].to_vec();
+        let rows =
+            |data: &[f32], per_px: usize| data[(top * w) as usize * per_px..(bottom * w) as usize * per_px].to_vec();
         Frame {
             width: w,
             height: bottom - top,

@@ -23,9 +23,9 @@ use crate::gpu::{Gpu, GpuError, GpuResult, Profile};
 use crate::model::frame::Frame;
 use crate::passes::flare::{tiles::tile_records, Flare};
 use crate::passes::{PASS_ORDER, TILE_SIZE};
-use std::sync::Arc;
 use crate::pipeline::planner::Plan;
 use crate::pipeline::render::{estimated_gpu_bytes_per_px, Rendered, Renderer};
+use std::sync::Arc;
 
 /// How a frame is cut into bands.
 #[derive(Clone, Debug, PartialEq)]
@@ -137,7 +137,8 @@ pub fn render_frame(
     // The first round: every pass before the flare (all of them when it does not run).
     let first_end = if whole.runs(crate::passes::flare::NAME) { flare } else { PASS_ORDER.len() };
     let apron = apron_px(whole, 0..first_end).unwrap_or(0);
-    let bands = plan_bands(frame.width, frame.height, whole, apron, gpu.memory_budget_bytes(), gpu.max_image_dimension_px())?;
+    let bands =
+        plan_bands(frame.width, frame.height, whole, apron, gpu.memory_budget_bytes(), gpu.max_image_dimension_px())?;
     let Some(bands) = bands else {
         let rendered = renderer.render_taking_colour(frame, whole, false)?;
         return Ok(FrameRender { rendered, bands: None });

@@ -135,7 +135,9 @@ fn main() {
         Command::Compare { test, reference, highlights, fstop } => {
             compare::run(&test, &reference, highlights.as_deref().zip(fstop))
         }
-        Command::Synth { out, layered, size, motion, demo_scale } => synth::run(&out, layered, &size, motion, demo_scale),
+        Command::Synth { out, layered, size, motion, demo_scale } => {
+            synth::run(&out, layered, &size, motion, demo_scale)
+        }
         Command::WarmUp(args) => warm_up::run(&args),
     };
     if let Err(e) = result {

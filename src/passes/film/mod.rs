@@ -171,7 +171,9 @@ impl FilmPush {
         let v = if value.is_finite() { value } else { 0.0 };
         let mut h = v * self.exposure_gain;
         if self.noise_sigma > 0.0 {
-            h += self.noise_sigma * h.max(0.0).sqrt() * gaussian(x, y.wrapping_add(self.band_top_px as u32), c, self.seed);
+            h += self.noise_sigma
+                * h.max(0.0).sqrt()
+                * gaussian(x, y.wrapping_add(self.band_top_px as u32), c, self.seed);
         }
         self.response(h, table)
     }

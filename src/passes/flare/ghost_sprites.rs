@@ -102,7 +102,8 @@ impl Twin for GhostSpritesShader {
         // The sprites' light over the whole frame's tiles; the image is the band of size[1] rows
         // from band_top_px (the whole frame: 0).
         let top = fc.band_top_px.max(0) as u32;
-        let (w, h) = ((groups[0] * TILE_SIZE).min(size[0] as u32), (top + groups[1] * TILE_SIZE).min(top + size[1] as u32));
+        let (w, h) =
+            ((groups[0] * TILE_SIZE).min(size[0] as u32), (top + groups[1] * TILE_SIZE).min(top + size[1] as u32));
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
         for s in sprites.chunks_exact(SPRITE_WORDS as usize).take(total) {
             if s[SPRITE_KIND as usize] as u32 == KIND_FITTED {

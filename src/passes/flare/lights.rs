@@ -283,7 +283,11 @@ impl Twin for FlareLightsShader {
         args[ARGS_LIGHTS as usize] = acc.len() as u32;
         args[ARGS_LIT_TILES as usize] = lit.len() as u32;
         // The sprites are drawn on the band's tile rows (a whole frame's: all).
-        let rows = if fc.band_height_px > 0 { (fc.band_height_px as u32).div_ceil(TILE_SIZE) } else { fc.tiles_y.max(0) as u32 };
+        let rows = if fc.band_height_px > 0 {
+            (fc.band_height_px as u32).div_ceil(TILE_SIZE)
+        } else {
+            fc.tiles_y.max(0) as u32
+        };
         let tiles = [fc.tiles_x.max(0) as u32, rows, 1];
         let none = [0, 1, 1];
         let sprites = if acc.is_empty() { none } else { tiles };

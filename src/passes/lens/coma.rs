@@ -95,7 +95,8 @@ pub fn coma_cpu(rgba: &[f32], params: &ComaPush, table: &[f32]) -> Vec<f32> {
     let mut out = vec![0.0f32; rgba.len()];
     for py in 0..h {
         for px in 0..w {
-            let x = [px as f32 + 0.5 - params.centre_px[0], (py + params.band_top_px) as f32 + 0.5 - params.centre_px[1]];
+            let x =
+                [px as f32 + 0.5 - params.centre_px[0], (py + params.band_top_px) as f32 + 0.5 - params.centre_px[1]];
             let o = (py * w + px) as usize * 4;
             let h_p = (x[0] * x[0] + x[1] * x[1]).sqrt();
             let c_max = params
@@ -197,7 +198,10 @@ impl Pass for Coma {
             input.camera.lens.f_number
         );
         let centre_px = [frame.centre_px[0], frame.centre_px[1] + frame.band_top_px() as f64];
-        let push = ComaPush { band_top_px: frame.band_top_px() as i32, ..ComaPush::new([frame.width, frame.height], centre_px, pitch_mm, t) };
+        let push = ComaPush {
+            band_top_px: frame.band_top_px() as i32,
+            ..ComaPush::new([frame.width, frame.height], centre_px, pitch_mm, t)
+        };
         Decision::run(ComaParams { push, table: table_data(t) }, why)
     }
 

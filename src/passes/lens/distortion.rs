@@ -39,7 +39,10 @@ pub fn distortion_cpu(rgba: &[f32], params: &DistortionPush, tables: &Distortion
     let mut out = rgba.to_vec();
     for y in 0..h {
         for x in 0..w {
-            let d = [x as f64 + 0.5 - params.centre_px[0] as f64, (y + params.band_top_px) as f64 + 0.5 - params.centre_px[1] as f64];
+            let d = [
+                x as f64 + 0.5 - params.centre_px[0] as f64,
+                (y + params.band_top_px) as f64 + 0.5 - params.centre_px[1] as f64,
+            ];
             let real_mm = (d[0] * d[0] + d[1] * d[1]).sqrt() * params.pixel_pitch_mm as f64;
             for c in 0..3 {
                 let r = tables.ideal_height_mm(c, real_mm);
@@ -99,7 +102,12 @@ impl Twin for DistortionShader {
                         }
                     }
                     let scale = if real_mm > 0.0 { r / real_mm } else { 1.0 };
-                    *value = bilinear_in_band(&input, push.centre_px[0] + d[0] * scale, push.centre_px[1] + d[1] * scale, top)[c];
+                    *value = bilinear_in_band(
+                        &input,
+                        push.centre_px[0] + d[0] * scale,
+                        push.centre_px[1] + d[1] * scale,
+                        top,
+                    )[c];
                 }
                 out.texel_mut(x, y).copy_from_slice(&texel.map(finite_or_zero));
             }
@@ -127,7 +135,8 @@ impl Pass for Distortion {
     /// frame's farthest corner from the centre, and the bilinear lookup's pixel.
     fn reach_px(p: &DistortionParams) -> Option<f64> {
         let n = p.push.entries.max(0) as usize;
-        let column = |k: usize| p.table.get(k * n..(k + 1) * n).unwrap_or(&[]).iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
+        let column =
+            |k: usize| p.table.get(k * n..(k + 1) * n).unwrap_or(&[]).iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
         let percent = column(1) + column(2).max(column(3));
         let [w, h] = p.push.size.map(|s| s as f64);
         let [cx, cy] = p.push.centre_px.map(|c| c as f64);

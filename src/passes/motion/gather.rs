@@ -121,7 +121,8 @@ fn sample_line(
     for i in 0..n {
         let r = 0.5 + (i as f32 + jitter) * spacing;
         let at = [p[0] as f32 + 0.5 + r * dir[0], (p[1] + top) as f32 + 0.5 + r * dir[1]];
-        let y = [(at[0].floor() as i32).clamp(0, pc.size[0] - 1), (at[1].floor() as i32 - top).clamp(0, pc.size[1] - 1)];
+        let y =
+            [(at[0].floor() as i32).clamp(0, pc.size[0] - 1), (at[1].floor() as i32 - top).clamp(0, pc.size[1] - 1)];
         let o = [(p[0] - y[0]) as f32, (p[1] - y[1]) as f32];
         let v = input.velocity(y[0], y[1], pc.max_speed_px);
         let light = path_coverage(o, [v[0], v[1]], [v[2], v[3]], win, pc.shutter.ramp_frames) / total;

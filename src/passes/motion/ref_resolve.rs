@@ -66,7 +66,8 @@ fn hidden(pc: &MbRefResolvePush, b: &[HostData], p: [i32; 2]) -> [f32; 4] {
         for k in 1..=reach.ceil() as i32 {
             for side in [1.0f32, -1.0] {
                 let top = pc.shutter.band_top_px;
-                let at = [p[0] as f32 + 0.5 + side * k as f32 * d[0], (p[1] + top) as f32 + 0.5 + side * k as f32 * d[1]];
+                let at =
+                    [p[0] as f32 + 0.5 + side * k as f32 * d[0], (p[1] + top) as f32 + 0.5 + side * k as f32 * d[1]];
                 let q = [at[0].floor() as i32, at[1].floor() as i32 - top];
                 if inside(q) && depth_classes(z, depth.clamped(q[0], q[1])[0])[2] >= 1.0 {
                     return color_at(color, q[0], q[1]);
