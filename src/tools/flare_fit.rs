@@ -801,6 +801,18 @@ pub fn fit_traced_ghosts(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{optics::flare::ghosts::GhostPath, passes::flare::FlareModel, tools::accuracy_flare::Sensor};
+
+    /// The Tessar at f/2.8 on a 320x180 frame (the flare bench's camera), its sensor (the
+    /// frame's centre), and its ghost 4/0: the fits' tests trace it.
+    pub(super) fn tessar_320x180_ghost_4_0() -> (FlareModel, Sensor, GhostPath) {
+        let camera = crate::tools::bench_flare::flare_camera(320, 180);
+        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(320, 180), centre_px: [160.0, 90.0] };
+        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
+        let catalogue = model.catalogue.as_ref().expect("the Tessar's ghosts");
+        let path = catalogue.ghosts.iter().map(|g| g.path).find(|p| (p.first, p.second) == (4, 0)).expect("ghost 4/0");
+        (model, sensor, path)
+    }
 
     fn truth() -> BezierGhost {
         BezierGhost {
@@ -934,14 +946,10 @@ mod tests {
         // primitive keeps the energy within 1% (measured 0.04%) and the centroid within a cell
         // (13 px); its RMS difference is under 15% of the traced peak (the rays' binning noise
         // is most of it: 0.122 measured).
-        use crate::passes::flare::FlareModel;
-        use crate::tools::accuracy_flare::{light_slope, Sensor};
+        use crate::tools::accuracy_flare::light_slope;
         let (w, h) = (320, 180);
-        let camera = crate::tools::bench_flare::flare_camera(w, h);
-        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [160.0, 90.0] };
-        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
-        let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
-        let path = catalogue.ghosts.iter().map(|g| g.path).find(|p| (p.first, p.second) == (4, 0)).unwrap();
+        let (model, sensor, path) = tessar_320x180_ghost_4_0();
+        let lens = model.lens.as_ref().unwrap();
         let image = traced_ghost_image(lens, path, light_slope(4.0, w, h), 1, 96, sensor, MARGIN, 40).unwrap();
         assert_eq!((image.width, image.height, image.cell_px), (40, 40, 28.0), "{:?}", image.origin_px);
         let f = fit(&image, &moments_guess(&image).unwrap(), &FitOptions::default());

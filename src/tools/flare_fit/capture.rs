@@ -311,14 +311,10 @@ mod tests {
         // brackets of 0.25, 1 and 4 s (the ghost's peak at 0.5 at 1 s: the 4 s frame clips
         // it and the glare). Merged, the background and glare removed, each is fitted as the
         // clean image is; the fits draw the clean fits' light within 5%.
-        use crate::passes::flare::FlareModel;
-        use crate::tools::accuracy_flare::{light_slope, Sensor};
+        use crate::tools::accuracy_flare::light_slope;
         let (w, h) = (320, 180);
-        let camera = crate::tools::bench_flare::flare_camera(w, h);
-        let sensor = Sensor { pixel_pitch_mm: camera.pixel_pitch_mm(w, h), centre_px: [160.0, 90.0] };
-        let model = FlareModel::new(&camera, sensor.pixel_pitch_mm, sensor.centre_px);
-        let (lens, catalogue) = (model.lens.as_ref().unwrap(), model.catalogue.as_ref().unwrap());
-        let path = catalogue.ghosts.iter().map(|g| g.path).find(|p| (p.first, p.second) == (4, 0)).unwrap();
+        let (model, sensor, path) = crate::tools::flare_fit::tests::tessar_320x180_ghost_4_0();
+        let lens = model.lens.as_ref().unwrap();
         let mut seed = 0x5eed_u64;
         let mut gauss = || {
             let mut u = || {
