@@ -107,7 +107,7 @@ impl SceneFacts {
             channel_offsets_px,
             motion: match camera.motion.mode {
                 crate::model::camera::MotionBlurMode::Off => None,
-                _ => frame.velocity_rgba().map(|v| super::motion::blur::motion_extent(&v, &camera.motion)),
+                _ => super::motion::blur::motion_extent(frame, &camera.motion),
             },
         }
     }

@@ -144,16 +144,24 @@ pub struct MotionExtent {
     pub blur_px: f64,
 }
 
-/// The [`MotionExtent`] of the velocities `rgba` (next x, y, previous x, y per pixel) under
-/// `motion`'s shutter and clamp.
-pub fn motion_extent(rgba: &[f32], motion: &crate::model::camera::Motion) -> MotionExtent {
+/// The [`MotionExtent`] of `frame`'s velocities under `motion`'s shutter and clamp (`None`:
+/// the frame has none), read in place (the previous vector the negated next one where the
+/// pass has only one, as [`crate::model::frame::Frame::velocity_rgba`]).
+pub fn motion_extent(
+    frame: &crate::model::frame::Frame,
+    motion: &crate::model::camera::Motion,
+) -> Option<MotionExtent> {
+    let next = frame.velocity_px.as_deref()?;
+    let prev = frame.velocity_prev_px.as_deref();
     let timing = &motion.timing;
     let max_speed_px = (motion.max_blur_px / timing.open_length_frames().max(1e-9)) as f32;
     let (earliest, latest) = timing.extent_frames();
     let (t_fwd, t_back) = (latest.max(0.0), (-earliest).max(0.0));
     let (mut speed_px, mut reach_px, mut blur_px) = (0.0f64, 0.0f64, 0.0f64);
-    for v in rgba.chunks_exact(4) {
-        let v = clamped_velocity(v, max_speed_px);
+    for i in 0..next.len() / 2 {
+        let (nx, ny) = (next[2 * i], next[2 * i + 1]);
+        let (px, py) = prev.map_or((-nx + 0.0, -ny + 0.0), |p| (p[2 * i], p[2 * i + 1]));
+        let v = clamped_velocity(&[nx, ny, px, py], max_speed_px);
         let (next, prev) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
         speed_px = speed_px.max(next).max(prev);
         reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
@@ -164,7 +172,7 @@ pub fn motion_extent(rgba: &[f32], motion: &crate::model::camera::Motion) -> Mot
     if timing.readout_frames > 0.0 {
         reach_px = reach_px.max(speed_px * timing.readout_frames);
     }
-    MotionExtent { speed_px, reach_px, blur_px }
+    Some(MotionExtent { speed_px, reach_px, blur_px })
 }
 
 /// Why motion blur runs before the depth of field, in `--explain`.
