@@ -156,24 +156,18 @@ impl Frame {
     /// second round, which reads only the colour).
     pub fn with_colour_only(&self, color: Vec<f32>) -> Frame {
         Frame {
+            width: self.width,
+            height: self.height,
             color,
             depth_m: Vec::new(),
             velocity_px: None,
             velocity_prev_px: None,
-            ..Frame::new(self.width, self.height, Vec::new(), Vec::new())
-        }
-        .with_settings_of(self)
-    }
-
-    fn with_settings_of(self, other: &Frame) -> Frame {
-        Frame {
-            velocity_format: other.velocity_format,
-            centre_px: other.centre_px,
-            display_window: other.display_window,
-            data_origin: other.data_origin,
-            working_space: other.working_space,
-            band: other.band,
-            ..self
+            velocity_format: self.velocity_format,
+            centre_px: self.centre_px,
+            display_window: self.display_window,
+            data_origin: self.data_origin,
+            working_space: self.working_space,
+            band: self.band,
         }
     }
 

@@ -123,8 +123,8 @@ impl Plan {
 
     /// Keep only the runs of the passes at `range` of the pass order (banded rendering's rounds).
     pub fn keep_only(&mut self, range: std::ops::Range<usize>) {
-        for (_, p) in self.passes.iter_mut().enumerate().filter(|(i, _)| !range.contains(i)) {
-            if p.runs() {
+        for (i, p) in self.passes.iter_mut().enumerate() {
+            if !range.contains(&i) && p.runs() {
                 p.clear_runs(format!("{} (in another round of bands)", p.why));
             }
         }
