@@ -876,6 +876,56 @@ fn tiled_path_stays_close_to_the_reference() {
 }
 
 #[test]
+fn a_defocused_foregrounds_rim_shows_the_background_behind_it_as_the_reference_does() {
+    // Scene A's pole, made small: a dark striped bar at 0.8 m (CoC ~37 px) whose edge meets a
+    // bright checker at 8 m (CoC ~18 px), focus 2 m, f/1.4. Inside the bar, within its CoC of
+    // the edge, part of each pixel's disc is background that the bar hides in the pinhole
+    // image; the reference fills it with that background (gather.glsl's hidden fill), so the
+    // rim brightens towards the edge. The tiled path's levels normalised the bar's own light
+    // instead: the 16 px inside the edge came out 53% darker than the reference (scene A's
+    // worst tiles). They now fill it as the reference does: 12% darker, the rest the level's
+    // coarse lattice (8-px texels here), on which the weights' sum misses part of the share.
+    let gpu = gpu();
+    let (w, h, edge) = (256u32, 144u32, 120u32);
+    let mut color = vec![0.0f32; (w * h * 4) as usize];
+    let mut depth = vec![0.0f32; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (v, z) = if x < edge {
+                (if (y / 8) % 2 == 0 { 0.06 } else { 0.03 }, 0.8)
+            } else {
+                (if ((x / 4) + (y / 4)) % 2 == 0 { 0.9 } else { 0.5 }, 8.0)
+            };
+            color[i * 4..i * 4 + 4].copy_from_slice(&[v, v, v, 1.0]);
+            depth[i] = z;
+        }
+    }
+    let frame = Frame::new(w, h, color, depth);
+    let mut camera = dof_camera(50.0, 1.4, 2.0, 6);
+    camera.bokeh = BokehMode::Reference;
+    let (reference, plan, _) = render(&gpu, &frame, &camera);
+    camera.bokeh = BokehMode::Tiled;
+    let (tiled, _, _) = render(&gpu, &frame, &camera);
+    // The measure: the mean over 16-px tiles (here the bar's rows, a tile's columns).
+    let tile = |rgba: &[f32], x0: u32| {
+        let sum: f64 = (x0..x0 + 16)
+            .flat_map(|x| (40..h - 40).map(move |y| (x, y)))
+            .map(|(x, y)| at(rgba, w, x, y, 1) as f64)
+            .sum();
+        sum / (16 * (h - 80)) as f64
+    };
+    let mut worst = 0.0f64;
+    for x0 in [edge - 32, edge - 16, edge] {
+        let (t, r) = (tile(&tiled, x0), tile(&reference, x0));
+        worst = worst.max((t - r).abs() / r);
+        println!("tile at x {x0}: tiled {t:.4} reference {r:.4} ({:+.1}%)", 100.0 * (t / r - 1.0));
+    }
+    println!("CoC {:?}; the rim's worst tile off the reference by {:.1}%", plan.coc_range_px(), 100.0 * worst);
+    assert!(worst < 0.15, "the rim is {:.1}% off the reference", 100.0 * worst);
+}
+
+#[test]
 fn cats_eye_narrows_corner_bokeh_radially_and_keeps_its_energy() {
     // A highlight toward the lower right (offset (72, 38) px from the centre) at 6 m, focus 1.2 m,
     // f/1 (CoC radius ~23 px), circular aperture. With the cat's eye the disk is clipped along

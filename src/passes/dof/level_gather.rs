@@ -118,8 +118,12 @@ impl Twin for LevelGatherShader {
                 }
                 let coc_p = coc.clamped(p[0], p[1])[0] * to_level;
                 let tap_disc = data.tap_disc_px(radii[t] * to_level);
-                let (mut bg, mut fg, mut big) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+                let radius_p = (0.5 * coc_p.abs()).max(0.5);
+                let reach_p = level_reach(radius_p);
+                let area_p = pc.aperture.area_factor * reach_p * reach_p;
+                let (mut bg, mut fg, mut big, mut hidden) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
                 let (mut bg_w, mut fg_w, mut big_w) = (0.0f32, 0.0f32, 0.0f32);
+                let (mut hidden_n, mut hidden_near_w, mut own_n) = (0.0f32, 0.0f32, 0.0f32);
                 for (dy, half_width) in tap_disc_rows(tap_disc) {
                     for dx in -half_width..=half_width {
                         let q =
@@ -133,11 +137,24 @@ impl Twin for LevelGatherShader {
                         let sample = [(p[0] + dx) as f32 + 0.5, (p[1] + dy) as f32 + 0.5];
                         let reach = level_reach(gather_reach(coc_p, coc_q));
                         let w = tap_weight_at_reach([dx, dy], reach, coc_q, &pc.aperture, sample, &data);
+                        let c = color.clamped(q[0], q[1]);
+                        let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
+                        // The background p's surface hides (the shader's fill), each texel by its weight.
+                        let d2 = (dx * dx + dy * dy) as f32;
+                        let in_p = if d2 <= radius_p * radius_p { cw[1] } else { 0.0 };
+                        let behind = ((coc_q - coc_p) / pc.layer_transition_px).clamp(0.0, 1.0);
+                        let unreached = in_p * behind * (1.0 - (w * area_p).min(1.0));
+                        let closeness = 1.0 / (1.0 + d2 / (radius_q * radius_q));
+                        let near = unreached * closeness * closeness * closeness;
+                        for k in 0..4 {
+                            hidden[k] += (near / cw[1]) * c[k];
+                        }
+                        hidden_near_w += near;
+                        hidden_n += unreached;
+                        own_n += in_p * (1.0 - f);
                         if w <= 0.0 {
                             continue;
                         }
-                        let c = color.clamped(q[0], q[1]);
-                        let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
                         for k in 0..4 {
                             fg[k] += f * w * c[k];
                             bg[k] += (1.0 - f) * w * c[k];
@@ -154,7 +171,13 @@ impl Twin for LevelGatherShader {
                 }
                 // Each layer the weighted mean of its samples' premultiplied RGBA (alpha as colour).
                 let layer = |sum: [f32; 4], weight: f32| sum.map(|v| if weight > 0.0 { v / weight } else { 0.0 });
-                bg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&layer(bg, bg_w));
+                // The weight missing from p's layer and behind, up to the hidden background's
+                // share of p's disc, is that background's; the rest normalises.
+                let hidden_share = if own_n > 0.0 { hidden_n / own_n } else { 0.0 };
+                let missing = (1.0 - bg_w).max(0.0).min(hidden_share);
+                let hidden_colour = layer(hidden, hidden_near_w);
+                let lit: [f32; 4] = std::array::from_fn(|k| bg[k] + missing * hidden_colour[k]);
+                bg_out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&layer(lit, bg_w + missing));
                 // The foregrounds premultiplied by their coverage.
                 let (coverage, big_coverage) = (fg_w.clamp(0.0, 1.0), big_w.clamp(0.0, 1.0));
                 let fg = layer(fg, fg_w).map(|v| v * coverage);
