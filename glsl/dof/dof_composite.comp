@@ -97,7 +97,7 @@ void main() {
     // at least 1.5), so a pixel at or above it costs only the upsampling. A nearly sharp pixel
     // (radius below 1.5) takes nothing of the level's background: the pyramid holds little or
     // none of it (its weight clamp(radius - 0.5, 0, 1)), and the level would blur it by 2^L px.
-    float blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
+    float blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px + float(EXACT_BLEND_ABOVE_SMALL_PX), radius_p);
     vec4 base = bg;
     Aperture ap = pc.ap;
     if (EXACT_GATHER) {

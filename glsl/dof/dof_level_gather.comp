@@ -144,15 +144,15 @@ void main() {
             // the fill's rules): within p's CoC, the positions behind p whose light does not
             // reach p, their colour from the nearest of them on their own CoC's scale. Each
             // texel counts by its weight (the share of its pixels the level holds).
-            float in_p = d2 <= radius_p * radius_p ? cw.y : 0.0;
+            float in_p = d2 <= radius_p * radius_p ? 1.0 : 0.0;
             float behind = clamp((coc_q - coc_p) / pc.layer_transition_px, 0.0, 1.0);
             float unreached = in_p * behind * (1.0 - min(w * area_p, 1.0));
-            float closeness = 1.0 / (1.0 + d2 / (radius_q * radius_q));
+            float closeness = radius_q * radius_q / (radius_q * radius_q + d2);
             float near = unreached * closeness * closeness * closeness;
-            hidden += (near / cw.y) * c;
-            hidden_near_w += near;
-            hidden_n += unreached;
-            own_n += in_p * (1.0 - f);
+            hidden += near * c;   // c is premultiplied by the texel's weight cw.y
+            hidden_near_w += near * cw.y;
+            hidden_n += unreached * cw.y;
+            own_n += in_p * (1.0 - f) * cw.y;
             if (w <= 0.0) continue;
             fg += (f * w) * c;
             fg_w += f * w * cw.y;

@@ -16,6 +16,11 @@
 #define LEVELS 4
 #define CLASS_COUNT 6
 #define LEVEL_RADIUS 3
+// A level tile's pixels blend from the exact gather to the level's layers as their CoC radius
+// goes from the small-CoC radius - 0.5 px to this many px above it (dof_composite.comp): over
+// 1.5 px of radius, so that a rack focus moves a pixel across it over several frames rather
+// than one (a tile's mean jumped 4% in one frame where the two disagree).
+#define EXACT_BLEND_ABOVE_SMALL_PX 1
 // The tile lists: one per class, then per level the level's tiles with no nearly sharp pixel
 // (every pixel's CoC radius at least the small-CoC radius), which the composite takes without
 // its exact gather; the level classes' own lists keep the others. Last, the level tiles whose

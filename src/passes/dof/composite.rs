@@ -4,7 +4,7 @@
 
 use super::aperture::{ApertureConstants, ApertureData};
 use super::bokeh_gather::gather_exact;
-use crate::gpu::shaders::dof_tiles::LIST_BLURRED_LEVEL1;
+use crate::gpu::shaders::dof_tiles::{EXACT_BLEND_ABOVE_SMALL_PX, LIST_BLURRED_LEVEL1};
 use crate::gpu::{GpuBuffer, GpuResult, HostData, HostImage, Recorder, Shader, SpecializedKernel, Twin};
 use crate::passes::barriers::{after_compute_write, args_for_indirect, buffer_after_compute_write, write_after_write};
 use crate::passes::twin::{floats, listed_tiles};
@@ -117,7 +117,8 @@ impl Twin for CompositeShader {
                 let coverage = bilinear(&coverage_level, h0, f);
                 let mut fg_coverage = coverage[0];
                 let radius_p = 0.5 * coc_here.abs();
-                let blurred = smoothstep(pc.small_radius_px - 0.5, pc.small_radius_px, radius_p);
+                let blend_top_px = pc.small_radius_px + EXACT_BLEND_ABOVE_SMALL_PX as f32;
+                let blurred = smoothstep(pc.small_radius_px - 0.5, blend_top_px, radius_p);
                 let mut base = bg;
                 if blurred < 1.0 {
                     let fg_radius = radii[tile_count + t];

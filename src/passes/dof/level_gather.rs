@@ -141,17 +141,18 @@ impl Twin for LevelGatherShader {
                         let f = ((coc_p - coc_q) / pc.layer_transition_px).clamp(0.0, 1.0);
                         // The background p's surface hides (the shader's fill), each texel by its weight.
                         let d2 = (dx * dx + dy * dy) as f32;
-                        let in_p = if d2 <= radius_p * radius_p { cw[1] } else { 0.0 };
+                        let in_p = if d2 <= radius_p * radius_p { 1.0 } else { 0.0 };
                         let behind = ((coc_q - coc_p) / pc.layer_transition_px).clamp(0.0, 1.0);
                         let unreached = in_p * behind * (1.0 - (w * area_p).min(1.0));
-                        let closeness = 1.0 / (1.0 + d2 / (radius_q * radius_q));
+                        let closeness = radius_q * radius_q / (radius_q * radius_q + d2);
                         let near = unreached * closeness * closeness * closeness;
+                        // c is premultiplied by the texel's weight cw[1].
                         for k in 0..4 {
-                            hidden[k] += (near / cw[1]) * c[k];
+                            hidden[k] += near * c[k];
                         }
-                        hidden_near_w += near;
-                        hidden_n += unreached;
-                        own_n += in_p * (1.0 - f);
+                        hidden_near_w += near * cw[1];
+                        hidden_n += unreached * cw[1];
+                        own_n += in_p * (1.0 - f) * cw[1];
                         if w <= 0.0 {
                             continue;
                         }
