@@ -22,7 +22,7 @@ mod support;
 use realcam::io::lens_file::LensFile;
 use realcam::model::camera::{BokehMode, Camera, CameraRequest, CocLimit, MotionBlurMode};
 use realcam::model::frame::Frame;
-use realcam::tools::layered_scene::{LayeredScene, MotionPasses};
+use realcam::tools::layered_scene::{Layer, LayerMotion, LayeredScene, Mask, MotionPasses, Shape, Texture};
 use realcam::tools::metrics::{compare_rgba, local_fidelity, LocalFidelity};
 use support::*;
 
@@ -430,4 +430,64 @@ fn a_rack_focus_changes_every_tile_smoothly_from_frame_to_frame() {
     println!("worst tile's jerk over the rack focus: tiled {:.2}%, reference {:.2}%", 100.0 * tiled, 100.0 * reference);
     assert!(reference < 0.01, "reference: {:.2}%", 100.0 * reference);
     assert!(tiled < 0.03, "tiled: {:.2}%", 100.0 * tiled);
+}
+
+#[test]
+fn a_static_highlight_before_a_fast_mover_stays_sharp_against_the_exact_blur() {
+    // Issue 30's hidden scene, generated: a textured ball (a disc of 30 px radius at 5 m) moving
+    // left 93 px per frame behind a still, very bright 3x3-px highlight (50, at 3 m, placed off
+    // the pixel grid so that its fringe pixels mix it with the ball in colour while their depth
+    // and vectors are the ball's or the highlight's, one sample each), before a still checkered
+    // wall; 24 fps, 180-degree shutter. Against the exact image (pixel area x open time), the
+    // fast path's RMSE must be at most half the unblurred input's (the issue's goal for its
+    // hidden scene, where realcam measured 1.6x the input's before the edge resolve moved the
+    // fringe's light with its own layer).
+    let (w, h) = (256u32, 144u32);
+    let gpu = gpu();
+    let mut scene = LayeredScene::random(0, w, h);
+    let (ball_m, light_m, wall_m) = (5.0, 3.0, 10.0);
+    let px = |depth_m: f64| scene.m_per_px(depth_m);
+    let (ball_px, light_px) = (px(ball_m), px(light_m));
+    scene.layers = vec![
+        Layer {
+            depth_m: light_m,
+            shape: Shape::Rect { x0: 0.3 * light_px, y0: -1.6 * light_px, x1: 3.3 * light_px, y1: 1.4 * light_px },
+            mask: Mask::Opaque,
+            texture: Texture::Flat([50.0, 50.0, 50.0]),
+            motion: LayerMotion::STILL,
+        },
+        Layer {
+            depth_m: ball_m,
+            shape: Shape::Disc { cx: 20.0 * ball_px, cy: 0.0, r: 30.0 * ball_px },
+            mask: Mask::Opaque,
+            texture: Texture::Stripes { period: 9.0 * ball_px, a: [0.8, 0.3, 0.2], b: [0.2, 0.1, 0.05] },
+            motion: LayerMotion { velocity_m_per_frame: [-93.0 * ball_px, 0.0], ..LayerMotion::STILL },
+        },
+        Layer {
+            depth_m: wall_m,
+            shape: Shape::Everywhere,
+            mask: Mask::Opaque,
+            texture: Texture::Checker { cell: 8.0 * px(wall_m), a: [0.3, 0.35, 0.3], b: [0.15, 0.15, 0.2] },
+            motion: LayerMotion::STILL,
+        },
+    ];
+    scene.shutter_frames = [-0.25, 0.25];
+    scene.truth_spp = 256;
+    let passes = scene.render_motion();
+    let frame = motion_frame(&passes);
+    let rmse = |rgba: &[f32]| compare_rgba(rgba, &passes.truth).rmse_matched;
+    let input = rmse(&passes.color);
+    let out_dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("generated_scenes");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let mut outputs = Vec::new();
+    for mode in [MotionBlurMode::Fast, MotionBlurMode::Reference] {
+        let (out, _, _) = render(&gpu, &frame, &motion_camera(&scene, mode));
+        println!("{mode:?}: RMSE {:.4}, {:.2} of the input's {input:.4}", rmse(&out), rmse(&out) / input);
+        outputs.push(out);
+    }
+    let images = [&passes.color[..], &passes.truth, &outputs[0], &outputs[1]];
+    write_strip(&out_dir.join("highlight_before_mover.png"), (w, h), images);
+    for (out, name) in outputs.iter().zip(["fast", "reference"]) {
+        assert!(rmse(out) <= 0.5 * input, "{name}: RMSE {:.4} against the input's {input:.4}", rmse(out));
+    }
 }

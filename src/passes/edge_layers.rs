@@ -58,8 +58,11 @@ pub fn edge_layer(w: &[f32; 9], c9: &[[f32; 3]; 9], c_p: [f32; 3], w_near: f32, 
         return EDGE_OWN;
     }
     let alpha = alpha_p.clamp(0.0, 1.0);
-    let to_near = alpha * brightness(c_near) > (1.0 - alpha) * brightness(c_far);
-    if to_near == own_near || (if to_near { alpha } else { 1.0 - alpha }) < min_share {
+    let (near_light, far_light) = (alpha * brightness(c_near), (1.0 - alpha) * brightness(c_far));
+    let to_near = near_light > far_light;
+    // The other layer's share of the pixel's light, not of its area (see the shader).
+    let other_share = (if to_near { near_light } else { far_light }) / (near_light + far_light).max(1.0e-30);
+    if to_near == own_near || other_share < min_share {
         EDGE_OWN
     } else if to_near {
         EDGE_NEAR
