@@ -4,9 +4,9 @@
 //! then reads only its tile's words. Shader: glsl/flare/flare_bins.comp.
 
 use super::sprite::sprite_bin;
-use super::types::constants_of;
+use super::types::{constants_of, FlareConstants};
 use crate::gpu::shaders::flare::{ARGS_BIN_GROUPS, ARGS_LIGHTS, BIN_SPRITES_PER_WORD, SPRITE_WORDS};
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
 use crate::passes::barriers::{args_for_indirect, buffer_after_compute_write, buffer_after_fill};
 use crate::passes::twin::floats;
@@ -69,9 +69,18 @@ impl Twin for FlareBinsShader {
 /// Record the binning: the bins cleared, then every sprite OR-ed into the tiles it reaches;
 /// one group per sprite flare_lights made (none without a light), `slots` the sprite buffer's
 /// capacity in sprites.
+/// The specialization constants of glsl/flare/flare_bins.comp for a frame of `constants`:
+/// aperture.glsl's two at their defaults (ghost_sdf uses neither path), and whether it has
+/// matrix ghosts and fitted ghosts (without, the pipeline has none of their bin tests' code).
+pub fn specialization(constants: &FlareConstants) -> [u32; 4] {
+    [1, 1, (constants.ghost_count > 0) as u32, (constants.fitted_count > 0) as u32]
+}
+
+/// Record the step; `constants` from [`specialization`].
 pub fn record(
-    kernel: &Kernel<FlareBinsShader>,
+    kernel: &SpecializedKernel<FlareBinsShader>,
     rec: &mut Recorder,
+    constants: &[u32; 4],
     b: &FlareBinsBindings<'_>,
     slots: u32,
 ) -> GpuResult<()> {
@@ -82,7 +91,7 @@ pub fn record(
     //   as this dispatch's group counts.
     rec.buffer_barriers(&[buffer_after_fill(b.bins), buffer_after_compute_write(b.sprites), args_for_indirect(b.args)]);
     let words = words_per_tile(slots as u64) as i32;
-    kernel.dispatch_indirect(rec, b, &words, b.args, ARGS_BIN_GROUPS as u64 * 4)?;
+    kernel.dispatch_indirect(rec, constants, b, &words, b.args, ARGS_BIN_GROUPS as u64 * 4)?;
     rec.end_pass();
     Ok(())
 }

@@ -10,7 +10,7 @@ use crate::gpu::shaders::flare::{
     LIGHT_SPIKE_SHARE, LIGHT_TILES, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND,
     SPRITE_LIGHT, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_COUNT, TILE_LIGHT, TILE_WORDS,
 };
-use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
+use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::passes::barriers::buffer_after_compute_write;
 use crate::passes::twin::floats;
 use crate::passes::TILE_SIZE;
@@ -356,10 +356,17 @@ impl Twin for FlareLightsShader {
     }
 }
 
-/// Record the step: one workgroup.
+/// The specialization constants of glsl/flare/flare_lights.comp for a frame of `constants`:
+/// whether it has fitted ghosts, and matrix ghosts (without, the pipeline has none of their code).
+pub fn specialization(constants: &FlareConstants) -> [u32; 2] {
+    [(constants.fitted_count > 0) as u32, (constants.ghost_count > 0) as u32]
+}
+
+/// Record the step: one workgroup; `constants` from [`specialization`].
 pub fn record(
-    kernel: &Kernel<FlareLightsShader>,
+    kernel: &SpecializedKernel<FlareLightsShader>,
     rec: &mut Recorder,
+    constants: &[u32; 2],
     b: &FlareLightsBindings<'_>,
     max_lights: i32,
 ) -> GpuResult<()> {
@@ -368,7 +375,7 @@ pub fn record(
     // lights, sprites, counts, lit tiles: buffers of this recording nothing has touched yet.
     // The ghost table and explicit lights: uploaded with their own barriers.
     rec.buffer_barriers(&[buffer_after_compute_write(b.tiles)]);
-    kernel.dispatch(rec, b, &max_lights, [1, 1, 1])?;
+    kernel.dispatch(rec, constants, b, &max_lights, [1, 1, 1])?;
     rec.end_pass();
     Ok(())
 }

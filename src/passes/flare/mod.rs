@@ -309,8 +309,8 @@ fn energy_text(e: f64) -> String {
 
 pub struct Flare {
     tiles: Kernel<FlareTilesShader>,
-    lights: Kernel<FlareLightsShader>,
-    bins: Kernel<FlareBinsShader>,
+    lights: SpecializedKernel<FlareLightsShader>,
+    bins: SpecializedKernel<FlareBinsShader>,
     sprites: SpecializedKernel<GhostSpritesShader>,
 }
 
@@ -397,14 +397,16 @@ impl Pass for Flare {
     fn new(gpu: &Gpu) -> GpuResult<Self> {
         Ok(Flare {
             tiles: Kernel::new(gpu)?,
-            lights: Kernel::new(gpu)?,
-            bins: Kernel::new(gpu)?,
+            lights: SpecializedKernel::new(gpu)?,
+            bins: SpecializedKernel::new(gpu)?,
             sprites: SpecializedKernel::new(gpu)?,
         })
     }
 
-    /// The ghost-sprite kernel's pipeline for the kinds of sprite this frame has.
+    /// The lights' and the ghost-sprite kernels' pipelines for the kinds of sprite this frame has.
     fn prepare(&self, p: &FlareParams) -> GpuResult<()> {
+        self.lights.prepare(&lights::specialization(&p.constants))?;
+        self.bins.prepare(&bins::specialization(&p.constants))?;
         self.sprites.prepare(&ghost_sprites::specialization(&p.constants, bins::words_per_tile(p.sprite_slots())))
     }
 
@@ -453,9 +455,9 @@ impl Pass for Flare {
             args: &args,
             lit: &lit,
         };
-        lights::record(&self.lights, rec, &light_bindings, p.max_lights as i32)?;
+        lights::record(&self.lights, rec, &lights::specialization(&p.constants), &light_bindings, p.max_lights as i32)?;
         let bin_bindings = FlareBinsBindings { constants: &constants, sprites: &sprites, args: &args, bins: &bins };
-        bins::record(&self.bins, rec, &bin_bindings, sprite_slots as u32)?;
+        bins::record(&self.bins, rec, &bins::specialization(&p.constants), &bin_bindings, sprite_slots as u32)?;
         let sprite_bindings = GhostSpritesBindings {
             color: &color,
             constants: &constants,
