@@ -239,3 +239,25 @@ fn bad_captures_and_flags_are_named() {
     assert!(e.contains("no ghost was found at more than --order 2 of the 4 angles [2.0, 3.0, 4.0, 5.0]"), "{e}");
     assert!(!Path::new(&out).exists());
 }
+
+#[test]
+fn a_ghost_box_keeps_one_ghost_of_two() {
+    // A 60x30 capture with a 4x4 ghost of 1 at x 10..14, y 10..14 and a 10x20 one of 2 at x
+    // 40..50, y 5..25. A ghost is the box of the pixels of at least a tenth of its region's
+    // peak, grown by a fifth of its larger side (at least 4 px), kept in the region.
+    let w = 60;
+    let mut v = vec![0.0; w * 30];
+    for y in 10..14 {
+        v[y * w + 10..y * w + 14].fill(1.0);
+    }
+    for y in 5..25 {
+        v[y * w + 40..y * w + 50].fill(2.0);
+    }
+    // The whole frame holds both: their box 10..50 x 5..25, grown by 40 / 5 = 8.
+    assert_eq!(ghost_window(&v, w, [0.0, 0.0, 60.0, 30.0]), Some([2.0, 0.0, 58.0, 30.0]));
+    // Each region one: the small ghost grown by the least, 4 px; the large one by 20 / 5 = 4.
+    assert_eq!(ghost_window(&v, w, [0.0, 0.0, 30.0, 30.0]), Some([6.0, 6.0, 18.0, 18.0]));
+    assert_eq!(ghost_window(&v, w, [30.0, 0.0, 60.0, 30.0]), Some([36.0, 1.0, 54.0, 29.0]));
+    // A dark region has none.
+    assert_eq!(ghost_window(&v, w, [20.0, 0.0, 30.0, 10.0]), None);
+}

@@ -180,7 +180,7 @@ pub fn svg(r: &RangePrediction) -> String {
 
 const PLOT_W: f64 = 640.0;
 const MARGIN: f64 = 40.0;
-const LEGEND_W: f64 = 220.0;
+const LEGEND_W: f64 = 280.0;
 
 fn heat_map(r: &RangePrediction, cols: u32, rows: u32) -> String {
     let frame = r.positions.first().map(|p| p.prediction.frame_px).unwrap_or([1, 1]);
@@ -195,7 +195,12 @@ fn heat_map(r: &RangePrediction, cols: u32, rows: u32) -> String {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
     );
     let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    let _ = writeln!(s, "<text x=\"{MARGIN}\" y=\"24\">{} over {}</text>", e.name(), escaped(&describe(r)));
+    let _ = writeln!(
+        s,
+        "<text x=\"{MARGIN}\" y=\"24\" font-size=\"10\">{} over {}</text>",
+        e.name(),
+        escaped(&describe(r))
+    );
     let _ = writeln!(s, "<g class=\"cells\" transform=\"translate({MARGIN},{MARGIN})\">");
     for p in &r.positions {
         let [c, row] = p.light.cell;
@@ -259,7 +264,7 @@ fn legend(s: &mut String, r: &RangePrediction, x: f64, y: f64) {
 
 fn path_plot(r: &RangePrediction) -> String {
     let e = r.request.estimator;
-    let (plot_w, plot_h) = (PLOT_W, 360.0);
+    let (plot_w, plot_h) = (PLOT_W + 80.0, 360.0);
     let (w, h) = (MARGIN * 2.0 + 40.0 + plot_w, MARGIN * 2.0 + 30.0 + plot_h);
     let (mut lo, mut hi) = (r.bins.lower, r.bins.upper);
     if let Some(t) = r.threshold {
@@ -278,7 +283,12 @@ fn path_plot(r: &RangePrediction) -> String {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
     );
     let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    let _ = writeln!(s, "<text x=\"{MARGIN}\" y=\"24\">{} along {}</text>", e.name(), escaped(&describe(r)));
+    let _ = writeln!(
+        s,
+        "<text x=\"{MARGIN}\" y=\"24\" font-size=\"10\">{} along {}</text>",
+        e.name(),
+        escaped(&describe(r))
+    );
     let _ = writeln!(
         s,
         "<rect x=\"{x0}\" y=\"{y0}\" width=\"{plot_w}\" height=\"{plot_h}\" fill=\"none\" stroke=\"black\"/>"
