@@ -12,7 +12,7 @@ use super::super::{
 };
 use super::{
     capture_file, capture_image, merge_brackets, remove_background, remove_glare, sidecar_of, Bracket, CaptureError,
-    Response,
+    CaptureFile, Response,
 };
 use crate::io::lens_file::FittedGhostSpec;
 use std::path::{Path, PathBuf};
@@ -52,47 +52,33 @@ pub enum CapturesError {
     Bracket { a: String, b: String, angle: f64, what: String },
 }
 
-/// One capture as read: its angle, exposure time (1 s when it names none) and its grey values
-/// in each of the 3 channels (a grey capture's one channel in all three).
-struct Frame {
-    path: PathBuf,
-    angle_deg: f64,
-    exposure_s: Option<f64>,
-    width: u32,
-    height: u32,
-    channels: [Vec<f32>; 3],
-}
-
-fn read_frame(path: &Path) -> Result<Frame, CapturesError> {
+/// A capture's name read ([`capture_file`], with its sidecar where there is one).
+fn named(path: &Path) -> Result<CaptureFile, CapturesError> {
     let sidecar_path = sidecar_of(path);
     let sidecar = match std::fs::read_to_string(&sidecar_path) {
         Ok(t) => Some(t),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(CapturesError::Read { path: sidecar_path.display().to_string(), message: e.to_string() }),
     };
-    let file = capture_file(path, sidecar.as_deref())?;
-    let read = |name: &str| crate::io::read_exr_channel(path, name);
-    let shown = path.display().to_string();
-    let (width, height, channels) = match (read("R"), read("G"), read("B")) {
-        (Ok(r), Ok(g), Ok(b)) => (r.width, r.height, [r.data, g.data, b.data]),
-        _ => match read("Y") {
-            Ok(y) => (y.width, y.height, [y.data.clone(), y.data.clone(), y.data]),
-            Err(e) => {
-                return Err(CapturesError::Read {
-                    path: shown,
-                    message: format!("a capture needs channels R, G and B, or one channel Y ({e})"),
-                })
-            }
-        },
-    };
-    Ok(Frame {
-        path: path.to_path_buf(),
-        angle_deg: file.angle_deg,
-        exposure_s: file.exposure_s,
-        width,
-        height,
-        channels,
-    })
+    Ok(capture_file(path, sidecar.as_deref())?)
+}
+
+/// The grey values of `channels` (0 red, 1 green, 2 blue) of the capture at `path`, and its
+/// size: its channel R, G or B, or, where it has not that one, its one channel Y.
+fn read_channels(path: &Path, channels: &[usize]) -> Result<(u32, u32, Vec<Vec<f32>>), CapturesError> {
+    let mut size = (0, 0);
+    let mut out = Vec::with_capacity(channels.len());
+    for &c in channels {
+        let name = ["R", "G", "B"][c.min(2)];
+        let image = crate::io::read_exr_channel(path, name).or_else(|_| crate::io::read_exr_channel(path, "Y"));
+        let image = image.map_err(|e| CapturesError::Read {
+            path: path.display().to_string(),
+            message: format!("a capture needs channel {name} (or one channel Y): {e}"),
+        })?;
+        size = (image.width, image.height);
+        out.push(image.data);
+    }
+    Ok((size.0, size.1, out))
 }
 
 /// The `.exr` files of `dir` (not its sub-folders), sorted by name.
@@ -147,44 +133,35 @@ pub fn ghost_window(values: &[f64], width: usize, region: [f64; 4]) -> Option<[f
     ])
 }
 
-/// Each angle's captures merged and cleaned, in channel `c`: (angle, radiance per pixel).
-fn merged_angles(
-    frames: &[Frame],
-    c: usize,
-    options: &CaptureFitOptions,
-) -> Result<Vec<(f64, Vec<f64>)>, CapturesError> {
-    let (w, h) = (frames[0].width as usize, frames[0].height as usize);
-    let mut out: Vec<(f64, Vec<f64>)> = Vec::new();
-    let mut i = 0;
-    while i < frames.len() {
-        let angle = frames[i].angle_deg;
-        let group: Vec<&Frame> = frames[i..].iter().take_while(|f| f.angle_deg == angle).collect();
-        i += group.len();
-        for (k, a) in group.iter().enumerate() {
-            for b in &group[k + 1..] {
-                let what = match (a.exposure_s, b.exposure_s) {
-                    (None, _) | (_, None) => "no exposure time in one of them".to_string(),
-                    (Some(x), Some(y)) if x == y => format!("the same exposure time {x} s"),
-                    _ => continue,
-                };
-                let (a, b) = (a.path.display().to_string(), b.path.display().to_string());
-                return Err(CapturesError::Bracket { a, b, angle, what });
-            }
+/// The files of one angle (sorted by angle) checked as a bracket: several frames need exposure
+/// times, each its own.
+fn check_bracket(group: &[CaptureFile]) -> Result<(), CapturesError> {
+    for (k, a) in group.iter().enumerate() {
+        for b in &group[k + 1..] {
+            let what = match (a.exposure_s, b.exposure_s) {
+                (None, _) | (_, None) => "no exposure time in one of them".to_string(),
+                (Some(x), Some(y)) if x == y => format!("the same exposure time {x} s"),
+                _ => continue,
+            };
+            let (p, q) = (a.path.display().to_string(), b.path.display().to_string());
+            return Err(CapturesError::Bracket { a: p, b: q, angle: a.angle_deg, what });
         }
-        let brackets: Vec<Bracket> = group
-            .iter()
-            .map(|f| Bracket { exposure_s: f.exposure_s.unwrap_or(1.0), recorded: f.channels[c].clone() })
-            .collect();
-        let mut radiance = merge_brackets(&brackets, options.response).radiance;
-        remove_background(&mut radiance, w, h, options.border_px);
-        if options.glare_radius_px > 0.0 {
-            let brightest = (0..radiance.len()).max_by(|&p, &q| radiance[p].total_cmp(&radiance[q])).unwrap_or(0);
-            let light = [(brightest % w) as f64 + 0.5, (brightest / w) as f64 + 0.5];
-            remove_glare(&mut radiance, w, h, light, options.glare_radius_px);
-        }
-        out.push((angle, radiance));
     }
-    Ok(out)
+    Ok(())
+}
+
+/// One angle's bracket (`frames`: exposure time, recorded values) merged and cleaned: the
+/// radiance per pixel of a `w` x `h` frame.
+fn cleaned(frames: &[(f64, Vec<f32>)], w: usize, h: usize, options: &CaptureFitOptions) -> Vec<f64> {
+    let brackets: Vec<Bracket> = frames.iter().map(|(t, v)| Bracket { exposure_s: *t, recorded: v.clone() }).collect();
+    let mut radiance = merge_brackets(&brackets, options.response).radiance;
+    remove_background(&mut radiance, w, h, options.border_px);
+    if options.glare_radius_px > 0.0 {
+        let brightest = (0..radiance.len()).max_by(|&p, &q| radiance[p].total_cmp(&radiance[q])).unwrap_or(0);
+        let light = [(brightest % w) as f64 + 0.5, (brightest / w) as f64 + 0.5];
+        remove_glare(&mut radiance, w, h, light, options.glare_radius_px);
+    }
+    radiance
 }
 
 /// One ghost's samples fitted over the angles and made polynomials (as
@@ -241,40 +218,57 @@ pub struct CapturesFit {
     pub files: usize,
 }
 
-/// The captures of `dir` fitted: every ghost region in every channel over the angles.
-/// `progress` hears each ghost.
+/// The captures of `dir` fitted: every ghost region in every channel over the angles. The
+/// names are all read (and the brackets checked) first; then one angle's files at a time, so
+/// that only one bracket's pixels are held. `progress` hears each angle and each ghost.
 pub fn fit_captures(
     dir: &Path,
     options: &CaptureFitOptions,
     mut progress: impl FnMut(&str),
 ) -> Result<CapturesFit, CapturesError> {
     let paths = capture_paths(dir)?;
-    let mut frames = paths.iter().map(|p| read_frame(p)).collect::<Result<Vec<_>, _>>()?;
-    let (w, h) = (frames[0].width, frames[0].height);
-    if let Some(f) = frames.iter().find(|f| (f.width, f.height) != (w, h)) {
-        let (path, first) = (f.path.display().to_string(), frames[0].path.display().to_string());
-        return Err(CapturesError::Size { path, w: f.width, h: f.height, first, w0: w, h0: h });
-    }
-    frames.sort_by(|a, b| a.angle_deg.total_cmp(&b.angle_deg));
-    let mut angles_deg: Vec<f64> = frames.iter().map(|f| f.angle_deg).collect();
-    angles_deg.dedup();
+    let mut files = paths.iter().map(|p| named(p)).collect::<Result<Vec<_>, _>>()?;
+    files.sort_by(|a, b| a.angle_deg.total_cmp(&b.angle_deg));
+    let groups: Vec<&[CaptureFile]> = files.chunk_by(|a, b| a.angle_deg == b.angle_deg).collect();
+    groups.iter().try_for_each(|g| check_bracket(g))?;
     let regions: Vec<(String, Option<[f64; 4]>)> =
         if options.ghosts.is_empty() { vec![("capture".into(), None)] } else { options.ghosts.clone() };
-    let mut fitted = Vec::new();
-    for &c in &options.channels {
-        let merged = merged_angles(&frames, c, options)?;
-        for (label, region) in &regions {
-            progress(&format!("ghost {label} channel {c}"));
-            let region = region.unwrap_or([0.0, 0.0, w as f64, h as f64]);
-            let samples: Vec<(f64, GreyImage)> = merged
-                .iter()
-                .filter_map(|(a, values)| {
-                    let window = ghost_window(values, w as usize, region)?;
-                    Some((*a, capture_image(values, w as usize, h as usize, Some(window), options.max_cells)))
-                })
-                .collect();
-            fitted.extend(fit_samples(&samples, label, c, [w, h], options.order, &options.fit));
+    // samples[channel][region]: (angle, the ghost's cells).
+    let mut samples: Vec<Vec<Vec<(f64, GreyImage)>>> = vec![vec![Vec::new(); regions.len()]; options.channels.len()];
+    let mut first: Option<(u32, u32, &Path)> = None;
+    for group in &groups {
+        let angle = group[0].angle_deg;
+        progress(&format!("captures at {angle} deg"));
+        let mut frames: Vec<(f64, Vec<Vec<f32>>)> = Vec::new();
+        for f in group.iter() {
+            let (w, h, values) = read_channels(&f.path, &options.channels)?;
+            let (w0, h0, p0) = *first.get_or_insert((w, h, &f.path));
+            if (w, h) != (w0, h0) {
+                let (path, first) = (f.path.display().to_string(), p0.display().to_string());
+                return Err(CapturesError::Size { path, w, h, first, w0, h0 });
+            }
+            frames.push((f.exposure_s.unwrap_or(1.0), values));
+        }
+        let (w, h) = first.map(|f| (f.0 as usize, f.1 as usize)).unwrap_or((0, 0));
+        for (ci, per_region) in samples.iter_mut().enumerate() {
+            let bracket: Vec<(f64, Vec<f32>)> = frames.iter().map(|(t, v)| (*t, v[ci].clone())).collect();
+            let radiance = cleaned(&bracket, w, h, options);
+            for ((_, region), out) in regions.iter().zip(per_region.iter_mut()) {
+                let region = region.unwrap_or([0.0, 0.0, w as f64, h as f64]);
+                if let Some(window) = ghost_window(&radiance, w, region) {
+                    out.push((angle, capture_image(&radiance, w, h, Some(window), options.max_cells)));
+                }
+            }
         }
     }
+    let (w, h, _) = first.unwrap_or((0, 0, dir));
+    let mut fitted = Vec::new();
+    for (&c, per_region) in options.channels.iter().zip(&samples) {
+        for ((label, _), s) in regions.iter().zip(per_region) {
+            progress(&format!("ghost {label} channel {c}"));
+            fitted.extend(fit_samples(s, label, c, [w, h], options.order, &options.fit));
+        }
+    }
+    let angles_deg = groups.iter().map(|g| g[0].angle_deg).collect();
     Ok(CapturesFit { fitted, frame_px: [w, h], angles_deg, files: paths.len() })
 }
