@@ -6,7 +6,12 @@
 //! brightness. The flare image's intensity is the mean of its three channels at each pixel;
 //! its min, max, sum, average and log-average (sec. 9.1) are reported, and the contrast the
 //! flare leaves a scene of the given I_max and I_min (eq 9.3), with the flare's average as
-//! I_flare (a veiling glare adds to every pixel alike).
+//! I_flare (a veiling glare adds to every pixel alike). [`range`] does the same over a grid or
+//! a path of lights, with sec. 9.2's statistics and bins; [`report`] writes those as text, CSV
+//! and SVG.
+
+pub mod range;
+pub mod report;
 
 use crate::gpu::shaders::bezier_ghost::{BEZIER_BOUNDS, BEZIER_WORDS};
 use crate::io::lens_file::FittedGhostSpec;
@@ -69,10 +74,21 @@ pub enum PredictError {
 /// The flare image (mean of the channels per pixel, row by row) of `ghosts` at `angle_deg`,
 /// turned by `roll` (radians, counter-clockwise on screen) and scaled by `scale`.
 pub fn flare_intensities(ghosts: &[FittedGhostSpec], angle_deg: f64, roll: f64, scale: f64) -> Vec<f64> {
+    flare_samples(ghosts, angle_deg, roll, scale, 1)
+}
+
+/// [`flare_intensities`] at every `step_px`-th pixel across and down: the pixel nearest the
+/// centre of each `step_px` x `step_px` block that starts within the frame (row by row of
+/// blocks). Step 1 is every pixel.
+pub fn flare_samples(ghosts: &[FittedGhostSpec], angle_deg: f64, roll: f64, scale: f64, step_px: u32) -> Vec<f64> {
     let Some(first) = ghosts.first() else { return Vec::new() };
     let [w, h] = first.frame_px;
-    let mut out = vec![0.0f64; w as usize * h as usize];
+    let step = step_px.max(1);
+    let (bw, bh) = (w.div_ceil(step), h.div_ceil(step));
+    let mut out = vec![0.0f64; bw as usize * bh as usize];
     let pivot_px = [w as f64 / 2.0, h as f64 / 2.0];
+    // The sampled pixel of block (bx, by): its centre pixel, kept within the frame.
+    let sample = |b: u32, size: u32| (b * step + step / 2).min(size - 1);
     for spec in ghosts {
         let ghost = spec.polynomials().at(angle_deg);
         let drawn = DrawnGhost { ghost, colour: [1.0; 3], roll_rad: roll, pivot_px };
@@ -83,11 +99,19 @@ pub fn flare_intensities(ghosts: &[FittedGhostSpec], angle_deg: f64, roll: f64, 
         let y0 = (b[1] as f64 - 0.5).floor().clamp(0.0, h as f64) as u32;
         let x1 = (b[2] as f64 + 0.5).ceil().clamp(0.0, w as f64) as u32;
         let y1 = (b[3] as f64 + 0.5).ceil().clamp(0.0, h as f64) as u32;
-        for y in y0..y1 {
-            for x in x0..x1 {
+        for by in 0..bh {
+            let y = sample(by, h);
+            if y < y0 || y >= y1 {
+                continue;
+            }
+            for bx in 0..bw {
+                let x = sample(bx, w);
+                if x < x0 || x >= x1 {
+                    continue;
+                }
                 let light = primitive_light(&words, [x as f32 + 0.5, y as f32 + 0.5]) as f64;
                 // One channel of three: its share of the pixel's mean.
-                out[(y * w + x) as usize] += scale * light / 3.0;
+                out[(by * bw + bx) as usize] += scale * light / 3.0;
             }
         }
     }
@@ -96,6 +120,18 @@ pub fn flare_intensities(ghosts: &[FittedGhostSpec], angle_deg: f64, roll: f64, 
 
 /// Ch. 9's prediction for `request` from a lens's fitted ghosts.
 pub fn predict(ghosts: &[FittedGhostSpec], request: &PredictRequest) -> Result<Prediction, PredictError> {
+    predict_sampled(ghosts, request, 1)
+}
+
+/// [`predict`] from the flare image at every `step_px`-th pixel ([`flare_samples`]): the
+/// min, max, average and log-average over those pixels, the sum their average times the
+/// frame's pixels. Step 1 is [`predict`]; a larger one is step^2 times quicker, for ranges
+/// over large frames.
+pub fn predict_sampled(
+    ghosts: &[FittedGhostSpec],
+    request: &PredictRequest,
+    step_px: u32,
+) -> Result<Prediction, PredictError> {
     let first = ghosts.first().ok_or(PredictError::NoGhosts)?;
     if let Some(g) = ghosts.iter().find(|g| g.frame_px != first.frame_px) {
         let ([w, h], [w0, h0]) = (g.frame_px, first.frame_px);
@@ -113,8 +149,11 @@ pub fn predict(ghosts: &[FittedGhostSpec], request: &PredictRequest) -> Result<P
     // Eq 8.1 with the camera at the origin looking down -z; eq 8.2 in view space.
     let angle_deg = constellation_angle_deg([0.0, 0.0, -1.0], [0.0; 3], l);
     let roll = roll_rad(l);
-    let image = flare_intensities(ghosts, angle_deg, roll, scale);
-    let e = estimators(&image, LOG_DELTA).ok_or(PredictError::NoGhosts)?;
+    let image = flare_samples(ghosts, angle_deg, roll, scale, step_px);
+    let mut e = estimators(&image, LOG_DELTA).ok_or(PredictError::NoGhosts)?;
+    if step_px > 1 {
+        e.sum = e.average * first.frame_px[0] as f64 * first.frame_px[1] as f64;
+    }
     Ok(Prediction {
         angle_deg,
         roll_deg: roll.to_degrees(),

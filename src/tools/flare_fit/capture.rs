@@ -13,6 +13,8 @@
 //!   distance from the light within a given radius, subtracted ([`remove_glare`]): a ghost
 //!   covers few of the azimuths at a distance and leaves the median alone, the glare all.
 
+pub mod folder;
+
 use super::GreyImage;
 use std::path::{Path, PathBuf};
 
