@@ -104,23 +104,8 @@ void list_sprites(uint base, uint first, uint last) {
     }
 }
 
-// The listed sprites' light at pixel p (centre q) added to `sum`, one loop per kind: lavapipe
-// runs both sides of every `if`, but leaves a loop no lane is still in (a branch on the kind
-// would run all three per sprite).
-void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
-    for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
-        uint entry = s_list[0][i];
-        uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
-        float ramp = sprite_data[b + SPRITE_SOFTNESS];
-        // The crossing channels only (each costs an aperture distance), in channel order.
-        for (uint channels = entry >> 24; channels != 0u; channels &= channels - 1u) {
-            uint c = uint(findLSB(channels));
-            float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
-            sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
-        }
-    }
-    for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
-    for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
+// The listed fitted sprites' light at pixel p (centre q) added to `sum` (shade_listed).
+void shade_fitted(ivec2 p, vec2 q, inout vec3 sum) {
     // The fitted sprites, FITTED_LIST at a time: their distance searched at the tile's corners
     // and centre by all invocations together (the trip counts are the same for every
     // invocation, so the barriers are reached by all). A sprite whose light is smooth over the
@@ -129,7 +114,7 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
     // pixel from their distance, interpolated where near linear, searched where not.
     // The tile's first pixel centre in the whole frame (a band's tiles start at its first row).
     vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE) + uvec2(0, fc.band_top_px)) + 0.5;
-    uint fitted = SPRITE_FITTED ? s_listed[3] : 0u;
+    uint fitted = s_listed[3];
     if (gl_LocalInvocationIndex < 12u) s_corner_sums[gl_LocalInvocationIndex] = 0.0;
     for (uint start = 0; start < fitted; start += FITTED_LIST) {
         uint n = min(fitted - start, FITTED_LIST);
@@ -180,6 +165,29 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
             sum[c] += mix(mix(s_corner_sums[c], s_corner_sums[3u + c], f.x), mix(s_corner_sums[6u + c], s_corner_sums[9u + c], f.x), f.y);
         }
     }
+}
+
+// The listed sprites' light at pixel p (centre q) added to `sum`, one loop per kind: lavapipe
+// runs both sides of every `if`, but leaves a loop no lane is still in (a branch on the kind
+// would run all three per sprite).
+void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
+    for (uint i = 0; i < (SPRITE_GHOSTS ? s_listed[0] : 0u); ++i) {
+        uint entry = s_list[0][i];
+        uint b = (entry & 0xFFFFFFu) * SPRITE_WORDS;
+        float ramp = sprite_data[b + SPRITE_SOFTNESS];
+        // The crossing channels only (each costs an aperture distance), in channel order.
+        for (uint channels = entry >> 24; channels != 0u; channels &= channels - 1u) {
+            uint c = uint(findLSB(channels));
+            float value = sprite_data[b + SPRITE_DATA + c * GHOST_SPRITE_CHANNEL_WORDS + 3];
+            sum[c] += value * clamp(0.5 - ghost_sdf(b, c, q) / ramp, 0.0, 1.0);
+        }
+    }
+    for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
+    for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
+    // An `if` on a specialization constant takes the code out of the pipeline; the loops' own
+    // zero trip counts did not (with SPRITE_FITTED off, the fitted part was 0.73 s of the
+    // demo's 1.08 s compile of this kernel on lavapipe).
+    if (SPRITE_FITTED) shade_fitted(p, q, sum);
 }
 
 void main() {
