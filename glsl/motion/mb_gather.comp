@@ -24,6 +24,7 @@ layout(binding = 1, r32f) uniform readonly image2D depth_m;
 layout(binding = 2, rgba32f) uniform readonly image2D velocity;
 layout(binding = 3, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 4, std430) readonly buffer NeighborMotion { vec4 neighbor_motion[]; };
+layout(binding = 5, std430) readonly buffer TileMotion { vec4 tile_motion[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -116,6 +117,21 @@ void main() {
     float reach_next_x = t_fwd * length(v.xy);
     float reach_prev_x = t_back * length(v.zw);
     float total = shutter_total(pc.shutter);
+    // A still pixel has no line of its own: it samples along its own tile's longest velocities
+    // instead. The neighbourhood's longest can belong to a faster object a tile or two away
+    // moving another way, and a slower mover over this still pixel (a fence sliding across the
+    // sky beside a fast ball) then spread none of its light over it: its paths cross X along
+    // neither line.
+    vec4 tm = tile_motion[tile.y * pc.tiles.x + tile.x];
+    vec2 line_next = v.xy, line_prev = v.zw;
+    if (reach_next_x <= 0.5) {
+        line_next = tm.xy;
+        reach_next_x = t_fwd * length(tm.xy);
+    }
+    if (reach_prev_x <= 0.5) {
+        line_prev = tm.zw;
+        reach_prev_x = t_back * length(tm.zw);
+    }
 
     Layers l;
     l.fg = vec4(0.0); l.fg_a = 0.0;
@@ -126,8 +142,8 @@ void main() {
     l.own = l.own_a * c;
 
     vec2 next_n = unit(nm.xy), prev_n = unit(nm.zw);
-    vec2 next_x = reach_next_x > 0.5 ? unit(v.xy) : vec2(0.0);
-    vec2 prev_x = reach_prev_x > 0.5 ? unit(v.zw) : vec2(0.0);
+    vec2 next_x = reach_next_x > 0.5 ? unit(line_next) : vec2(0.0);
+    vec2 prev_x = reach_prev_x > 0.5 ? unit(line_prev) : vec2(0.0);
     float same_next = same_direction(next_n, next_x);
     float same_prev = same_direction(prev_n, prev_x);
     // Sources whose forward half ends on X lie back along their next velocity; those whose

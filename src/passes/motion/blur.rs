@@ -255,6 +255,8 @@ impl Pass for MotionBlur {
         // neighbor_motion: written by mb_neighbor (read-after-write). color: written by the upload
         //   (its own barrier) or an earlier compute pass; the gather reads it anywhere around a
         //   pixel, so all of it must be written and visible. output: written from scratch.
+        // tile_motion: written by mb_tiles, read by mb_neighbor since (read-after-read: the
+        //   barrier before mb_neighbor made it visible to compute reads).
         rec.buffer_barriers(&[buffer_after_compute_write(&neighbor_motion)]);
         rec.image_barriers(&[after_compute_write(&color), overwrite(&output)]);
         let bindings = MbGatherBindings {
@@ -263,6 +265,7 @@ impl Pass for MotionBlur {
             velocity: &velocity,
             color_out: &output,
             neighbor_motion: &neighbor_motion,
+            tile_motion: &tile_motion,
         };
         let push = MbGatherPush {
             size,

@@ -26,6 +26,7 @@ crate::shader_bindings! {
         velocity: image(velocity),
         color_out: image(color_out),
         neighbor_motion: buffer(NeighborMotion),
+        tile_motion: buffer(TileMotion),
     }
 }
 
@@ -81,6 +82,8 @@ pub struct GatherInputs<'a> {
     pub velocity: &'a HostImage,
     /// (next.xy, prev.xy) per tile: the neighbourhood maximum.
     pub neighbor: &'a [f32],
+    /// (next.xy, prev.xy) per tile: the tile's own maximum.
+    pub tile: &'a [f32],
 }
 
 impl GatherInputs<'_> {
@@ -158,15 +161,25 @@ pub fn gather_pixel(input: &GatherInputs, pc: &MbGatherPush, p: [i32; 2]) -> [f3
     }
     let z_x = input.depth.clamped(p[0], p[1])[0];
     let v = input.velocity(p[0], p[1], pc.max_speed_px);
-    let reach_next_x = t_fwd * length([v[0], v[1]]);
-    let reach_prev_x = t_back * length([v[2], v[3]]);
+    let (mut reach_next_x, mut reach_prev_x) = (t_fwd * length([v[0], v[1]]), t_back * length([v[2], v[3]]));
     let total = pc.shutter.total();
+    // A still pixel samples along its own tile's longest velocities instead (the shader).
+    let tm = &input.tile[4 * (tile[1] * pc.tiles[0] + tile[0]) as usize..][..4];
+    let (mut line_next, mut line_prev) = ([v[0], v[1]], [v[2], v[3]]);
+    if reach_next_x <= 0.5 {
+        line_next = [tm[0], tm[1]];
+        reach_next_x = t_fwd * length(line_next);
+    }
+    if reach_prev_x <= 0.5 {
+        line_prev = [tm[2], tm[3]];
+        reach_prev_x = t_back * length(line_prev);
+    }
     let mut l = Layers::default();
     l.own_a = path_coverage([0.0, 0.0], [v[0], v[1]], [v[2], v[3]], win, pc.shutter.ramp_frames) / total;
     l.own = c.map(|x| l.own_a * x);
     let (next_n, prev_n) = (unit([nm[0], nm[1]]), unit([nm[2], nm[3]]));
-    let next_x = if reach_next_x > 0.5 { unit([v[0], v[1]]) } else { [0.0; 2] };
-    let prev_x = if reach_prev_x > 0.5 { unit([v[2], v[3]]) } else { [0.0; 2] };
+    let next_x = if reach_next_x > 0.5 { unit(line_next) } else { [0.0; 2] };
+    let prev_x = if reach_prev_x > 0.5 { unit(line_prev) } else { [0.0; 2] };
     let (same_next, same_prev) = (same_direction(next_n, next_x), same_direction(prev_n, prev_x));
     let neg = |d: [f32; 2]| [-d[0], -d[1]];
     let lines = [
@@ -196,9 +209,10 @@ pub fn gather_pixel(input: &GatherInputs, pc: &MbGatherPush, p: [i32; 2]) -> [f3
 
 impl Twin for MbGatherShader {
     fn cpu(pc: &MbGatherPush, _groups: [u32; 3], b: &mut [HostData]) {
-        let neighbor = crate::passes::twin::floats(b[4].words());
+        let (neighbor, tile) = (crate::passes::twin::floats(b[4].words()), crate::passes::twin::floats(b[5].words()));
         let (color, depth, velocity) = (b[0].image().clone(), b[1].image().clone(), b[2].image().clone());
-        let input = GatherInputs { color: &color, depth: &depth, velocity: &velocity, neighbor: &neighbor };
+        let input =
+            GatherInputs { color: &color, depth: &depth, velocity: &velocity, neighbor: &neighbor, tile: &tile };
         let out = b[3].image_mut();
         for y in 0..pc.size[1] {
             for x in 0..pc.size[0] {
