@@ -163,3 +163,29 @@ fn a_render_taking_the_frames_colour_gives_the_same_bits_in_that_colours_memory(
     }
     assert_validation_clean(&gpu);
 }
+
+#[test]
+fn the_profile_reports_the_gpu_memory_a_frame_held_and_the_next_frame_holds_no_more() {
+    // `--profile` and the bench report the device memory held at the submit (issue 33 item 2).
+    // A frame's colour comes in and a new one goes out (RGBA32F, 16 bytes per pixel each), so
+    // the tiled depth of field holds at least 32 bytes per pixel; a second frame of the same
+    // size takes its images from the pool and holds no more than the first.
+    let gpu = gpu();
+    let (w, h) = (256u32, 160u32);
+    let frame = highlights_over_two_depths(w, h, 97);
+    let camera = dof_camera(50.0, 1.4, 2.0, 6);
+    let p = plan(&frame, &camera);
+    let renderer = Renderer::new(&gpu, &p).expect("pipelines");
+    let first = renderer.render(&frame, &p, false).expect("render").profile;
+    let second = renderer.render(&frame, &p, false).expect("render").profile;
+    let per_px = |bytes: u64| bytes as f64 / (w * h) as f64;
+    println!("{}; second frame {:.0} B/px", first.memory_line((w * h) as u64), per_px(second.gpu_memory_bytes));
+    assert!(per_px(first.gpu_memory_bytes) >= 32.0, "{}", first.memory_line((w * h) as u64));
+    assert!(
+        second.gpu_memory_bytes <= first.gpu_memory_bytes,
+        "{} then {}",
+        first.gpu_memory_bytes,
+        second.gpu_memory_bytes
+    );
+    assert_validation_clean(&gpu);
+}

@@ -483,6 +483,16 @@ impl Gpu {
         &self.shared.info
     }
 
+    /// The device memory in use now (the live allocations) and held (the allocator's blocks,
+    /// used or not), in bytes.
+    pub fn memory_bytes(&self) -> (u64, u64) {
+        let guard = self.shared.allocator.lock().unwrap_or_else(|e| e.into_inner());
+        guard.as_ref().map_or((0, 0), |a| {
+            let report = a.generate_report();
+            (report.total_allocated_bytes, report.total_reserved_bytes)
+        })
+    }
+
     /// Writes the pipeline cache to its file if it holds anything new (closing the device does
     /// too; this is for a process that ends without closing it).
     pub fn save_pipeline_cache(&self) {

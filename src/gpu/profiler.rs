@@ -18,6 +18,12 @@ pub struct Profile {
     pub submit_wall_ms: f64,
     /// When the work was submitted (host clock), for a caller's start-up time.
     pub submitted_at: Option<std::time::Instant>,
+    /// The device memory in use when the work was submitted: every image and buffer of the
+    /// recording is alive then (the recorder keeps them until the fence), so this is the
+    /// frame's peak (with what the pool keeps idle from earlier frames).
+    pub gpu_memory_bytes: u64,
+    /// The allocator's memory blocks then, used or not (what the device gave the process).
+    pub gpu_memory_held_bytes: u64,
 }
 
 impl Profile {
@@ -33,7 +39,7 @@ impl Profile {
 
     /// Adds `other`'s times to these (banded rendering: a frame's bands): each pass's GPU time
     /// to the first of this profile's of the same name (or as a pass of its own), and the
-    /// submit's wall time.
+    /// submit's wall time; the memory held is the larger.
     pub fn add(&mut self, other: &Profile) {
         for pass in &other.passes {
             match self.passes.iter_mut().find(|p| p.name == pass.name) {
@@ -42,6 +48,19 @@ impl Profile {
             }
         }
         self.submit_wall_ms += other.submit_wall_ms;
+        self.gpu_memory_bytes = self.gpu_memory_bytes.max(other.gpu_memory_bytes);
+        self.gpu_memory_held_bytes = self.gpu_memory_held_bytes.max(other.gpu_memory_held_bytes);
+    }
+
+    /// The device memory in use at the submit, per pixel of a frame of `pixels`, and the
+    /// allocator's blocks.
+    pub fn memory_line(&self, pixels: u64) -> String {
+        format!(
+            "GPU memory in use at the submit: {:.1} MB, {:.0} bytes per pixel of the frame ({:.1} MB in the allocator's blocks)",
+            self.gpu_memory_bytes as f64 / 1e6,
+            self.gpu_memory_bytes as f64 / pixels.max(1) as f64,
+            self.gpu_memory_held_bytes as f64 / 1e6
+        )
     }
 
     /// A plain-text table, one line per pass.
@@ -106,6 +125,8 @@ mod tests {
             ],
             submit_wall_ms: 4.0,
             submitted_at: None,
+            gpu_memory_bytes: 0,
+            gpu_memory_held_bytes: 0,
         };
         let json = p.chrome_trace_json();
         assert!(json.contains(r#""name":"bokeh","cat":"gpu","ph":"X","pid":1,"tid":1,"ts":1500.000,"dur":2250.000"#));

@@ -200,6 +200,9 @@ pub fn render_loaded(settings: &RenderSettings, loaded: LoadedFrame, session: &m
     }
     if settings.profile {
         session.report().say(rendered.profile.table().trim_end_matches('\n'));
+        let pixels = frame.width as u64 * frame.height as u64;
+        session.report().say(&rendered.profile.memory_line(pixels));
+        session.report().say(&super::report::host_peak_line(pixels));
         if let Some(line) = session.take_startup() {
             session.report().say(&line);
         }

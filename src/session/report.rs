@@ -96,3 +96,24 @@ mod tests {
         assert_eq!(farm_percent(0, 0), 100);
     }
 }
+
+/// The process's peak resident memory so far (getrusage's ru_maxrss), in bytes; 0 where it cannot
+/// be read. On a device that runs on the CPU (lavapipe) the GPU's memory is in it too.
+pub fn host_peak_bytes() -> u64 {
+    // SAFETY: getrusage only writes the struct it is given; a zeroed rusage is a valid one.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+        return 0;
+    }
+    usage.ru_maxrss.max(0) as u64 * 1024
+}
+
+/// [`host_peak_bytes`] as a line, with its bytes per pixel of a frame of `pixels`.
+pub fn host_peak_line(pixels: u64) -> String {
+    let bytes = host_peak_bytes();
+    format!(
+        "host memory peak so far: {:.1} MB, {:.0} bytes per pixel of the frame",
+        bytes as f64 / 1e6,
+        bytes as f64 / pixels.max(1) as f64
+    )
+}

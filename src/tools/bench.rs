@@ -21,6 +21,8 @@ pub struct BenchRow {
     pub width: u32,
     pub height: u32,
     pub coc_radius_px: f64,
+    /// The process's host memory peak after the tiled path's runs at this size, in bytes.
+    pub host_peak_bytes: u64,
     /// Median over the runs of the tiled path's GPU time per pass.
     pub tiled: Profile,
     pub tiled_ms: f64,
@@ -172,10 +174,12 @@ pub fn run(gpu: &Gpu, options: &BenchOptions, mut progress: impl FnMut(&str)) ->
                 error = Some(compare_rgba(&out.rgba, &reference.rgba));
                 local = Some(local_fidelity(&out.rgba, &reference.rgba, &frame.color, width, height));
             }
+            let host_peak_bytes = crate::session::report::host_peak_bytes();
             rows.push(BenchRow {
                 width,
                 height,
                 coc_radius_px: radius,
+                host_peak_bytes,
                 tiled,
                 tiled_ms,
                 reference_ms,
@@ -247,6 +251,23 @@ pub fn markdown(device: &str, command: &str, rows: &[BenchRow]) -> String {
                 l.alpha.holes
             );
         }
+    }
+    out += "\nMemory of the tiled path, per pixel of the frame: the GPU memory in use when the frame's work \
+            was submitted (every image and buffer of the frame alive; the pool's idle ones from earlier frames too) \
+            and the allocator's blocks; the process's host peak so far (on a device that runs on the CPU the GPU's \
+            memory is in it).\n\n| resolution | CoC radius px | GPU in use B/px | GPU blocks B/px | host peak so far B/px |\n";
+    out += "| --- | --- | --- | --- | --- |\n";
+    for r in rows {
+        let px = (r.width as u64 * r.height as u64).max(1) as f64;
+        out += &format!(
+            "| {}x{} | {} | {:.0} | {:.0} | {:.0} |\n",
+            r.width,
+            r.height,
+            r.coc_radius_px,
+            r.tiled.gpu_memory_bytes as f64 / px,
+            r.tiled.gpu_memory_held_bytes as f64 / px,
+            r.host_peak_bytes as f64 / px
+        );
     }
     out += "\nTiled path, GPU ms per pass:\n\n| resolution | CoC radius px |";
     let names: Vec<String> = rows

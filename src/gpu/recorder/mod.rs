@@ -274,6 +274,7 @@ impl Recorder {
         let device = self.gpu.device().clone();
         unsafe {
             device.end_command_buffer(self.cb).vk("vkEndCommandBuffer")?;
+            let (gpu_memory_bytes, gpu_memory_held_bytes) = self.gpu.memory_bytes();
             let started = std::time::Instant::now();
             self.gpu.submit_and_wait(self.cb)?;
             let wall_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -321,6 +322,8 @@ impl Recorder {
                 passes,
                 submit_wall_ms: wall_ms,
                 submitted_at: Some(started),
+                gpu_memory_bytes,
+                gpu_memory_held_bytes,
             };
             Ok((profile, data, checks))
         }
