@@ -228,10 +228,7 @@ fn a_static_background_stays_sharp_behind_a_moving_bar_whose_edges_soften_by_the
                 }
             }
         }
-        // The fast path's sparse samples (8 on each line): its mean error beside the bar is
-        // 0.006 (0.008 before a still pixel's own lines took its tile's velocity), its worst
-        // pixel 0.122 (0.119).
-        let tolerance = if mode == MotionBlurMode::Fast { 0.125 } else { 0.03 };
+        let tolerance = if mode == MotionBlurMode::Fast { 0.12 } else { 0.03 };
         assert!(worst.0 < tolerance, "{mode:?}: off by {:.3} at column {} (bar value 4)", worst.0, worst.1);
         // Far from the streak the background is copied exactly.
         for x in (0..24).chain(75..w) {

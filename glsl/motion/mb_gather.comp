@@ -118,17 +118,20 @@ void main() {
     float reach_prev_x = t_back * length(v.zw);
     float total = shutter_total(pc.shutter);
     // A still pixel has no line of its own: it samples along its own tile's longest velocities
-    // instead. The neighbourhood's longest can belong to a faster object a tile or two away
-    // moving another way, and a slower mover over this still pixel (a fence sliding across the
-    // sky beside a fast ball) then spread none of its light over it: its paths cross X along
-    // neither line.
+    // instead where they point another way than the neighbourhood's (by more than ~25 degrees).
+    // The neighbourhood's longest can belong to a faster object a tile or two away moving
+    // another way, and a slower mover over this still pixel (a fence sliding across the sky
+    // beside a fast ball) then spread none of its light over it: its paths cross X along
+    // neither line. Where the two point the same way the tile's line adds nothing but a second
+    // estimate of the same sources, whose overlap weights (`same`) are made for a line inside
+    // the other: it gathered 1.3% too much light around a moving highlight.
     vec4 tm = tile_motion[tile.y * pc.tiles.x + tile.x];
     vec2 line_next = v.xy, line_prev = v.zw;
-    if (reach_next_x <= 0.5) {
+    if (reach_next_x <= 0.5 && same_direction(unit(nm.xy), unit(tm.xy)) <= 0.0) {
         line_next = tm.xy;
         reach_next_x = t_fwd * length(tm.xy);
     }
-    if (reach_prev_x <= 0.5) {
+    if (reach_prev_x <= 0.5 && same_direction(unit(nm.zw), unit(tm.zw)) <= 0.0) {
         line_prev = tm.zw;
         reach_prev_x = t_back * length(tm.zw);
     }

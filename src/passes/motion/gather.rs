@@ -163,14 +163,15 @@ pub fn gather_pixel(input: &GatherInputs, pc: &MbGatherPush, p: [i32; 2]) -> [f3
     let v = input.velocity(p[0], p[1], pc.max_speed_px);
     let (mut reach_next_x, mut reach_prev_x) = (t_fwd * length([v[0], v[1]]), t_back * length([v[2], v[3]]));
     let total = pc.shutter.total();
-    // A still pixel samples along its own tile's longest velocities instead (the shader).
+    // A still pixel samples along its own tile's longest velocities instead, where they point
+    // another way than the neighbourhood's (the shader).
     let tm = &input.tile[4 * (tile[1] * pc.tiles[0] + tile[0]) as usize..][..4];
     let (mut line_next, mut line_prev) = ([v[0], v[1]], [v[2], v[3]]);
-    if reach_next_x <= 0.5 {
+    if reach_next_x <= 0.5 && same_direction(unit([nm[0], nm[1]]), unit([tm[0], tm[1]])) <= 0.0 {
         line_next = [tm[0], tm[1]];
         reach_next_x = t_fwd * length(line_next);
     }
-    if reach_prev_x <= 0.5 {
+    if reach_prev_x <= 0.5 && same_direction(unit([nm[2], nm[3]]), unit([tm[2], tm[3]])) <= 0.0 {
         line_prev = [tm[2], tm[3]];
         reach_prev_x = t_back * length(line_prev);
     }
