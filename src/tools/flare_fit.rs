@@ -6,7 +6,8 @@
 //! here a kept step is also tried doubled, up to 4 times, while that helps); after an
 //! iteration without progress the learning rate halves. A range of samples is fitted
 //! in order, each started from the least-squares polynomial of the samples fitted before it
-//! (sec. 7.3), and the parameters then become polynomials of the angle (ch. 8).
+//! (sec. 7.3), and the parameters then become polynomials of the angle (ch. 8: polynomial.rs,
+//! the stage the traced and the captured path share).
 //!
 //! The primitive is drawn as the GPU draws it (the f32 twin of glsl/tools/bezier_ghosts.comp).
 
