@@ -6,16 +6,18 @@
 //! here a kept step is also tried doubled, up to 4 times, while that helps); after an
 //! iteration without progress the learning rate halves. A range of samples is fitted
 //! in order, each started from the least-squares polynomial of the samples fitted before it
-//! (sec. 7.3), and the parameters then become polynomials of the angle (ch. 8).
+//! (sec. 7.3), and the parameters then become polynomials of the angle (ch. 8: polynomial.rs,
+//! the stage the traced and the captured path share).
 //!
 //! The primitive is drawn as the GPU draws it (the f32 twin of glsl/tools/bezier_ghosts.comp).
 
 pub mod capture;
+pub mod polynomial;
+
+pub use polynomial::{fitted_range, missed_angles, polynomials, relight, smooth_fits, worst_error};
 
 use crate::io::lens_file::FittedGhostSpec;
-use crate::optics::bezier_ghost::{
-    poly_eval, polyfit, BezierGhost, GhostPolynomials, Transfer, CIRCLE_CONTROL, PARAMS, PARAM_RANGES,
-};
+use crate::optics::bezier_ghost::{poly_eval, polyfit, BezierGhost, Transfer, CIRCLE_CONTROL, PARAMS, PARAM_RANGES};
 use crate::{passes::flare::ghost_shape::primitive_light, tools::bezier_ghosts::DrawnGhost};
 
 /// A grey image of a ghost: `values` (light per frame pixel) row by row, its pixel (0, 0) at `origin_px` of the frame,
@@ -279,6 +281,10 @@ fn steps_and_limits(g: &BezierGhost) -> ([f64; PARAMS], [(f64, f64); PARAMS]) {
     ];
     let mut limits = PARAM_RANGES;
     limits[10].1 = MAX_OUTER_FADE * size;
+    // Eq 6.4: an inner fade longer than the ghost is deep draws what one of the ghost's depth
+    // does with another I_i, so past its size F_i is free and neighbouring samples' fits wander
+    // along it (polynomial.rs); kept within the size nothing drawable is lost.
+    limits[9].1 = size.max(limits[9].0);
     (steps, limits)
 }
 
@@ -339,9 +345,30 @@ pub fn cheapest_start(target: &GreyImage, starts: &[BezierGhost]) -> Option<Bezi
 
 /// Sec. 7.2's coordinate descent from `start`.
 pub fn fit(target: &GreyImage, start: &BezierGhost, options: &FitOptions) -> Fit {
+    fit_near(target, start, None, options)
+}
+
+/// [`fit`] with the cost plus `weight` times the squared distance of the parameters from an
+/// `anchor`, each in units of ten of its steps (half the size for sizes and fades, the light
+/// for I_b and I_i, 1 for the controls, 2 for the exponents): where the image cannot tell
+/// parameters apart (polynomial.rs) the anchor decides, elsewhere the image. The returned
+/// cost is the image's alone.
+pub fn fit_near(
+    target: &GreyImage,
+    start: &BezierGhost,
+    anchor: Option<(&BezierGhost, f64)>,
+    options: &FitOptions,
+) -> Fit {
     let mut cost = Cost::new(target);
     let (steps, limits) = steps_and_limits(start);
+    let penalty = |q: &[f64; PARAMS]| {
+        anchor.map_or(0.0, |(a, weight)| {
+            let a = a.to_params();
+            weight * (0..PARAMS).map(|k| ((q[k] - a[k]) / (10.0 * steps[k])).powi(2)).sum::<f64>()
+        })
+    };
     let (mut p, mut best) = held(&mut cost, start, &limits);
+    best += penalty(&p);
     let mut rate = 1.0;
     let mut iterations = 0;
     while iterations < options.max_iterations && rate >= options.min_learning_rate {
@@ -352,7 +379,7 @@ pub fn fit(target: &GreyImage, start: &BezierGhost, options: &FitOptions) -> Fit
             let trial = |cost: &mut Cost, base: [f64; PARAMS], value: f64| {
                 let mut q = base;
                 q[k] = value.clamp(limits[k].0, limits[k].1);
-                (q, cost.of(&BezierGhost::from_params(&q)))
+                (q, cost.of(&BezierGhost::from_params(&q)) + penalty(&q))
             };
             // Eq 7.3's central difference decides the direction; the step is kept if it helps.
             let (plus, c_plus) = trial(&mut cost, p, p[k] + h);
@@ -378,7 +405,9 @@ pub fn fit(target: &GreyImage, start: &BezierGhost, options: &FitOptions) -> Fit
             rate *= 0.5;
         }
     }
-    Fit { ghost: BezierGhost::from_params(&p), cost: best, iterations, evaluations: cost.evaluations }
+    let ghost = BezierGhost::from_params(&p);
+    let best = if anchor.is_some() { cost.of(&ghost) } else { best };
+    Fit { ghost, cost: best, iterations, evaluations: cost.evaluations }
 }
 
 /// A first guess from the image's moments (Walch sets the first sample's start by hand): the
@@ -577,74 +606,6 @@ pub fn seed(angles: &[f64], fitted: &[BezierGhost], angle: f64, order: usize) ->
     BezierGhost::from_params(&p)
 }
 
-/// Ch. 8: the fitted range as polynomials of the angle.
-pub fn polynomials(samples: &[(f64, GreyImage)], fits: &[Fit], order: usize) -> GhostPolynomials {
-    let angles: Vec<f64> = samples.iter().map(|s| s.0).take(fits.len()).collect();
-    let ghosts: Vec<BezierGhost> = fits.iter().map(|f| f.ghost).collect();
-    GhostPolynomials::fit(&angles, &ghosts, order)
-}
-
-/// The light of the polynomials refitted to their own shapes: the coordinate descent trades
-/// I_b, I_i and the fades from one sample to the next, and a polynomial through those loses
-/// energy (22.5% on the Tessar's 4/0 at 2..5 degrees) although every sample keeps it. The
-/// image is linear in I_b and I_i for a given shape and fades (eq 6.4: I_b (1 - w) + I_i w
-/// inside, I_b (1 - w) outside), so at each sample the primitive of the polynomials gets the
-/// least-squares I_b and I_i of its image (kept >= 0), scaled together so that its energy is
-/// the sample's; their polynomials then replace those of I_b and I_i.
-pub fn relight(samples: &[(f64, GreyImage)], poly: &GhostPolynomials, order: usize) -> GhostPolynomials {
-    let (mut angles, mut borders, mut inners) = (Vec::new(), Vec::new(), Vec::new());
-    for (a, image) in samples {
-        let g = poly.at(*a);
-        let with = |border: f64, inner: f64| {
-            image.draw(&BezierGhost { transfer: Transfer { border, inner, ..g.transfer }, ..g })
-        };
-        let (b1, b2, t) = (with(1.0, 0.0), with(0.0, 1.0), &image.values);
-        let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
-        let (a11, a12, a22, r1, r2) = (dot(&b1, &b1), dot(&b1, &b2), dot(&b2, &b2), dot(&b1, t), dot(&b2, t));
-        let det = a11 * a22 - a12 * a12;
-        let (mut ib, mut ii) = if det > 1e-12 * a11 * a22 {
-            ((r1 * a22 - r2 * a12) / det, (r2 * a11 - r1 * a12) / det)
-        } else {
-            (g.transfer.border, g.transfer.inner)
-        };
-        // Kept >= 0: the other one alone then.
-        if ib < 0.0 {
-            (ib, ii) = (0.0, if a22 > 0.0 { (r2 / a22).max(0.0) } else { 0.0 });
-        } else if ii < 0.0 {
-            (ib, ii) = (if a11 > 0.0 { (r1 / a11).max(0.0) } else { 0.0 }, 0.0);
-        }
-        let (e1, e2, e_t) = (b1.iter().sum::<f64>(), b2.iter().sum::<f64>(), t.iter().sum::<f64>());
-        let drawn = ib * e1 + ii * e2;
-        if drawn > 0.0 && drawn.is_finite() {
-            let k = e_t / drawn;
-            (ib, ii) = (k * ib, k * ii);
-        }
-        angles.push(*a);
-        borders.push(ib);
-        inners.push(ii);
-    }
-    let mut out = poly.clone();
-    if !angles.is_empty() {
-        out.coefficients[7] = polyfit(&angles, &borders, order);
-        out.coefficients[8] = polyfit(&angles, &inners, order);
-    }
-    out
-}
-
-/// The worst, over the samples, of the RMS difference over the traced peak plus the relative
-/// energy error of the polynomials' primitive.
-fn worst_error(samples: &[(f64, GreyImage)], poly: &GhostPolynomials) -> f64 {
-    samples
-        .iter()
-        .map(|(a, image)| {
-            let drawn = image.draw(&poly.at(*a));
-            let peak = image.values.iter().copied().fold(0.0, f64::max);
-            let e_t = energy_centroid(image, &image.values).0;
-            mse(&drawn, &image.values).sqrt() / peak + (energy_centroid(image, &drawn).0 / e_t - 1.0).abs()
-        })
-        .fold(0.0, f64::max)
-}
-
 /// What [`fit_traced_ghosts`] fits: each ghost (all of the lens's when `ghosts` is empty) in
 /// each channel, traced at each angle (light towards +x of the centre, as `[[fitted_ghost]]`
 /// has it) on a `width` x `height` frame.
@@ -696,6 +657,26 @@ pub struct FittedRange {
     /// by its difference what ch. 8's polynomials lose.
     pub worst_fit_rmse_over_peak: f64,
     pub worst_fit_energy_error: f64,
+    /// The angles (degrees) whose sample's own fit draws its light within
+    /// [`RESTART_ENERGY_ERROR`] but the polynomials do not ([`missed_angles`]): where the
+    /// polynomials cannot represent the fits; empty when they can.
+    pub missed_angles_deg: Vec<f64>,
+}
+
+impl FittedRange {
+    /// What to tell the user where the polynomials cannot represent the fits: the ghost, its
+    /// channel and the angles; None where they can.
+    pub fn warning(&self) -> Option<String> {
+        (!self.missed_angles_deg.is_empty()).then(|| {
+            format!(
+                "ghost {} channel {}: the polynomials draw the light more than {}% off at {:?} degrees, where the angle's own fit draws it within that; fit fewer angles at a time or a higher --order",
+                self.spec.ghost,
+                self.spec.channel,
+                100.0 * RESTART_ENERGY_ERROR,
+                self.missed_angles_deg
+            )
+        })
+    }
 }
 
 /// The traced images' margin around the ghost's rays, a share of their box's larger side: room
@@ -761,38 +742,7 @@ pub fn fit_traced_ghosts(
             if fits.len() <= options.order {
                 continue;
             }
-            // `relight` where it helps: a polynomial shape far from a sample's (a failed fit
-            // among them) can draw little of it, and scaling that up misleads the others.
-            let plain = polynomials(&samples, &fits, options.order);
-            let relit = relight(&samples[..fits.len()], &plain, options.order);
-            let poly = if worst_error(&samples[..fits.len()], &relit) <= worst_error(&samples[..fits.len()], &plain) {
-                relit
-            } else {
-                plain
-            };
-            let (mut rmse, mut energy, mut moved) = (0.0f64, 0.0f64, 0.0f64);
-            let (mut fit_rmse, mut fit_energy) = (0.0f64, 0.0f64);
-            for ((a, image), fit1) in samples[..fits.len()].iter().zip(&fits) {
-                let drawn = image.draw(&poly.at(*a));
-                let own = image.draw(&fit1.ghost);
-                let peak = image.values.iter().copied().fold(0.0, f64::max);
-                let e_t = energy_centroid(image, &image.values).0;
-                fit_rmse = fit_rmse.max(mse(&own, &image.values).sqrt() / peak);
-                fit_energy = fit_energy.max((energy_centroid(image, &own).0 / e_t - 1.0).abs());
-                let ((e_t, c_t), (e_f, c_f)) = (energy_centroid(image, &image.values), energy_centroid(image, &drawn));
-                rmse = rmse.max(mse(&drawn, &image.values).sqrt() / peak);
-                energy = energy.max((e_f / e_t - 1.0).abs());
-                moved = moved.max((c_t[0] - c_f[0]).hypot(c_t[1] - c_f[1]));
-            }
-            out.push(FittedRange {
-                spec: FittedGhostSpec::new(&label, c as u32, [w, h], &poly),
-                samples: fits.len(),
-                worst_rmse_over_peak: rmse,
-                worst_energy_error: energy,
-                worst_centroid_px: moved,
-                worst_fit_rmse_over_peak: fit_rmse,
-                worst_fit_energy_error: fit_energy,
-            });
+            out.push(fitted_range(&samples, fits, &label, c, [w, h], options.order, &options.fit));
         }
     }
     out
@@ -801,6 +751,7 @@ pub fn fit_traced_ghosts(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::optics::bezier_ghost::GhostPolynomials;
     use crate::{optics::flare::ghosts::GhostPath, passes::flare::FlareModel, tools::accuracy_flare::Sensor};
 
     /// The Tessar at f/2.8 on a 320x180 frame (the flare bench's camera), its sensor (the

@@ -7,14 +7,11 @@
 //! over the angles (ch. 7, sec. 7.3's seeding) and made polynomials of the angle (ch. 8) as the
 //! traced path does ([`super::super::fit_traced_ghosts`]), with the same errors reported.
 
-use super::super::{
-    energy_centroid, fit_range, mse, polynomials, relight, worst_error, FitOptions, FittedRange, GreyImage,
-};
+use super::super::{fit_range, fitted_range, FitOptions, FittedRange, GreyImage};
 use super::{
     capture_file, capture_image, merge_brackets, remove_background, remove_glare, sidecar_of, Bracket, CaptureError,
     CaptureFile, Response,
 };
-use crate::io::lens_file::FittedGhostSpec;
 use std::path::{Path, PathBuf};
 
 /// How the captures are read and fitted.
@@ -164,8 +161,9 @@ fn cleaned(frames: &[(f64, Vec<f32>)], w: usize, h: usize, options: &CaptureFitO
     radiance
 }
 
-/// One ghost's samples fitted over the angles and made polynomials (as
-/// [`super::super::fit_traced_ghosts`] does each traced ghost); None with too few samples.
+/// One ghost's samples fitted over the angles and made polynomials by the stage the traced
+/// path uses ([`fitted_range`], as [`super::super::fit_traced_ghosts`] does each traced
+/// ghost); None with too few samples.
 pub fn fit_samples(
     samples: &[(f64, GreyImage)],
     label: &str,
@@ -181,32 +179,7 @@ pub fn fit_samples(
     if fits.len() <= order {
         return None;
     }
-    let used = &samples[..fits.len()];
-    let plain = polynomials(samples, &fits, order);
-    let relit = relight(used, &plain, order);
-    let poly = if worst_error(used, &relit) <= worst_error(used, &plain) { relit } else { plain };
-    let (mut rmse, mut energy, mut moved, mut fit_rmse, mut fit_energy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for ((a, image), fit1) in used.iter().zip(&fits) {
-        let drawn = image.draw(&poly.at(*a));
-        let own = image.draw(&fit1.ghost);
-        let peak = image.values.iter().copied().fold(0.0, f64::max);
-        let (e_t, c_t) = energy_centroid(image, &image.values);
-        let (e_f, c_f) = energy_centroid(image, &drawn);
-        fit_rmse = fit_rmse.max(mse(&own, &image.values).sqrt() / peak);
-        fit_energy = fit_energy.max((energy_centroid(image, &own).0 / e_t - 1.0).abs());
-        rmse = rmse.max(mse(&drawn, &image.values).sqrt() / peak);
-        energy = energy.max((e_f / e_t - 1.0).abs());
-        moved = moved.max((c_t[0] - c_f[0]).hypot(c_t[1] - c_f[1]));
-    }
-    Some(FittedRange {
-        spec: FittedGhostSpec::new(label, channel as u32, frame_px, &poly),
-        samples: fits.len(),
-        worst_rmse_over_peak: rmse,
-        worst_energy_error: energy,
-        worst_centroid_px: moved,
-        worst_fit_rmse_over_peak: fit_rmse,
-        worst_fit_energy_error: fit_energy,
-    })
+    Some(fitted_range(samples, fits, label, channel, frame_px, order, options))
 }
 
 /// What [`fit_captures`] found: the fitted ghosts, the frame, the angles and the files read.
