@@ -149,6 +149,10 @@ fn print_table(fitted: &[FittedRange]) {
             f.worst_centroid_px
         );
     }
+    // Where the polynomials cannot represent the angles' own fits (ch. 8), say so by ghost.
+    for warning in fitted.iter().filter_map(FittedRange::warning) {
+        eprintln!("warning: {warning}");
+    }
 }
 
 /// The --lens file with its [[fitted_ghost]] section replaced by `fitted`, written to --out.
