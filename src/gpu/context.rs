@@ -655,7 +655,12 @@ impl Shared {
         if std::fs::create_dir_all(dir).is_err() {
             return;
         }
-        let tmp = dir.join(format!(".pipelines.tmp-{}", std::process::id()));
+        // Unique per device, not only per process: devices of one process (tests on threads, a
+        // session's renderers) may save at the same moment, and one temporary shared by two
+        // writers could be renamed half written.
+        static SAVES: AtomicU64 = AtomicU64::new(0);
+        let n = SAVES.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(".pipelines.tmp-{}-{n}", std::process::id()));
         if std::fs::write(&tmp, &data).and_then(|_| std::fs::rename(&tmp, path)).is_err() {
             let _ = std::fs::remove_file(&tmp);
             log::debug!("could not save the pipeline cache to {}", path.display());
