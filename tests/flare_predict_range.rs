@@ -6,7 +6,6 @@
 //! the centre (20, 10) of a 40 x 20 frame. No GPU is needed.
 
 use realcam::io::lens_file::FittedGhostSpec;
-use realcam::optics::bezier_ghost::{BezierGhost, GhostPolynomials, Transfer};
 use realcam::optics::ghost_prediction::ExposureSetting;
 use realcam::tools::flare_predict::range::{predict_range, Estimator, Range, RangeError, RangeRequest};
 use realcam::tools::flare_predict::{predict, report, PredictError, PredictRequest};
@@ -14,25 +13,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn box_ghost() -> FittedGhostSpec {
-    let g = BezierGhost {
-        centre_px: [10.0, 10.0],
-        height_px: 3.0,
-        left_px: 5.0,
-        right_px: 5.0,
-        left_control: 1.0,
-        right_control: 1.0,
-        transfer: Transfer {
-            border: 2.0,
-            inner: 2.0,
-            inner_falloff_px: 0.0,
-            outer_falloff_px: 0.0,
-            inner_exponent: 1.0,
-            outer_exponent: 1.0,
-        },
-    };
-    let mut coefficients: Vec<Vec<f64>> = g.to_params().iter().map(|&v| vec![v]).collect();
-    coefficients[0] = vec![10.0, 1.0];
-    FittedGhostSpec::new("2/1", 1, [40, 20], &GhostPolynomials { angles_deg: [0.0, 30.0], coefficients })
+    realcam::tools::flare_predict::box_ghost(1)
 }
 
 fn base() -> PredictRequest {

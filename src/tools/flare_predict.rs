@@ -187,34 +187,37 @@ pub fn text(p: &Prediction) -> String {
     )
 }
 
+/// A hand-checkable fitted ghost for the estimators' tests: a 10 x 6 px box of light 2 (sharp
+/// edges on pixel borders) in channel `channel`, whose centre moves 1 px right per degree from
+/// x = 10 at 0 degrees, fitted on a 40 x 20 frame.
+#[doc(hidden)]
+pub fn box_ghost(channel: u32) -> FittedGhostSpec {
+    use crate::optics::bezier_ghost::{BezierGhost, GhostPolynomials, Transfer};
+    let g = BezierGhost {
+        centre_px: [10.0, 10.0],
+        height_px: 3.0,
+        left_px: 5.0,
+        right_px: 5.0,
+        left_control: 1.0,
+        right_control: 1.0,
+        transfer: Transfer {
+            border: 2.0,
+            inner: 2.0,
+            inner_falloff_px: 0.0,
+            outer_falloff_px: 0.0,
+            inner_exponent: 1.0,
+            outer_exponent: 1.0,
+        },
+    };
+    let mut coefficients: Vec<Vec<f64>> = g.to_params().iter().map(|&v| vec![v]).collect();
+    coefficients[0] = vec![10.0, 1.0];
+    FittedGhostSpec::new("2/1", channel, [40, 20], &GhostPolynomials { angles_deg: [0.0, 30.0], coefficients })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::bezier_ghost::{BezierGhost, GhostPolynomials, Transfer};
 
-    /// A 10 x 6 px box of light 2 (sharp edges on pixel borders) whose centre moves 1 px right
-    /// per degree from x = 10 at 0 degrees, in a 40 x 20 frame.
-    fn box_ghost(channel: u32) -> FittedGhostSpec {
-        let g = BezierGhost {
-            centre_px: [10.0, 10.0],
-            height_px: 3.0,
-            left_px: 5.0,
-            right_px: 5.0,
-            left_control: 1.0,
-            right_control: 1.0,
-            transfer: Transfer {
-                border: 2.0,
-                inner: 2.0,
-                inner_falloff_px: 0.0,
-                outer_falloff_px: 0.0,
-                inner_exponent: 1.0,
-                outer_exponent: 1.0,
-            },
-        };
-        let mut coefficients: Vec<Vec<f64>> = g.to_params().iter().map(|&v| vec![v]).collect();
-        coefficients[0] = vec![10.0, 1.0];
-        FittedGhostSpec::new("2/1", channel, [40, 20], &GhostPolynomials { angles_deg: [0.0, 30.0], coefficients })
-    }
 
     fn setting() -> ExposureSetting {
         ExposureSetting {

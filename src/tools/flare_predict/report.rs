@@ -189,18 +189,7 @@ fn heat_map(r: &RangePrediction, cols: u32, rows: u32) -> String {
     let (w, h) = (MARGIN * 2.0 + PLOT_W + LEGEND_W, (MARGIN * 2.0 + plot_h).max(MARGIN * 2.0 + legend_h));
     let (cw, ch) = (PLOT_W / cols as f64, plot_h / rows as f64);
     let e = r.request.estimator;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
-    );
-    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    let _ = writeln!(
-        s,
-        "<text x=\"{MARGIN}\" y=\"24\" font-size=\"10\">{} over {}</text>",
-        e.name(),
-        escaped(&describe(r))
-    );
+    let mut s = svg_start(w, h, &format!("{} over {}", e.name(), describe(r)));
     let _ = writeln!(s, "<g class=\"cells\" transform=\"translate({MARGIN},{MARGIN})\">");
     for p in &r.positions {
         let [c, row] = p.light.cell;
@@ -277,18 +266,7 @@ fn path_plot(r: &RangePrediction) -> String {
     let n = r.positions.len().max(2) - 1;
     let px = |i: usize| x0 + plot_w * i as f64 / n as f64;
     let py = |v: f64| y0 + plot_h * (1.0 - (v - lo) / (hi - lo));
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
-    );
-    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    let _ = writeln!(
-        s,
-        "<text x=\"{MARGIN}\" y=\"24\" font-size=\"10\">{} along {}</text>",
-        e.name(),
-        escaped(&describe(r))
-    );
+    let mut s = svg_start(w, h, &format!("{} along {}", e.name(), describe(r)));
     let _ = writeln!(
         s,
         "<rect x=\"{x0}\" y=\"{y0}\" width=\"{plot_w}\" height=\"{plot_h}\" fill=\"none\" stroke=\"black\"/>"
@@ -346,5 +324,17 @@ fn path_plot(r: &RangePrediction) -> String {
         );
     }
     s.push_str("</svg>\n");
+    s
+}
+
+/// An SVG document's opening of `w` x `h` px: a white background and `title` (escaped) at the top.
+fn svg_start(w: f64, h: f64, title: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
+    );
+    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let _ = writeln!(s, "<text x=\"{MARGIN}\" y=\"24\" font-size=\"10\">{}</text>", escaped(title));
     s
 }
