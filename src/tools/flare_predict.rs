@@ -218,7 +218,6 @@ pub fn box_ghost(channel: u32) -> FittedGhostSpec {
 mod tests {
     use super::*;
 
-
     fn setting() -> ExposureSetting {
         ExposureSetting {
             f_number: 4.0,
