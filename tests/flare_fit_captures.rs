@@ -20,8 +20,8 @@ use realcam::io::{write_exr_channels, ExrWriteOptions};
 use realcam::optics::bezier_ghost::BezierGhost;
 use realcam::passes::flare::FlareModel;
 use realcam::tools::accuracy_flare::Sensor;
-use realcam::tools::flare_fit::capture::capture_image;
 use realcam::tools::flare_fit::capture::folder::ghost_window;
+use realcam::tools::flare_fit::capture::{capture_image, seeded_gauss};
 use realcam::tools::flare_fit::{fit_restarted, moments_guess, traced_ghost_image, FitOptions, GreyImage, MARGIN};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -137,15 +137,7 @@ fn fits_of_recorded_captures_draw_the_clean_captures_fits_light_within_5_percent
     // Radiance in units where the ghost's brightest pixel over the angles is 0.5 /s.
     let k = 0.5 / peak;
     let recorded = dir.sub("recorded");
-    let mut seed = 0x5eed_u64;
-    let mut gauss = || {
-        let mut u = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        let (a, b) = (u(), u());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    };
+    let mut gauss = seeded_gauss(0x5eed);
     let mut clipped = 0;
     for (a, f) in ANGLES.iter().zip(&frames) {
         // The light 8 px left of the ghost's left end, at its height: a glare of 3x the

@@ -252,6 +252,21 @@ pub fn capture_image(
     GreyImage { width: w, height: h, origin_px: [x0, y0], cell_px: cell, values: out }
 }
 
+/// Synthetic captures' noise: standard normal values (Box-Muller over a 64-bit LCG), the same
+/// sequence for the same seed (the captures' tests).
+#[doc(hidden)]
+pub fn seeded_gauss(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        let mut u = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let (a, b) = (u(), u());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -317,15 +332,7 @@ mod tests {
         let (w, h) = (320, 180);
         let (model, sensor, path) = crate::tools::flare_fit::tests::tessar_320x180_ghost_4_0();
         let lens = model.lens.as_ref().unwrap();
-        let mut seed = 0x5eed_u64;
-        let mut gauss = || {
-            let mut u = || {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                ((seed >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-            };
-            let (a, b) = (u(), u());
-            (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-        };
+        let mut gauss = seeded_gauss(0x5eed);
         let options = FitOptions::default();
         let response = Response { gamma: 2.2, clip: 0.999 };
         for angle in [2.0, 5.0] {
