@@ -109,8 +109,12 @@ fn the_fitted_sprites_match_their_twins() {
     let renderer = Renderer::new(&gpu, &p).expect("pipelines");
     let (out, checks) = renderer.render_with_twin_checks(&frame, &p).expect("render");
     assert_validation_clean(&gpu);
-    let flare: Vec<_> = checks.iter().filter(|c| c.pass.starts_with("flare") || c.shader == "ghost_sprites").collect();
+    let flare: Vec<_> = checks
+        .iter()
+        .filter(|c| c.pass.starts_with("flare") || c.shader == "ghost_sprites" || c.shader == "fitted_ghosts")
+        .collect();
     assert!(flare.iter().any(|c| c.shader == "ghost_sprites" && c.groups[0] > 0), "the sprites ran");
+    assert!(flare.iter().any(|c| c.shader == "fitted_ghosts" && c.groups[0] > 0), "the fitted ghosts ran");
     let failures: Vec<String> =
         flare.iter().filter_map(|c| c.result.as_ref().err().map(|e| format!("{}: {e}", c.shader))).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -200,7 +204,8 @@ fn explain_names_the_fitted_model() {
 #[test]
 fn the_grid_interpolation_keeps_the_searched_light() {
     use realcam::gpu::shaders::flare::{LIGHT_AREA, LIGHT_ENERGY, LIGHT_WORDS, LIGHT_X, LIGHT_Y, SPRITE_WORDS};
-    use realcam::passes::flare::fitted::{add_sprite, fitted_light, fitted_sprite};
+    use realcam::passes::flare::fitted::{fitted_light, fitted_sprite};
+    use realcam::passes::flare::fitted_ghosts::add_sprite;
     let (w, h) = (160u32, 90u32);
     let cam = camera(w, h, Vec::new(), FlareGhosts::Fitted);
     let params = ghosts_only(&black(w, h), &cam);

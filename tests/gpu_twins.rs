@@ -161,6 +161,9 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
         "the glow-only case has ghosts or spikes"
     );
     cases.push(("flare, glow only", flare_frame(72, 40), glow_only));
+    // Walch's fitted ghosts (the Tessar's fits, docs/): covering tiles in ghost_sprites, crossing
+    // ones in fitted_ghosts; a light of 4e9 in the frame and one of 1e10 given inside it.
+    cases.push(("flare, fitted ghosts", fitted_flare_frame(96, 54), fitted_flare_camera(96, 54)));
     // The vignette in a dispatch of its own: no film pass to apply it (exposure off, linear).
     let mut camera = dof_camera(50.0, 1.4, 2.0, 5);
     camera.vignetting = true;
@@ -219,6 +222,34 @@ fn flare_camera(file: &str, blades: u32) -> Camera {
         ..realcam::model::camera::CameraRequest::blur_only().with_lens(100.0, 4.0, 50.0)
     };
     Camera::new(&lens, &request).expect("flare camera")
+}
+
+/// A black frame with a light of three pixels of 4e9.
+fn fitted_flare_frame(w: u32, h: u32) -> Frame {
+    let mut color = vec![0.0f32; (w * h * 4) as usize];
+    for (x, y) in [(30, 40), (31, 40), (30, 41)] {
+        color[((y * w + x) * 4) as usize..][..3].copy_from_slice(&[4.0e9; 3]);
+    }
+    Frame::new(w, h, color, vec![1.0e4; (w * h) as usize])
+}
+
+/// The Tessar with its fitted ghosts (docs/flare/tessar-walch-fitted.toml) at the fits' f/2.8
+/// on a 36 mm wide sensor of the frame's aspect, scene values kept, no distortion, one light given.
+fn fitted_flare_camera(w: u32, h: u32) -> Camera {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/flare/tessar-walch-fitted.toml");
+    let lens = realcam::io::lens_file::LensFile::load(&path).expect("the fitted Tessar");
+    let request = realcam::model::camera::CameraRequest {
+        sensor: Some(format!("36x{}", 36.0 * h as f64 / w as f64)),
+        flare: Some(true),
+        flare_lights: vec![realcam::model::flare::FlareLight::white(70.0, 12.0, 1.0e10)],
+        force: true,
+        ..realcam::model::camera::CameraRequest::blur_only().with_lens(lens.focal_length_mm, 2.8, 1.0e4)
+    };
+    let mut camera = Camera::new(&lens, &request).expect("fitted flare camera");
+    // The flare alone: the lens's distortion resampling the flare's 1e9-bright light is
+    // another case's.
+    camera.distortion = None;
+    camera
 }
 
 /// Two of Walch's primitives on a 40x28 frame: a rounded one and a rolled diamond-like one.

@@ -10,9 +10,8 @@
 // starburst and halo took. The flare is added to the colour in place: each pixel is read and
 // written by its own invocation only, and a frame without a light dispatches no group and
 // keeps its colour untouched (no copy).
-// Walch's fitted primitives (ch. 6-8) are one more kind: eq 6.4 of the 12-step search's signed
-// distance (ghost_sprite.glsl), binned like the others (covered tiles add I_i once), interpolated
-// from five searched nodes per tile where smooth.
+// Walch's fitted primitives (ch. 6-8) are binned like the others: here each adds I_i once to
+// the tiles it covers; fitted_ghosts.comp shades the tiles they cross (kind 3 is never listed).
 #include "common.glsl"
 #include "flare.glsl"
 // Only aperture_sdf is used: the mask and shape-table bindings are declared, never read.
@@ -44,24 +43,14 @@ layout(constant_id = 3) const bool SPRITE_SPIKES = true;
 // shading: with it, the kernel took 1.8x as long on lavapipe with the Tessar's ghosts in frame,
 // and 1.1x where no light was found and the loop never ran.
 layout(constant_id = 4) const bool SPRITE_BATCHES = true;
-// Whether the frame has fitted sprites (Walch's primitives).
+// Whether the frame has fitted sprites (Walch's primitives): their covering light.
 layout(constant_id = 5) const bool SPRITE_FITTED = true;
 
 #define GROUP (TILE_SIZE * TILE_SIZE)
 shared float s_covering[3];
-// The crossing sprites (of a batch) by kind (0 ghosts, 1 spikes, 2 glows, 3 fitted), in sprite
-// order.
-shared uint s_list[4][SPRITE_LIST];
-shared uint s_listed[4];
-// The listed fitted sprites' signed distances at the tile's corner and centre pixel centres,
-// FITTED_LIST at a time.
-#define FITTED_LIST 256
-shared float s_nodes[FITTED_LIST][FITTED_NODES];
-// The smooth fitted sprites' light at the tile's corners (corner by corner, channel by channel),
-// and the others (indices into the chunk of the list).
-shared float s_corner_sums[12];
-shared uint s_searched[FITTED_LIST];
-shared uint s_searched_count;
+// The crossing sprites (of a batch) by kind (0 ghosts, 1 spikes, 2 glows), in sprite order.
+shared uint s_list[3][SPRITE_LIST];
+shared uint s_listed[3];
 
 // The spike's light in the pixel square lo..lo+1, channel by channel.
 vec3 spike_light(uint b, vec2 lo) {
@@ -85,85 +74,22 @@ vec3 glow_light(uint b, vec2 q) {
 }
 
 // Invocation 0 lists the crossing sprites of the tile's bin words first .. last - 1 (at most
-// SPRITE_LIST sprites) by kind, in sprite order.
+// SPRITE_LIST sprites) by kind, in sprite order; the fitted ones are fitted_ghosts.comp's.
 void list_sprites(uint base, uint first, uint last) {
     if (gl_LocalInvocationIndex == 0u) {
-        uint n[4] = uint[4](0u, 0u, 0u, 0u);
+        uint n[3] = uint[3](0u, 0u, 0u);
         for (uint w = first; w < last; ++w) {
             uint cross = bins[base + w] & 0x07070707u;
             while (cross != 0u) {
                 uint k = uint(findLSB(cross)) / 8u;
                 uint s = w * BIN_SPRITES_PER_WORD + k;
                 int kind = int(sprite_data[s * SPRITE_WORDS + SPRITE_KIND]);
-                uint list = kind == KIND_GHOST ? 0u : (kind == KIND_SPIKE ? 1u : (kind == KIND_FITTED ? 3u : 2u));
-                s_list[list][n[list]++] = s | (((cross >> (8u * k)) & 7u) << 24);
+                uint list = kind == KIND_GHOST ? 0u : (kind == KIND_SPIKE ? 1u : 2u);
+                if (kind != KIND_FITTED) s_list[list][n[list]++] = s | (((cross >> (8u * k)) & 7u) << 24);
                 cross &= ~(0xFFu << (8u * k));
             }
         }
-        for (uint k = 0; k < 4; ++k) s_listed[k] = n[k];
-    }
-}
-
-// The listed fitted sprites' light at pixel p (centre q) added to `sum` (shade_listed).
-void shade_fitted(ivec2 p, vec2 q, inout vec3 sum) {
-    // The fitted sprites, FITTED_LIST at a time: their distance searched at the tile's corners
-    // and centre by all invocations together (the trip counts are the same for every
-    // invocation, so the barriers are reached by all). A sprite whose light is smooth over the
-    // tile (ghost_sprite.glsl fitted_smooth) adds its corners' light to the tile's corner sums,
-    // interpolated bilinearly at each pixel once for all of them; the others are shaded per
-    // pixel from their distance, interpolated where near linear, searched where not.
-    // The tile's first pixel centre in the whole frame (a band's tiles start at its first row).
-    vec2 first = vec2(gl_WorkGroupID.xy * uint(TILE_SIZE) + uvec2(0, fc.band_top_px)) + 0.5;
-    uint fitted = s_listed[3];
-    if (gl_LocalInvocationIndex < 12u) s_corner_sums[gl_LocalInvocationIndex] = 0.0;
-    for (uint start = 0; start < fitted; start += FITTED_LIST) {
-        uint n = min(fitted - start, FITTED_LIST);
-        // Every pixel has read the previous nodes and list.
-        barrier();
-        for (uint k = gl_LocalInvocationIndex; k < n * FITTED_NODES; k += GROUP) {
-            uint i = k / FITTED_NODES, j = k % FITTED_NODES;
-            s_nodes[i][j] = fitted_distance((s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS, first + fitted_node(j));
-        }
-        barrier();
-        // Invocation 3 corner + c sums channel c's smooth light at that corner, in list order;
-        // invocation 0 also lists the others.
-        if (gl_LocalInvocationIndex < 12u) {
-            uint corner = gl_LocalInvocationIndex / 3u, c = gl_LocalInvocationIndex % 3u;
-            float acc = 0.0;
-            uint m = 0u;
-            for (uint i = 0; i < n; ++i) {
-                uint b = (s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS;
-                float g[FITTED_NODES];
-                for (uint j = 0; j < FITTED_NODES; ++j) g[j] = s_nodes[i][j];
-                if (fitted_smooth(b, g)) {
-                    acc += fitted_transfer(b, g[corner]) * sprite_data[b + SPRITE_DATA + BEZIER_COLOUR + c];
-                } else if (gl_LocalInvocationIndex == 0u) {
-                    s_searched[m++] = i;
-                }
-            }
-            s_corner_sums[gl_LocalInvocationIndex] += acc;
-            if (gl_LocalInvocationIndex == 0u) s_searched_count = m;
-        }
-        barrier();
-        for (uint k = 0; k < s_searched_count; ++k) {
-            uint i = s_searched[k];
-            uint b = (s_list[3][start + i] & 0xFFFFFFu) * SPRITE_WORDS;
-            float g[FITTED_NODES];
-            for (uint j = 0; j < FITTED_NODES; ++j) g[j] = s_nodes[i][j];
-            float d = fitted_interpolated(g, q - first);
-            // Searched where the nodes are not near linear: as a loop, which lavapipe skips when
-            // no lane enters it (it would run both sides of an `if` or `?:`).
-            for (bool search = !fitted_linear(g); search; search = false) d = fitted_distance(b, q);
-            uint colour = b + SPRITE_DATA + BEZIER_COLOUR;
-            sum += fitted_transfer(b, d) * vec3(sprite_data[colour], sprite_data[colour + 1], sprite_data[colour + 2]);
-        }
-    }
-    // Every invocation has added its share to the sums (the last barrier of the loop).
-    if (fitted > 0u) {
-        vec2 f = (q - first) / FITTED_SPAN;
-        for (uint c = 0; c < 3u; ++c) {
-            sum[c] += mix(mix(s_corner_sums[c], s_corner_sums[3u + c], f.x), mix(s_corner_sums[6u + c], s_corner_sums[9u + c], f.x), f.y);
-        }
+        for (uint k = 0; k < 3; ++k) s_listed[k] = n[k];
     }
 }
 
@@ -184,10 +110,6 @@ void shade_listed(ivec2 p, vec2 q, inout vec3 sum) {
     }
     for (uint i = 0; i < (SPRITE_SPIKES ? s_listed[1] : 0u); ++i) sum += spike_light((s_list[1][i] & 0xFFFFFFu) * SPRITE_WORDS, vec2(p));
     for (uint i = 0; i < s_listed[2]; ++i) sum += glow_light((s_list[2][i] & 0xFFFFFFu) * SPRITE_WORDS, q);
-    // An `if` on a specialization constant takes the code out of the pipeline; the loops' own
-    // zero trip counts did not (with SPRITE_FITTED off, the fitted part was 0.73 s of the
-    // demo's 1.08 s compile of this kernel on lavapipe).
-    if (SPRITE_FITTED) shade_fitted(p, q, sum);
 }
 
 void main() {

@@ -10,7 +10,7 @@ use crate::gpu::{Gpu, GpuResult, Profile};
 use crate::io::lens_file::LensFile;
 use crate::model::camera::{Camera, CameraRequest};
 use crate::model::frame::Frame;
-use crate::passes::flare::{bins, ghost_sprites, lights, tiles};
+use crate::passes::flare::{bins, fitted_ghosts, ghost_sprites, lights, tiles};
 use crate::passes::flare::{Flare, FlareModel, FlareParams};
 use crate::passes::PlanInput;
 use crate::pipeline::planner::plan;
@@ -36,7 +36,7 @@ pub const FITTED_LIGHT_VALUE: f32 = 1.0e9;
 pub const LIGHT_SIDE_PX: u32 = 3;
 
 /// The flare passes, in recording order.
-pub const FLARE_PASSES: [&str; 4] = [tiles::NAME, lights::NAME, bins::NAME, ghost_sprites::NAME];
+pub const FLARE_PASSES: [&str; 5] = [tiles::NAME, lights::NAME, bins::NAME, ghost_sprites::NAME, fitted_ghosts::NAME];
 
 /// One measured configuration.
 #[derive(Clone, Debug)]
@@ -195,6 +195,11 @@ pub fn run(gpu: &Gpu, options: &FlareBenchOptions, mut progress: impl FnMut(&str
     Ok(rows)
 }
 
+/// The kernels that draw the sprites: ghost_sprites, and fitted_ghosts where the ghosts are fitted.
+fn sprite_kernels_ms(r: &FlareBenchRow) -> f64 {
+    r.pass_ms(ghost_sprites::NAME) + r.pass_ms(fitted_ghosts::NAME)
+}
+
 /// The results as a Markdown table, with the device.
 pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
     let mut out = format!("Device: {device}\n\nCommand: `{command}`\n\n");
@@ -206,13 +211,14 @@ pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
          the same run. Sprites: per light its ghosts, its starburst's spikes and one glow; the cost per sprite is \
          the kernel's time over one light's, per sprite added. Ghosts: 'matrix' the prescription's ray-transfer \
          matrices (lenses/tessar-walch-lens.toml), 'fitted' Walch's fitted primitives (ch. 6-8) of \
-         docs/flare/tessar-walch-fitted.toml (21 ghosts in green) for the same lights; 'fitted / matrix' is the \
-         ghost_sprites kernel's time with the fitted ghosts over its time with the matrix ghosts for the same \
+         docs/flare/tessar-walch-fitted.toml (21 ghosts in green) for the same lights; 'sprite kernels' is \
+         ghost_sprites + fitted_ghosts (the second runs only for fitted ghosts, on the tiles they cross), \
+         'fitted / matrix' their time with the fitted ghosts over it with the matrix ghosts for the same \
          lights; the fitted ghosts need lights of {FITTED_LIGHT_VALUE:.0e} to show, so both models are measured \
          there too.\n\n"
     );
-    out += "| resolution | ghosts model | bare pass ms | lights | light value | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | flare_bins | ghost_sprites | ghost_sprites ms per added sprite | fitted / matrix |\n";
-    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    out += "| resolution | ghosts model | bare pass ms | lights | light value | ghosts | sprites | flare ms | x bare | vs 1 light | flare_tiles | flare_lights | flare_bins | ghost_sprites | fitted_ghosts | sprite kernels ms per added sprite | fitted / matrix |\n";
+    out += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for r in rows {
         let one = rows.iter().find(|o| r.same_set(o) && o.lights == 1);
         let matrix = rows.iter().find(|o| {
@@ -220,15 +226,13 @@ pub fn markdown(device: &str, command: &str, rows: &[FlareBenchRow]) -> String {
                 == (r.width, r.height, r.lights, "matrix", r.light_value)
                 && r.model == "fitted"
         });
-        let versus = matrix.map_or(String::new(), |m| {
-            format!("{:.2}x", r.pass_ms(ghost_sprites::NAME) / m.pass_ms(ghost_sprites::NAME))
-        });
+        let versus = matrix.map_or(String::new(), |m| format!("{:.2}x", sprite_kernels_ms(r) / sprite_kernels_ms(m)));
         let ratio = one.map_or(String::new(), |o| format!("{:.2}x", r.flare_ms / o.flare_ms));
         // The kernel's cost of each sprite more than one light makes (its time per pixel is the
         // rest).
         let per_sprite = one.filter(|o| r.sprites > o.sprites).map_or(String::new(), |o| {
             let added = (r.sprites - o.sprites) as f64;
-            format!("{:.2}", (r.pass_ms(ghost_sprites::NAME) - o.pass_ms(ghost_sprites::NAME)) / added)
+            format!("{:.2}", (sprite_kernels_ms(r) - sprite_kernels_ms(o)) / added)
         });
         let passes: Vec<String> =
             FLARE_PASSES.iter().map(|n| format!("{:.2} ({:.1}x)", r.pass_ms(n), r.pass_ms(n) / r.bare_ms)).collect();

@@ -17,7 +17,7 @@
 //! sensor is kept; the light per pixel goes with the pixels' area), about the frame's centre.
 //!
 //! This is the twin of the fitted parts of glsl/flare/flare_lights.comp (`fitted_sprite`) and
-//! glsl/include/ghost_sprite.glsl (`fitted_distance`, `fitted_light`, the sorting).
+//! glsl/include/fitted_ghost.glsl (`fitted_distance`, the sorting); `fitted_ghosts` shades them.
 
 use super::ghost_shape::{primitive_light, search_signed_distance};
 use super::sprite::TILE_REACH_PX;
@@ -262,108 +262,10 @@ pub fn fitted_bin(s: &[f32], origin: [u32; 2]) -> u32 {
 
 /// The signed distance (px, > 0 inside) of the primitive of BEZIER words `w` at `q`, q turned
 /// back by its roll (glsl/include/ghost_sprite.glsl's `fitted_distance`).
-fn fitted_distance(w: &[f32], q: [f32; 2]) -> f32 {
+pub fn fitted_distance(w: &[f32], q: [f32; 2]) -> f32 {
     let r = BEZIER_ROLL as usize;
     let (c, s, pivot) = (w[r], w[r + 1], [w[r + 2], w[r + 3]]);
     let o = [q[0] - pivot[0], q[1] - pivot[1]];
     let local = [pivot[0] + c * o[0] + s * o[1], pivot[1] - s * o[0] + c * o[1]];
     search_signed_distance(&w[BEZIER_SHAPE as usize..][..7], local)
-}
-
-/// A fitted sprite's distance is searched at five nodes of a tile (FITTED_NODES of
-/// glsl/include/ghost_sprite.glsl): its corner pixels' centres, this far apart (px), and its centre.
-pub const SPAN_PX: f32 = (TILE_SIZE - 1) as f32;
-/// The nodes are interpolated where the centre's distance is within this (px) of the corners'
-/// mean (FITTED_LINEAR).
-pub const LINEAR_PX: f32 = 0.05;
-
-/// The signed distance of fitted sprite `s` at the five nodes of the tile whose first pixel is
-/// `origin`: the corners row by row, then the centre (ghost_sprites.comp's `s_nodes`).
-pub fn nodes(s: &[f32], origin: [u32; 2]) -> [f32; 5] {
-    let first = [origin[0] as f32 + 0.5, origin[1] as f32 + 0.5];
-    let w = &s[SPRITE_DATA as usize..];
-    std::array::from_fn(|j| {
-        let o = if j == 4 { [0.5 * SPAN_PX; 2] } else { [SPAN_PX * (j & 1) as f32, SPAN_PX * (j >> 1) as f32] };
-        fitted_distance(w, [first[0] + o[0], first[1] + o[1]])
-    })
-}
-
-/// Whether nodes `g` are near linear enough to interpolate (ghost_sprite.glsl's fitted_linear).
-pub fn linear(g: &[f32; 5]) -> bool {
-    (g[4] - 0.25 * (g[0] + g[1] + g[2] + g[3])).abs() <= LINEAR_PX
-}
-
-/// The corner nodes of `g` interpolated at `o` px from the first (ghost_sprite.glsl's
-/// fitted_interpolated).
-pub fn interpolated(g: &[f32; 5], o: [f32; 2]) -> f32 {
-    let f = [o[0] / SPAN_PX, o[1] / SPAN_PX];
-    let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-    mix(mix(g[0], g[1], f[0]), mix(g[2], g[3], f[0]), f[1])
-}
-
-/// A fitted sprite's light is interpolated from the tile's corners where its centre's is within
-/// this share of the sprite's brightest of the corners' mean (FITTED_SMOOTH).
-pub const SMOOTH: f32 = 1e-3;
-
-/// Whether the light of transfer `t` (I_b, I_i, F_i, F_o, E_i, E_o) is smooth over the tile of
-/// nodes `g` (ghost_sprite.glsl's fitted_smooth): its border and fades' ends over the tile's
-/// reach from its centre, the centre's light within [`SMOOTH`] of the peak of the corners' mean.
-pub fn smooth(t: &[f32], g: &[f32; 5]) -> bool {
-    use super::ghost_shape::transfer;
-    let reach = (TILE_REACH_PX + FITTED_MARGIN_PX) as f32;
-    let d = g[4];
-    let clear = d.abs() > reach && (d + t[3]).abs() > reach && (d - t[2]).abs() > reach;
-    let mean = 0.25 * (transfer(g[0], t) + transfer(g[1], t) + transfer(g[2], t) + transfer(g[3], t));
-    clear && (transfer(d, t) - mean).abs() <= SMOOTH * t[0].max(t[1])
-}
-
-/// Fitted sprite `s`'s light added to `sums` (a `width`-pixel-wide frame of `height` rows) over
-/// the pixels of its bounds, as ghost_sprites.comp shades it: per tile its five nodes; where its
-/// light is smooth over the tile, the corners' light interpolated bilinearly; else each pixel's
-/// distance interpolated where the nodes are near linear, searched where not, and eq 6.4 of it;
-/// times the sprite's colour.
-pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
-    let bx = &s[SPRITE_BOUNDS as usize..][..4];
-    let (x0, y0) = (bx[0].floor().max(0.0) as u32, bx[1].floor().max(0.0) as u32);
-    let (x1, y1) = ((bx[2].ceil() as u32).min(width), (bx[3].ceil() as u32).min(height));
-    if x0 >= x1 || y0 >= y1 {
-        return;
-    }
-    let w = &s[SPRITE_DATA as usize..];
-    let t = &w[BEZIER_TRANSFER as usize..][..6];
-    let colour = &w[BEZIER_COLOUR as usize..][..3];
-    for ty in y0 / TILE_SIZE..=(y1 - 1) / TILE_SIZE {
-        for tx in x0 / TILE_SIZE..=(x1 - 1) / TILE_SIZE {
-            let origin = [tx * TILE_SIZE, ty * TILE_SIZE];
-            let g = nodes(s, origin);
-            let near_linear = linear(&g);
-            if smooth(t, &g) {
-                // The corners' light interpolated bilinearly.
-                let corners: Vec<f32> = (0..4).map(|j| super::ghost_shape::transfer(g[j], t)).collect();
-                for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
-                    for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
-                        let f = [(x - origin[0]) as f32 / SPAN_PX, (y - origin[1]) as f32 / SPAN_PX];
-                        let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-                        let light = mix(mix(corners[0], corners[1], f[0]), mix(corners[2], corners[3], f[0]), f[1]);
-                        let sum = &mut sums[(y * width + x) as usize];
-                        (0..3).for_each(|c| sum[c] += light as f64 * colour[c] as f64);
-                    }
-                }
-                continue;
-            }
-            for y in (origin[1].max(y0))..((origin[1] + TILE_SIZE).min(y1)) {
-                for x in (origin[0].max(x0))..((origin[0] + TILE_SIZE).min(x1)) {
-                    let q = [x as f32 + 0.5, y as f32 + 0.5];
-                    let d = if near_linear {
-                        interpolated(&g, [(x - origin[0]) as f32, (y - origin[1]) as f32])
-                    } else {
-                        fitted_distance(w, q)
-                    };
-                    let light = super::ghost_shape::transfer(d, t) as f64;
-                    let sum = &mut sums[(y * width + x) as usize];
-                    (0..3).for_each(|c| sum[c] += light * colour[c] as f64);
-                }
-            }
-        }
-    }
 }

@@ -1,14 +1,14 @@
 //! The ghost-sprite kernel: every flare sprite (a ghost's aperture polygon, a starburst spike,
 //! a glow) added to the frame, binned per 16x16 tile so that each output pixel is written once
-//! whatever the number of sprites. Shader: glsl/flare/ghost_sprites.comp. Further ghost primitives
-//! (Walch's fitted Bezier shapes) are further kinds of sprite here.
+//! whatever the number of sprites. Shader: glsl/flare/ghost_sprites.comp. Walch's fitted ghosts
+//! add their light here only to the tiles they cover; `fitted_ghosts` shades those they cross.
 
 use super::sprite::{ghost_channel, ray_in_box};
 use super::types::{constants_of, FlareConstants};
 use crate::gpu::shaders::flare::{
-    ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_FITTED, KIND_GHOST,
-    KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_KIND, SPRITE_LIST,
-    SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
+    ARGS_LIGHTS, ARGS_SPRITE_GROUPS, BIN_COVERING_SHIFT, BIN_SPRITES_PER_WORD, GHOST_SPRITE_CHANNEL_WORDS, KIND_FITTED,
+    KIND_GHOST, KIND_GLOW, KIND_SPIKE, LIGHT_MOVED, LIGHT_WORDS, SPRITE_BOUNDS, SPRITE_DATA, SPRITE_INNER, SPRITE_KIND,
+    SPRITE_LIST, SPRITE_SOFTNESS, SPRITE_WORDS, TILE_LIGHT, TILE_WORDS,
 };
 use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::optics::flare::AperturePolygon;
@@ -85,10 +85,33 @@ pub fn sprite_light(s: &[f32], aperture: &AperturePolygon, x: u32, y: u32) -> [f
     }
 }
 
+/// Fitted sprite `s` (slot `slot`) adds its light deep inside (SPRITE_INNER, I_i times its
+/// channel's value) to every pixel of the tiles whose bin word covers it, in the channels
+/// covered (`size`: the frame's pixels the sums hold).
+fn add_covering(s: &[f32], slot: usize, bins: &[u32], words_per_tile: usize, size: [u32; 2], sums: &mut [[f64; 3]]) {
+    let (tiles_x, tiles_y) = (size[0].div_ceil(TILE_SIZE), size[1].div_ceil(TILE_SIZE));
+    let per_word = BIN_SPRITES_PER_WORD as usize;
+    for ty in 0..tiles_y {
+        for tx in 0..tiles_x {
+            let word = bins[(ty * tiles_x + tx) as usize * words_per_tile + slot / per_word];
+            let covering = (word >> (8 * (slot % per_word) as u32 + BIN_COVERING_SHIFT)) & 7;
+            if covering == 0 {
+                continue;
+            }
+            for y in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(size[1]) {
+                for x in tx * TILE_SIZE..((tx + 1) * TILE_SIZE).min(size[0]) {
+                    let sum = &mut sums[(y * size[0] + x) as usize];
+                    (0..3).filter(|c| covering >> c & 1 == 1).for_each(|c| sum[c] += s[SPRITE_INNER as usize] as f64);
+                }
+            }
+        }
+    }
+}
+
 impl Twin for GhostSpritesShader {
     /// Every sprite at every pixel of its bounds (the bins only skip sprites whose light there is
-    /// 0, and add covering ones once per tile: the same light); a fitted sprite from its grid
-    /// per tile, as the kernel shades it.
+    /// 0, and add covering ones once per tile: the same light); a fitted sprite on the tiles it
+    /// covers only.
     fn cpu(size: &[i32; 3], groups: [u32; 3], b: &mut [HostData]) {
         let fc = constants_of(&b[1]);
         let aperture = AperturePolygon {
@@ -105,9 +128,13 @@ impl Twin for GhostSpritesShader {
         let (w, h) =
             ((groups[0] * TILE_SIZE).min(size[0] as u32), (top + groups[1] * TILE_SIZE).min(top + size[1] as u32));
         let mut sums = vec![[0.0f64; 3]; (w * h) as usize];
-        for s in sprites.chunks_exact(SPRITE_WORDS as usize).take(total) {
+        let bins = b[6].words();
+        let words_per_tile = size[2].max(0) as usize;
+        for (i, s) in sprites.chunks_exact(SPRITE_WORDS as usize).take(total).enumerate() {
             if s[SPRITE_KIND as usize] as u32 == KIND_FITTED {
-                super::fitted::add_sprite(s, w, h, &mut sums);
+                // A fitted sprite here adds I_i to the tiles it covers (fitted_ghosts shades
+                // those it crosses).
+                add_covering(s, i, bins, words_per_tile, [w, h], &mut sums);
                 continue;
             }
             let bx = &s[SPRITE_BOUNDS as usize..][..4];

@@ -11,7 +11,9 @@
 //!   3. `flare_bins` (`bins`): each sprite sorted against the tiles its bounds touch (away,
 //!      covering, crossing), once per frame, into per-tile bin words;
 //!   4. `ghost_sprites`: the ghost-sprite kernel, each tile's binned sprites added, every output
-//!      pixel written once.
+//!      pixel written once;
+//!   5. `fitted_ghosts` (a lens with Walch's fitted ghosts only): the fitted sprites' light on
+//!      the tiles they cross, one invocation per tile.
 //!
 //! The steps read the constants and the ghost table this pass writes from `types`, and one
 //! sprite's geometry from `sprite`; none imports this module or another step.
@@ -21,6 +23,7 @@
 
 pub mod bins;
 pub mod fitted;
+pub mod fitted_ghosts;
 pub mod ghost_shape;
 pub mod ghost_sprites;
 pub mod lights;
@@ -39,6 +42,7 @@ use crate::passes::{Decision, FrameImages, Pass, TILE_SIZE};
 use ash::vk;
 use bins::{FlareBinsBindings, FlareBinsShader};
 use fitted::FittedGhosts;
+use fitted_ghosts::{FittedGhostsBindings, FittedGhostsShader};
 use ghost_sprites::{GhostSpritesBindings, GhostSpritesShader};
 use lights::{FlareLightsBindings, FlareLightsShader};
 use tiles::{light_weight, FlareTilesShader};
@@ -312,6 +316,7 @@ pub struct Flare {
     lights: SpecializedKernel<FlareLightsShader>,
     bins: SpecializedKernel<FlareBinsShader>,
     sprites: SpecializedKernel<GhostSpritesShader>,
+    fitted: SpecializedKernel<FittedGhostsShader>,
 }
 
 impl Pass for Flare {
@@ -400,6 +405,7 @@ impl Pass for Flare {
             lights: SpecializedKernel::new(gpu)?,
             bins: SpecializedKernel::new(gpu)?,
             sprites: SpecializedKernel::new(gpu)?,
+            fitted: SpecializedKernel::new(gpu)?,
         })
     }
 
@@ -407,7 +413,11 @@ impl Pass for Flare {
     fn prepare(&self, p: &FlareParams) -> GpuResult<()> {
         self.lights.prepare(&lights::specialization(&p.constants))?;
         self.bins.prepare(&bins::specialization(&p.constants))?;
-        self.sprites.prepare(&ghost_sprites::specialization(&p.constants, bins::words_per_tile(p.sprite_slots())))
+        self.sprites.prepare(&ghost_sprites::specialization(&p.constants, bins::words_per_tile(p.sprite_slots())))?;
+        if p.constants.fitted_count > 0 {
+            self.fitted.prepare(&[])?;
+        }
+        Ok(())
     }
 
     /// The flare added to the colour in place (and the lights' starburst and halo taken from
@@ -469,6 +479,16 @@ impl Pass for Flare {
         };
         let kinds = ghost_sprites::specialization(&p.constants, words_per_tile);
         ghost_sprites::record(&self.sprites, rec, &kinds, &sprite_bindings, words_per_tile)?;
+        if p.constants.fitted_count > 0 {
+            let fitted_bindings = FittedGhostsBindings {
+                color: &color,
+                constants: &constants,
+                sprites: &sprites,
+                args: &args,
+                bins: &bins,
+            };
+            fitted_ghosts::record(&self.fitted, rec, &fitted_bindings, tx, words_per_tile)?;
+        }
         Ok(())
     }
 }
