@@ -12,7 +12,7 @@ use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
 use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::prelude::{ReadChannels, ReadLayers, WritableImage};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 const W: usize = 256;
@@ -231,5 +231,59 @@ fn a_usd_camera_racks_focus_frame_by_frame() {
         assert_eq!(float(&h, "focus"), focus_m, "frame {frame}");
         assert_eq!(float(&h, "aperture"), 4.0, "frame {frame}");
         assert_eq!(text(&h, "realcam/source/focus_distance_m"), "the USD camera /Camera/Lens of \"shot.usda\"");
+    }
+}
+
+/// Python with Blender as a module (bpy 4.2 LTS, built with USD): `$REALCAM_BPY_PYTHON`, else the
+/// virtual environment scripts/test.sh installs it into; None when there is none and
+/// `$REALCAM_REQUIRE_BPY` is not set (scripts/test.sh sets it, so CI never skips).
+fn bpy_python() -> Option<PathBuf> {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bpy-venv/bin/python");
+    let found = std::env::var_os("REALCAM_BPY_PYTHON").map(PathBuf::from).or_else(|| venv.exists().then_some(venv));
+    if found.is_none() {
+        assert!(
+            std::env::var_os("REALCAM_REQUIRE_BPY").is_none(),
+            "REALCAM_REQUIRE_BPY is set but bpy is not installed (scripts/test.sh installs it)"
+        );
+        eprintln!("skipped: bpy (Blender as a Python module) is not installed (scripts/test.sh installs it into target/bpy-venv)");
+    }
+    found
+}
+
+/// Issue 31, item 2: a camera keyed in Blender (focus 1 -> 3 m, f/2 -> f/8 over frames 1-3) and
+/// exported by Blender's USD exporter drives the shot: each output's `focus`, `aperture` and
+/// focal length follow the file's samples (Blender writes the lens in tenths of a metre), and
+/// the plane in focus moves from the near half of the frame to the far one.
+#[test]
+fn a_camera_blender_exports_to_usd_racks_focus_and_pulls_the_iris() {
+    let Some(python) = bpy_python() else { return };
+    let dir = TestDir::new("shot-blender-usd");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/export_usd_camera.py");
+    let export = Command::new(&python).arg(&script).arg(dir.join("shot.usda")).output().expect("running bpy");
+    assert!(export.status.success(), "{}", String::from_utf8_lossy(&export.stderr));
+    let usda = std::fs::read_to_string(dir.join("shot.usda")).unwrap();
+    assert!(usda.contains("doc = \"Blender v4.2"), "not Blender's export:\n{usda}");
+    write_input(&dir.join("in.exr"), &[]);
+    let args = ["--color", "in.exr", "--camera-file", "shot.usda", "--frames", "1-3", "-o", "out_####.exr"];
+    succeeded(realcam(&dir, &args));
+    let (near, far) = ((0, W / 2), (W / 2, W));
+    // Blender's Bezier keys pass halfway at frame 2.
+    for (frame, focus_m, f_number) in [(1, 1.0, 2.0), (2, 2.0, 5.0), (3, 3.0, 8.0)] {
+        let path = dir.join(&format!("out_000{frame}.exr"));
+        let h = header(&path);
+        assert_eq!(float(&h, "focus"), focus_m, "frame {frame}");
+        assert_eq!(float(&h, "aperture"), f_number, "frame {frame}");
+        assert!((float(&h, "effectiveFocalLength") - 50.0).abs() < 1e-3, "frame {frame}");
+        let origin = "the USD camera /root/Camera/Camera of \"shot.usda\"";
+        for setting in ["focus_distance_m", "f_number", "focal_length_mm"] {
+            assert_eq!(text(&h, &format!("realcam/source/{setting}")), origin, "frame {frame}");
+        }
+        if frame != 2 {
+            let r = red(&path);
+            let (sharp, blurred) = if focus_m == 1.0 { (near, far) } else { (far, near) };
+            let (c_sharp, c_blurred) = (contrast(&r, sharp.0, sharp.1), contrast(&r, blurred.0, blurred.1));
+            assert!((c_sharp - 0.8).abs() < 0.01, "frame {frame}: the plane at {focus_m} m is not sharp: {c_sharp}");
+            assert!(c_blurred < 0.4, "frame {frame}: the plane out of focus keeps contrast {c_blurred}");
+        }
     }
 }

@@ -4,12 +4,16 @@
 //! samples) or its default value. Read through the `openusd` crate (pure Rust; see the README's
 //! dependencies).
 //!
-//! Units, as USD's schema and the exporters write them: `focalLength` in mm (the schema says
-//! "tenths of a scene unit", which is mm at USD's default centimetre; Blender, Houdini and
-//! Omniverse write mm whatever the unit); `focusDistance` in scene units, times the stage's
-//! `metersPerUnit` (0.01 when unauthored); `fStop` an f-number, 0 meaning "no depth of field"
-//! (left out); the shutter in time codes around the frame, so (close - open) x 360 is the shutter
-//! angle in degrees.
+//! Units, as USD's schema and the exporters write them: `focalLength` and `horizontalAperture`
+//! in tenths of a scene unit, so in mm the value times 100 x the stage's `metersPerUnit` (0.01,
+//! USD's centimetre, when unauthored: then mm as written). Blender's exporter follows the
+//! schema (a 50 mm lens on a metre stage is `focalLength = 0.5`, aperture 0.36 for 36 mm); some
+//! tools write mm whatever the unit. Which one a file uses is read from its aperture (its focal
+//! length when it has none): the schema's conversion where that gives a sensor of 1-100 mm (a
+//! lens of 1-2000 mm), mm as written where only that does. `focusDistance` in scene units,
+//! times `metersPerUnit`; `fStop` an f-number, 0 meaning "no depth of field" (left out); the
+//! shutter in time codes around the frame, so (close - open) x 360 is the shutter angle in
+//! degrees.
 
 use crate::model::camera::keys::{CameraKeys, Interpolation, Track};
 use crate::model::camera::CameraField;
@@ -109,7 +113,10 @@ pub fn load_usd_camera(path: &Path, prim: Option<&str>) -> Result<CameraKeys, Us
         })
     };
     let mut tracks = Vec::new();
-    if let Some(keys) = samples("focalLength")? {
+    let focal = samples("focalLength")?;
+    let mm_per_lens_unit = lens_unit_mm(meters_per_unit, samples("horizontalAperture")?.as_deref(), focal.as_deref());
+    if let Some(keys) = focal {
+        let keys = keys.into_iter().map(|(t, f)| (t, f * mm_per_lens_unit)).collect();
         tracks.push(track(CameraField::FocalLengthMm, keys)?);
     }
     if let Some(keys) = samples("focusDistance")? {
@@ -133,40 +140,93 @@ pub fn load_usd_camera(path: &Path, prim: Option<&str>) -> Result<CameraKeys, Us
     Ok(CameraKeys { tracks, origin })
 }
 
+/// The mm per unit of the file's `focalLength` and `horizontalAperture`: the schema's tenth of
+/// a scene unit (100 x `meters_per_unit` mm) where the file's aperture (else its focal length)
+/// is a plausible camera's in those units, else mm as written where it is in mm, else the
+/// schema's.
+fn lens_unit_mm(meters_per_unit: f64, aperture: Option<&[(f64, f64)]>, focal: Option<&[(f64, f64)]>) -> f64 {
+    let schema = 100.0 * meters_per_unit;
+    let (samples, plausible): (&[(f64, f64)], std::ops::RangeInclusive<f64>) = match (aperture, focal) {
+        (Some(a), _) => (a, 1.0..=100.0),
+        (None, Some(f)) => (f, 1.0..=2000.0),
+        (None, None) => return schema,
+    };
+    let fits = |unit: f64| samples.iter().all(|(_, v)| plausible.contains(&(v * unit)));
+    if !fits(schema) && fits(1.0) {
+        1.0
+    } else {
+        schema
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A camera as Blender's USD exporter writes an animation (a sample per frame, metres).
-    const BLENDER_LIKE: &str = r#"#usda 1.0
+    /// A camera as Blender 4.2 LTS's USD exporter wrote a keyed rack focus and iris pull (a
+    /// sample per frame; lens and apertures in tenths of a metre; abridged).
+    const BLENDER: &str = r#"#usda 1.0
 (
-    defaultPrim = "Camera"
-    doc = "Blender v3.4.1"
-    endTimeCode = 5
+    defaultPrim = "root"
+    doc = "Blender v4.2.23 LTS"
+    endTimeCode = 3
     metersPerUnit = 1
     startTimeCode = 1
+    timeCodesPerSecond = 24
     upAxis = "Z"
+)
+
+def Xform "root"
+{
+    def Xform "Camera"
+    {
+        def Camera "Camera"
+        {
+            float focalLength.timeSamples = {
+                1: 0.5,
+                2: 0.5,
+                3: 0.5,
+            }
+            float focusDistance.timeSamples = {
+                1: 1,
+                2: 2,
+                3: 3,
+            }
+            float fStop.timeSamples = {
+                1: 2,
+                2: 5,
+                3: 8,
+            }
+            float horizontalAperture.timeSamples = {
+                1: 0.36,
+                2: 0.36,
+                3: 0.36,
+            }
+            token projection = "perspective"
+        }
+    }
+}
+"#;
+
+    /// A camera written in mm on a metre stage, with a shutter of half a frame.
+    const IN_MM: &str = r#"#usda 1.0
+(
+    metersPerUnit = 1
 )
 
 def Xform "Camera"
 {
-    uniform token[] xformOpOrder = ["xformOp:transform"]
-
     def Camera "Lens"
     {
         float focalLength = 50
         float focusDistance.timeSamples = {
             1: 1,
-            2: 1.5,
-            3: 2,
-            4: 2.5,
             5: 3,
         }
         float fStop = 0
         float horizontalAperture = 36
         double shutter:close = 0.25
         double shutter:open = -0.25
-        token projection = "perspective"
     }
 }
 "#;
@@ -179,17 +239,44 @@ def Xform "Camera"
     }
 
     #[test]
-    fn a_blender_like_camera_gives_its_samples_in_metres_and_its_shutter_as_an_angle() {
-        let path = write("blender", BLENDER_LIKE);
+    fn a_blender_camera_gives_its_lens_in_mm_and_its_focus_in_metres() {
+        let path = write("blender", BLENDER);
         let keys = load_usd_camera(&path, None).unwrap();
         let focus = keys.track(CameraField::FocusDistanceM).unwrap();
-        assert_eq!(focus.keys(), &[(1.0, 1.0), (2.0, 1.5), (3.0, 2.0), (4.0, 2.5), (5.0, 3.0)]);
-        assert!((focus.at(3.5) - 2.25).abs() < 1e-9, "linear between samples");
+        assert_eq!(focus.keys(), &[(1.0, 1.0), (2.0, 2.0), (3.0, 3.0)]);
+        assert!((focus.at(2.5) - 2.5).abs() < 1e-9, "linear between samples");
+        // 0.5 tenths of a metre.
+        assert!((keys.track(CameraField::FocalLengthMm).unwrap().at(2.0) - 50.0).abs() < 1e-9);
+        assert_eq!(keys.track(CameraField::FNumber).unwrap().keys(), &[(1.0, 2.0), (2.0, 5.0), (3.0, 8.0)]);
+        assert!(keys.track(CameraField::ShutterAngleDeg).is_none());
+        assert_eq!(keys.origin, format!("the USD camera /root/Camera/Camera of \"{}\"", path.display()));
+    }
+
+    #[test]
+    fn a_camera_in_mm_on_a_metre_stage_keeps_its_mm_and_its_shutter_is_an_angle() {
+        let path = write("mm", IN_MM);
+        let keys = load_usd_camera(&path, None).unwrap();
+        // 36 tenths of a metre would be a 3.6 m sensor: the file is in mm.
         assert_eq!(keys.track(CameraField::FocalLengthMm).unwrap().at(4.0), 50.0);
+        assert!((keys.track(CameraField::FocusDistanceM).unwrap().at(3.0) - 2.0).abs() < 1e-9);
         // fStop 0 is USD's "no depth of field": no f-number from the file.
         assert!(keys.track(CameraField::FNumber).is_none());
         assert_eq!(keys.track(CameraField::ShutterAngleDeg).unwrap().at(2.0), 180.0);
-        assert_eq!(keys.origin, format!("the USD camera /Camera/Lens of \"{}\"", path.display()));
+    }
+
+    #[test]
+    fn the_lens_unit_is_the_schemas_where_it_gives_a_camera_else_mm() {
+        let one = |v: f64| vec![(0.0, v)];
+        // The schema's tenth of a unit: mm on USD's centimetre, 100 mm on a metre.
+        assert_eq!(lens_unit_mm(0.01, Some(&one(36.0)), Some(&one(50.0))), 1.0);
+        assert_eq!(lens_unit_mm(1.0, Some(&one(0.36)), Some(&one(0.5))), 100.0);
+        // mm on a metre stage, told by the aperture, else by the focal length.
+        assert_eq!(lens_unit_mm(1.0, Some(&one(36.0)), Some(&one(0.5))), 1.0);
+        assert_eq!(lens_unit_mm(1.0, None, Some(&one(50.0))), 1.0);
+        assert_eq!(lens_unit_mm(1.0, None, Some(&one(0.35))), 100.0);
+        // Neither plausible, or nothing to tell by: the schema's.
+        assert_eq!(lens_unit_mm(1.0, Some(&one(1e6)), None), 100.0);
+        assert_eq!(lens_unit_mm(0.01, None, None), 1.0);
     }
 
     #[test]
