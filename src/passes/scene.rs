@@ -39,6 +39,9 @@ pub struct PlanInput<'a> {
     pub frame: &'a Frame,
     pub camera: &'a Camera,
     pub facts: SceneFacts,
+    /// Whether the plan will be explained (`--explain`): counts that only `--explain` prints
+    /// are made then only (the motion blur's edge resolve counts its pixels on the CPU).
+    pub explained: bool,
 }
 
 /// Facts about the frame under the camera that several passes plan from.
@@ -152,13 +155,18 @@ fn offsets_visible([r, b]: [f64; 2]) -> bool {
 
 impl<'a> PlanInput<'a> {
     pub fn new(frame: &'a Frame, camera: &'a Camera) -> PlanInput<'a> {
-        PlanInput { frame, camera, facts: SceneFacts::new(frame, camera) }
+        PlanInput { frame, camera, facts: SceneFacts::new(frame, camera), explained: true }
+    }
+
+    /// [`PlanInput::new`] for a plan that `--explain` will not print.
+    pub fn unexplained(frame: &'a Frame, camera: &'a Camera) -> PlanInput<'a> {
+        PlanInput { explained: false, ..PlanInput::new(frame, camera) }
     }
 
     /// A band of a frame with the whole frame's facts (banded rendering: every band plans from
     /// the whole frame's CoC range and clamp).
     pub fn with_facts(frame: &'a Frame, camera: &'a Camera, facts: SceneFacts) -> PlanInput<'a> {
-        PlanInput { frame, camera, facts }
+        PlanInput { frame, camera, facts, explained: false }
     }
 
     /// The runs of the depth of field: one for all channels, or, when longitudinal colour is

@@ -25,7 +25,17 @@ pub struct Plan {
 }
 
 pub fn plan(frame: &Frame, camera: &Camera) -> Plan {
-    let input = PlanInput::new(frame, camera);
+    plan_of(PlanInput::new(frame, camera))
+}
+
+/// [`plan`] for a render that does not print it (`--explain` off): the same passes and
+/// decisions, without the counts only `--explain` prints.
+pub fn plan_unexplained(frame: &Frame, camera: &Camera) -> Plan {
+    plan_of(PlanInput::unexplained(frame, camera))
+}
+
+fn plan_of(input: PlanInput) -> Plan {
+    let camera = input.camera;
     let passes = PASS_ORDER.iter().map(|entry| entry.plan(&input)).collect();
     let coc_clamp_warning = if input.facts.dof_visible() { input.facts.coc_clamp_note(camera) } else { None };
     Plan { passes, facts: input.facts, notes: Vec::new(), coc_clamp_warning }

@@ -113,7 +113,7 @@ pub fn plan_frame(settings: &RenderSettings, camera: &Camera, mut passes: SceneP
     let mut frame = Frame::from_passes(passes, camera, settings.depth_kind);
     let wants_view = settings.png.is_some();
     let (space_line, display_view) = choose_working_space(&settings.colour, wants_view, &mut frame)?;
-    let plan = planner::plan(&frame, camera);
+    let plan = if settings.explain { planner::plan(&frame, camera) } else { planner::plan_unexplained(&frame, camera) };
     // The render's focal length: what the input says, else --focal-length's.
     let render_mm = render_focal_length.as_ref().map_or(camera.lens.focal_length_mm, |(mm, _)| *mm);
     let focal_length_warning = camera.focal_length_warning(Some(render_mm)).map(|w| match &render_focal_length {

@@ -61,7 +61,7 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
             Decision::not_chosen()
         });
     }
-    let (Some(rgba), Some(extent)) = (frame.velocity_rgba(), input.facts.motion) else {
+    let (true, Some(extent)) = (frame.velocity_px.is_some(), input.facts.motion) else {
         return Err(Decision::skip("no velocity pass"));
     };
     let timing = &motion.timing;
@@ -102,14 +102,20 @@ pub fn plan_motion<P>(input: &PlanInput<'_>, mode: MotionBlurMode) -> Result<(Mo
     }
     let (w, h) = input.size();
     // The edge resolve, counted here with its twin (the frame's colour is what the pass reads:
-    // motion blur comes first), so that --explain says how many pixels it changes.
+    // motion blur comes first), so that --explain says how many pixels it changes (only then:
+    // 4% of a shot's CPU time).
     let (edges, edges_why) = if input.camera.resolve_depth_edges {
         let push = MbEdgesPush::new([w as i32, h as i32], timing.extent_frames(), max_speed_px);
-        let edge_input =
-            EdgeInputs { width: w, height: h, color: &frame.color, depth: &frame.depth_m, velocity: &rgba };
-        let changed = changed_pixels(&edge_input, &push);
+        let what = "pixels whose colour is mostly a neighbouring layer's";
+        let changed = if let (true, Some(rgba)) = (input.explained, frame.velocity_rgba()) {
+            let edge_input =
+                EdgeInputs { width: w, height: h, color: &frame.color, depth: &frame.depth_m, velocity: &rgba };
+            format!("{} {what}", changed_pixels(&edge_input, &push))
+        } else {
+            what.to_string()
+        };
         let why = format!(
-            "; anti-aliased edges resolved ({}): {changed} pixels whose colour is mostly a neighbouring layer's (at least {:.0}% of their light) take that layer's velocity and depth",
+            "; anti-aliased edges resolved ({}): {changed} (at least {:.0}% of their light) take that layer's velocity and depth",
             edges::NAME,
             100.0 * edges::MIN_SHARE
         );
