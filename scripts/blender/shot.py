@@ -5,7 +5,7 @@ the Defocus node, then the Vector Blur node, rendered as an animation into EXRs:
 Run by scripts/compare-blender-shot.sh as
   blender -b --factory-startup -noaudio --python-exit-code 1 --python shot.py -- \
       --passes 'DIR/passes_####.exr' --frames 12 --output 'OUT/blender_####.exr' --fstop 2 --focus 2
-Checked with Blender 3.4.1 (Debian 12). Nothing is rendered: the tree has no Render Layers node,
+With --no-defocus, Vector Blur alone. Checked with Blender 3.4.1 (Debian 12). Nothing is rendered: the tree has no Render Layers node,
 so Blender only composites each frame and writes it. The Defocus node's f-stop and camera are
 matched to the thin lens as scripts/blender/defocus.py explains; the Vector Blur takes the
 shutter as its factor (0.5: a 180-degree shutter) with 32 samples.
@@ -32,6 +32,8 @@ def parse_args():
     p.add_argument("--sensor-width", type=float, default=36.0)
     p.add_argument("--blades", type=int, default=6)
     p.add_argument("--shutter", type=float, default=0.5, help="shutter in frames (the Vector Blur's factor)")
+    p.add_argument("--no-defocus", action="store_true",
+                   help="Vector Blur alone, no Defocus node (the peer of realcam's motion blur alone)")
     p.add_argument("--blur-max", type=float, default=32.0,
                    help="the Defocus node's largest blur radius in px (32 covers scene A at f/2: CoC up to 35 px across)")
     return p.parse_args(argv)
@@ -108,14 +110,18 @@ def main():
     comp = tree.nodes.new("CompositorNodeComposite")
     comp.use_alpha = True
     combined, depth = output(node, "Combined", "Image"), output(node, "Depth", "Z")
-    tree.links.new(combined, d.inputs["Image"])
-    tree.links.new(depth, d.inputs["Z"])
-    tree.links.new(d.outputs["Image"], v.inputs["Image"])
+    if a.no_defocus:
+        tree.nodes.remove(d)
+        tree.links.new(combined, v.inputs["Image"])
+    else:
+        tree.links.new(combined, d.inputs["Image"])
+        tree.links.new(depth, d.inputs["Z"])
+        tree.links.new(d.outputs["Image"], v.inputs["Image"])
     tree.links.new(depth, v.inputs["Z"])
     tree.links.new(output(node, "Vector", "Speed"), v.inputs["Speed"])
     tree.links.new(v.outputs["Image"], comp.inputs["Image"])
-    print(f"shot.py: {a.frames} frames of {w}x{h}, Defocus f_stop {n_b:.2f} (f/{a.fstop}), Vector Blur factor "
-          f"{a.shutter}", flush=True)
+    defocus = "no Defocus" if a.no_defocus else f"Defocus f_stop {n_b:.2f} (f/{a.fstop})"
+    print(f"shot.py: {a.frames} frames of {w}x{h}, {defocus}, Vector Blur factor {a.shutter}", flush=True)
     bpy.ops.render.render(animation=True)
 
 
