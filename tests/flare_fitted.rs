@@ -135,7 +135,7 @@ fn fitted_ghosts_lie_on_the_light_centre_line_and_differ_from_the_matrix_ghosts(
     let tolerance_px = 0.01 * w as f64;
     for (dir, across) in [([1.0, 0.0], 1), ([0.0, -1.0], 0)] {
         let light = light_at(&probe, w, h, 6.0, dir, 1.0e10);
-        let fitted = render_ghosts(&black(w, h), &camera(w, h, vec![light.clone()], FlareGhosts::Fitted));
+        let fitted = render_ghosts(&black(w, h), &camera(w, h, vec![light], FlareGhosts::Fitted));
         let (energy, c) = centroid(&fitted, w, 1);
         assert!(energy > 0.0, "no fitted ghost drawn");
         let off = (c[across] - [w as f64 / 2.0, h as f64 / 2.0][across]).abs();

@@ -24,7 +24,7 @@ const FAR_M: f32 = 3.0;
 /// A one-pixel checkerboard (0.1 / 0.9) over two planes, 1 m on the left, 3 m on the right,
 /// with `attributes` in its header.
 fn write_input(path: &Path, attributes: &[(&str, f32)]) {
-    let checker: Vec<f32> = (0..W * H).map(|i| if (i % W + i / W) % 2 == 0 { 0.1 } else { 0.9 }).collect();
+    let checker: Vec<f32> = (0..W * H).map(|i| if (i % W + i / W).is_multiple_of(2) { 0.1 } else { 0.9 }).collect();
     let depth: Vec<f32> = (0..W * H).map(|i| if i % W < W / 2 { NEAR_M } else { FAR_M }).collect();
     let channels = vec![
         AnyChannel::new("R", FlatSamples::F32(checker.clone())),
@@ -104,7 +104,7 @@ fn red(path: &Path) -> Vec<f32> {
         .all_attributes()
         .from_file(path)
         .unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
-    let channel = image.layer_data.channel_data.list.iter().find(|c| c.name == Text::from("R")).expect("an R channel");
+    let channel = image.layer_data.channel_data.list.iter().find(|c| c.name == *"R").expect("an R channel");
     channel.sample_data.values_as_f32().collect()
 }
 

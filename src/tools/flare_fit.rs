@@ -917,11 +917,12 @@ mod tests {
     fn the_traced_ghosts_of_a_range_become_a_lens_file_section_that_round_trips() {
         // The tiny case of `realcam flare-fit`: the Tessar's ghost 4/0 in green on a 320x180
         // frame at 2..5 degrees (48 rays across per wavelength, at most 24 cells across: cells of
-        // 45 px), fitted and made parabolas of the angle, their light refitted to their shapes
-        // (`relight`). Each sample's own fit keeps its energy within 1% (measured 0.41%), RMS
-        // over the traced peak under 0.15 (0.102: mostly the rays' binning noise); the
-        // parabolas lose little more: energy within 2% (0.74%; 22.5% before `relight`), RMS
-        // 0.15 (0.103), centroid within a cell (18 px).
+        // 45 px), fitted and made polynomials of the angle (src/tools/flare_fit/polynomial.rs:
+        // the fade kept within the ghost's size, the lights fitted jointly, samples refitted
+        // near the polynomials). Each sample's own fit keeps its energy within 1% (measured
+        // 0.72%), RMS over the traced peak under 0.15 (0.071: mostly the rays' binning noise);
+        // the polynomials lose little more: energy within 2% (0.19%), RMS 0.15 (0.072),
+        // centroid within a cell (14 px).
         use crate::io::lens_file::{LensFile, LensFileWriter};
         let camera = crate::tools::bench_flare::flare_camera(320, 180);
         let options = TracedFitOptions {

@@ -73,12 +73,11 @@ impl FittedGhosts {
             w[FITTED_PIVOT as usize] = (spec.frame_px[0] as f64 / 2.0) as f32;
             w[FITTED_PIVOT as usize + 1] = (spec.frame_px[1] as f64 / 2.0) as f32;
             let polynomials = spec.polynomials();
-            for k in 0..PARAMS {
+            for (k, (coefficients, &(lo, hi))) in polynomials.coefficients.iter().zip(&PARAM_RANGES).enumerate() {
                 let p = (FITTED_PARAMS + k as u32 * FITTED_PARAM_WORDS) as usize;
-                for (i, c) in polynomials.coefficients[k].iter().take(FITTED_TERMS as usize).enumerate() {
+                for (i, c) in coefficients.iter().take(FITTED_TERMS as usize).enumerate() {
                     w[p + i] = *c as f32;
                 }
-                let (lo, hi) = PARAM_RANGES[k];
                 w[p + FITTED_TERMS as usize] = lo.max(f32::MIN as f64) as f32;
                 w[p + FITTED_TERMS as usize + 1] = hi.min(f32::MAX as f64) as f32;
             }
@@ -185,7 +184,8 @@ pub fn fitted_sprite(
     let (fi, fo) = (scale * p[9], scale * p[10]);
     let channel = t[FITTED_CHANNEL as usize] as usize;
     let value = light[LIGHT_ENERGY as usize + channel.min(2)] as f64 / (scale * scale);
-    if !(p[7].max(p[8]) * value >= fc.visible as f64) {
+    // Not visible, or NaN.
+    if (p[7].max(p[8]) * value).partial_cmp(&(fc.visible as f64)).is_none_or(|o| o.is_lt()) {
         return false;
     }
     let reach = fo + 1.0;
