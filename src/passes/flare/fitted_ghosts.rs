@@ -81,8 +81,7 @@ fn mix(a: f32, b: f32, t: f32) -> f32 {
 /// The corner nodes of `g` interpolated at `o` px from the first pixel of an `n`-px block.
 pub fn interpolated(g: &[f32; 5], o: [u32; 2], n: u32) -> f32 {
     let span = (n - 1) as f32;
-    let f = [o[0] as f32 / span, o[1] as f32 / span];
-    mix(mix(g[0], g[1], f[0]), mix(g[2], g[3], f[0]), f[1])
+    bilinear([g[0], g[1], g[2], g[3]], [o[0] as f32 / span, o[1] as f32 / span])
 }
 
 /// Whether the light of transfer `t` (I_b, I_i, F_i, F_o, E_i, E_o) is smooth over the tile of
@@ -135,6 +134,22 @@ fn shade_block(w: &[f32], at: [u32; 2], n: u32, g: &[f32; 5], add: &mut impl FnM
     }
 }
 
+/// Each pixel of the tile whose first pixel is `origin`, with its fraction of the way between
+/// the tile's corner pixels (the sweep that adds the smooth sprites' corner sums).
+fn corner_sweep(origin: [u32; 2], mut at: impl FnMut(u32, u32, [f32; 2])) {
+    let span = (TILE_SIZE - 1) as f32;
+    for y in 0..TILE_SIZE {
+        for x in 0..TILE_SIZE {
+            at(origin[0] + x, origin[1] + y, [x as f32 / span, y as f32 / span]);
+        }
+    }
+}
+
+/// The corner values `c` (row by row) interpolated bilinearly at fraction `f`.
+fn bilinear(c: [f32; 4], f: [f32; 2]) -> f32 {
+    mix(mix(c[0], c[1], f[0]), mix(c[2], c[3], f[0]), f[1])
+}
+
 /// Fitted sprite `s`'s light added to `sums` (a `width` x `height` frame) over every tile its
 /// bounds touch, as the kernel shades a tile it crosses (on a covered tile, I_i at every pixel).
 pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
@@ -155,13 +170,7 @@ pub fn add_sprite(s: &[f32], width: u32, height: u32, sums: &mut [[f64; 3]]) {
         for tx in x0 / TILE_SIZE..=(x1 - 1) / TILE_SIZE {
             let origin = [tx * TILE_SIZE, ty * TILE_SIZE];
             if let Some(corners) = shade_tile(w, origin, &mut add) {
-                for y in 0..TILE_SIZE {
-                    for x in 0..TILE_SIZE {
-                        let f = [x as f32 / (TILE_SIZE - 1) as f32, y as f32 / (TILE_SIZE - 1) as f32];
-                        let light = mix(mix(corners[0], corners[1], f[0]), mix(corners[2], corners[3], f[0]), f[1]);
-                        add(origin[0] + x, origin[1] + y, light);
-                    }
-                }
+                corner_sweep(origin, |x, y, f| add(x, y, bilinear(corners, f)));
             }
         }
     }
@@ -213,15 +222,9 @@ impl Twin for FittedGhostsShader {
                 if !smooth_any {
                     continue;
                 }
-                for y in 0..TILE_SIZE {
-                    for x in 0..TILE_SIZE {
-                        let f = [x as f32 / (TILE_SIZE - 1) as f32, y as f32 / (TILE_SIZE - 1) as f32];
-                        let rgb = std::array::from_fn(|c| {
-                            mix(mix(corners[0][c], corners[1][c], f[0]), mix(corners[2][c], corners[3][c], f[0]), f[1])
-                        });
-                        add_rgb(origin[0] + x, origin[1] + y, rgb);
-                    }
-                }
+                corner_sweep(origin, |x, y, f| {
+                    add_rgb(x, y, std::array::from_fn(|c| bilinear(corners.map(|corner| corner[c]), f)))
+                });
             }
         }
     }
