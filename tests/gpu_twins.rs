@@ -121,8 +121,9 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     camera.coma = Some(table(vec![0.0, 0.1, 0.3]));
     cases.push(("tiled, longitudinal colour, distortion, astigmatism, coma", banded_frame(160, 48), camera));
     // Motion blur: a bar moving over a textured background along a bent path (its previous and
-    // next vectors differ), a trapezoid shutter and a rolling readout; then the reference on a
-    // smaller frame (its sub-frame times are many dispatches).
+    // next vectors differ), a trapezoid shutter and a rolling readout, on a frame wide enough
+    // for tiles nothing near moves in (copied by mb_still); then the reference on a smaller frame
+    // (its sub-frame times are many dispatches).
     let mut camera = motion_camera(24.0, 0.5);
     camera.motion.timing = realcam::optics::shutter::ShutterTiming::new(
         0.5 / 24.0,
@@ -135,7 +136,7 @@ fn twin_cases() -> Vec<(&'static str, Frame, Camera)> {
     let bar = |w, h, next, prev| moving_bar_frame(w, h, (14, 22), [4.0, 1.0, 0.5], (1.0, 6.0), next, prev, texture);
     cases.push((
         "motion blur, bent path, rolling trapezoid shutter",
-        bar(48, 34, [12.0, 3.0], Some([-10.0, 4.0])),
+        bar(96, 34, [12.0, 3.0], Some([-10.0, 4.0])),
         camera,
     ));
     // The edge resolve (mb_edges) changing pixels: a still 3x3 highlight whose anti-aliased
@@ -300,6 +301,8 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     let mut composite_lists = BTreeSet::new();
     // The sprites' dispatch, on tiles that have sprites (it has no workgroup where none has).
     let mut sprite_tiles_checked = 0;
+    // The motion blur's two tile lists, each checked on tiles.
+    let (mut gather_tiles_checked, mut still_tiles_checked) = (0, 0);
     // The bare pass of the benchmark is no pass of a render: check it on its own.
     let copy = realcam::gpu::Kernel::new(&gpu).expect("copy pipeline");
     let (_, checks) = realcam::tools::bench::run_bare_pass(&gpu, &copy, &busy_frame(20, 12), true).expect("bare pass");
@@ -332,8 +335,11 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
             if c.shader == "dof_composite" && c.groups[0] > 0 {
                 composite_lists.insert(c.pass.ends_with("_blurred"));
             }
-            if c.shader == "dof_sprites" {
-                sprite_tiles_checked += c.groups[0];
+            match c.shader {
+                "dof_sprites" => sprite_tiles_checked += c.groups[0],
+                "mb_gather" => gather_tiles_checked += c.groups[0],
+                "mb_still" => still_tiles_checked += c.groups[0],
+                _ => {}
             }
             if let Err(e) = c.result {
                 failures.push(format!("{name}: pass {}: {e}", c.pass));
@@ -350,6 +356,7 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
     }
     assert_eq!(composite_lists.len(), 2, "the composite ran on tiles of only one kind of list: {composite_lists:?}");
     assert!(sprite_tiles_checked > 0, "the sprites were checked on no tile with sprites");
+    assert!(gather_tiles_checked > 0 && still_tiles_checked > 0, "the motion blur's gather ({gather_tiles_checked} tiles) or copy ({still_tiles_checked}) was checked on no tile");
 }
 
 #[test]

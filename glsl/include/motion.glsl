@@ -20,6 +20,15 @@
 // Invocations per workgroup of the resolve (glsl/motion/mb_edges.comp).
 #define MB_EDGE_GROUP_SIZE 64
 
+// The gather's tile lists (glsl/motion/mb_neighbor.comp makes them): the indirect dispatches
+// (x, y, z: one workgroup per listed tile) of the tiles something near moves in (mb_gather) and
+// of the still tiles (mb_still, a copy), then the tiles themselves (column | row << 16): the
+// moving ones from word 0 of the list buffer, the still ones from word `tiles` (the frame's tile
+// count).
+#define MB_TILE_ARGS_MOVING 0
+#define MB_TILE_ARGS_STILL 3
+#define MB_TILE_ARGS_WORDS 6
+
 // A pixel of the edge list: x | y << 16 (as the depth of field's, glsl/include/coc.glsl).
 uint mb_pack_pixel(ivec2 p) { return uint(p.x) | (uint(p.y) << 16); }
 ivec2 mb_unpack_pixel(uint v) { return ivec2(int(v & 0xffffu), int(v >> 16)); }
@@ -67,6 +76,13 @@ float shutter_total(Shutter s) {
 vec2 clamp_speed(vec2 v, float max_speed) {
     float l = length(v);
     return l > max_speed ? v * (max_speed / l) : v;
+}
+
+// The pixel of a tile list's tile (its column and row packed as a pixel of the edge list: an
+// integer division per invocation cost lavapipe more than the copy of a still tile) at this
+// invocation of a workgroup of TILE_SIZE x TILE_SIZE.
+ivec2 listed_tile_pixel(uint packed_tile, uvec2 local) {
+    return mb_unpack_pixel(packed_tile) * TILE_SIZE + ivec2(local);
 }
 
 // The shutter light (cdf units) during which a point moving along `v` from t = 0 (at `v` px

@@ -14,7 +14,8 @@
 //      hides the rest: issue 30 item 2).
 // Result = F + (1 - aF) (S + (1 - aS) B). A static background stays sharp behind a moving
 // object (its own S is the texel, aS = 1), and a moving object's silhouette spreads over it
-// (F). Tiles whose neighbourhood moves less than half a pixel are copied.
+// (F). One workgroup per tile of mb_neighbor's list of tiles something near moves in (the
+// others are copied by mb_still); a pixel whose own open time lets nothing reach it copies too.
 #include "common.glsl"
 #include "motion.glsl"
 
@@ -25,6 +26,7 @@ layout(binding = 2, rgba32f) uniform readonly image2D velocity;
 layout(binding = 3, rgba32f) uniform writeonly image2D color_out;
 layout(binding = 4, std430) readonly buffer NeighborMotion { vec4 neighbor_motion[]; };
 layout(binding = 5, std430) readonly buffer TileMotion { vec4 tile_motion[]; };
+layout(binding = 6, std430) readonly buffer TileList { uint tile_list[]; };
 
 layout(push_constant) uniform Push {
     ivec2 size;
@@ -97,7 +99,7 @@ vec2 unit(vec2 v) {
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 p = listed_tile_pixel(tile_list[gl_WorkGroupID.x], gl_LocalInvocationID.xy);
     if (outside(p, pc.size)) return;
     vec4 c = finite_or_zero(imageLoad(color_in, p));
     ivec2 tile = p / TILE_SIZE;

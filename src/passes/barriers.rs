@@ -58,6 +58,30 @@ pub fn update_in_place(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
         .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE)
 }
 
+/// An image an earlier compute pass or the upload wrote, about to be copied from
+/// (read-after-write, into the copy stage).
+pub fn copy_source(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    after_compute_write(image)
+        .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+}
+
+/// An image about to be overwritten completely by a copy: its old contents are discarded
+/// (UNDEFINED -> GENERAL), after earlier compute and copy work (write-after-read).
+pub fn copy_target(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    overwrite(image).dst_stage_mask(vk::PipelineStageFlags2::COPY).dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+}
+
+/// An image a copy wrote, which compute passes then read and update (read-after-write,
+/// write-after-write).
+pub fn after_copy(image: &GpuImage) -> vk::ImageMemoryBarrier2<'static> {
+    write_after_write(image)
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+}
+
 /// A buffer an earlier compute pass wrote and this pass reads or updates.
 pub fn buffer_after_compute_write(buffer: &GpuBuffer) -> vk::BufferMemoryBarrier2<'static> {
     vk::BufferMemoryBarrier2::default()

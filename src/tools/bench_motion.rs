@@ -148,10 +148,18 @@ pub fn markdown(device: &str, command: &str, rows: &[MotionBenchRow]) -> String 
             r.fast_ms / r.bare_ms
         );
     }
-    out += "\nFast path, GPU ms per pass (x bare pass):\n\n| resolution | blur px | mb_tiles | mb_neighbor | mb_gather |\n| --- | --- | --- | --- | --- |\n";
+    // Every step of the fast path, the anti-aliased-edge resolve's first.
+    use crate::passes::motion::{edges, gather, neighbor, still, tiles};
+    let steps =
+        [edges::TILES_NAME, edges::LIST_NAME, edges::NAME, tiles::NAME, neighbor::NAME, gather::NAME, still::NAME];
+    out += &format!(
+        "\nFast path, GPU ms per pass (x bare pass):\n\n| resolution | blur px | {} |\n| --- | --- |{}\n",
+        steps.join(" | "),
+        " --- |".repeat(steps.len())
+    );
     for r in rows {
         out += &format!("| {}x{} | {} |", r.width, r.height, r.blur_px);
-        for n in ["mb_tiles", "mb_neighbor", "mb_gather"] {
+        for n in steps {
             let ms = r.fast.pass_ms(n).unwrap_or(0.0);
             out += &format!(" {ms:.2} ({:.1}x) |", ms / r.bare_ms);
         }

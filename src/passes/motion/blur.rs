@@ -1,6 +1,6 @@
 //! Motion blur from the velocity pass (`--motion-blur fast`, the default): tiles -> neighbourhood
-//! -> reconstruction gather, each a module with its shader and CPU twin (mb_tiles, mb_neighbor,
-//! mb_gather). This pass plans the path (and shares its plan with the reference,
+//! -> reconstruction gather over the tiles something near moves in, a copy of the others, each a
+//! module with its shader and CPU twin (mb_tiles, mb_neighbor, mb_gather, mb_still). This pass plans the path (and shares its plan with the reference,
 //! src/passes/motion/reference.rs), owns the buffers the steps share and the barriers between them.
 //!
 //! Kyaw 2013 sec 5.2 and 7.3: a point that moves while the shutter is open leaves a streak as
@@ -9,16 +9,20 @@
 
 use super::edges::{changed_pixels, EdgeInputs, EdgeKernels, MbEdgesPush};
 use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
-use super::neighbor::{MbNeighborPush, MbNeighborShader};
+use super::neighbor::{MbNeighborPush, MbNeighborShader, NeighborOutputs, GATHER_FROM_PX};
 use super::path::{clamped_velocity, ShutterPush};
+use super::still::{MbStillBindings, MbStillPush, MbStillShader};
 use super::tiles::{MbTilesPush, MbTilesShader};
-use super::{edges, gather, neighbor, tiles};
+use super::{edges, gather, neighbor, still, tiles};
+use crate::gpu::shaders::motion::{MB_TILE_ARGS_MOVING, MB_TILE_ARGS_STILL, MB_TILE_ARGS_WORDS};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
 use crate::model::camera::MotionBlurMode;
 use crate::optics::shutter::ShutterCurve;
-use crate::passes::barriers::{after_compute_write, buffer_after_compute_write, overwrite};
+use crate::passes::barriers::{
+    after_compute_write, args_for_indirect, buffer_after_compute_write, overwrite, write_after_write,
+};
 use crate::passes::scene::PlanInput;
-use crate::passes::{groups_for, Decision, FrameImages, Input, Pass, TILE_SIZE};
+use crate::passes::{Decision, FrameImages, Input, Pass, TILE_SIZE};
 use ash::vk;
 
 pub const NAME: &str = "motion_blur";
@@ -168,7 +172,10 @@ pub fn motion_extent(
         let (nx, ny) = (next[2 * i], next[2 * i + 1]);
         let (px, py) = prev.map_or((-nx + 0.0, -ny + 0.0), |p| (p[2 * i], p[2 * i + 1]));
         let v = clamped_velocity(&[nx, ny, px, py], max_speed_px);
-        let (next, prev) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
+        // sqrt of the squares (exact in f64 for any f32), not hypot: libm's hypot made this loop
+        // over the pixels 5% of a shot's CPU time.
+        let length = |x: f32, y: f32| (x as f64 * x as f64 + y as f64 * y as f64).sqrt();
+        let (next, prev) = (length(v[0], v[1]), length(v[2], v[3]));
         speed_px = speed_px.max(next).max(prev);
         reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
         // The longest path over one line's open time (both halves when it straddles the frame time).
@@ -198,6 +205,7 @@ pub struct MotionBlur {
     tiles: Kernel<MbTilesShader>,
     neighbor: Kernel<MbNeighborShader>,
     gather: Kernel<MbGatherShader>,
+    still: Kernel<MbStillShader>,
 }
 
 impl Pass for MotionBlur {
@@ -232,6 +240,7 @@ impl Pass for MotionBlur {
             tiles: Kernel::new(gpu)?,
             neighbor: Kernel::new(gpu)?,
             gather: Kernel::new(gpu)?,
+            still: Kernel::new(gpu)?,
         })
     }
 
@@ -254,16 +263,31 @@ impl Pass for MotionBlur {
             &MbTilesPush { size, tiles, max_speed_px: m.max_speed_px },
         )?;
         rec.begin_pass(neighbor::NAME);
-        let neighbor = MbNeighborPush { tiles, search_tiles: p.search_tiles };
-        neighbor::record(&self.neighbor, rec, &tile_motion, &neighbor_motion, &neighbor)?;
+        let args = rec.create_args_buffer("motion blur tile lists (indirect dispatches)", MB_TILE_ARGS_WORDS)?;
+        let tile_list = rec.create_buffer("motion blur tile lists", 2 * tile_count * 4, storage)?;
+        let lists = NeighborOutputs { neighbor_motion: &neighbor_motion, args: &args, tile_list: &tile_list };
+        let neighbor = MbNeighborPush {
+            size,
+            tiles,
+            shutter: m.shutter,
+            search_tiles: p.search_tiles,
+            gather_from_px: GATHER_FROM_PX,
+        };
+        neighbor::record(&self.neighbor, rec, &tile_motion, &lists, &neighbor)?;
         rec.begin_pass(gather::NAME);
         let output = rec.create_image("color (motion blur)", m.width, m.height, vk::Format::R32G32B32A32_SFLOAT)?;
-        // neighbor_motion: written by mb_neighbor (read-after-write). color: written by the upload
-        //   (its own barrier) or an earlier compute pass; the gather reads it anywhere around a
-        //   pixel, so all of it must be written and visible. output: written from scratch.
+        // args: written by mb_neighbor with atomics, read as the indirect dispatches' sizes.
+        // neighbor_motion, tile_list: written by mb_neighbor (read-after-write). color: written by
+        //   the upload (its own barrier) or an earlier compute pass; the gather reads it anywhere
+        //   around a pixel, so all of it must be written and visible. output: written from
+        //   scratch, each pixel by one of the two dispatches.
         // tile_motion: written by mb_tiles, read by mb_neighbor since (read-after-read: the
         //   barrier before mb_neighbor made it visible to compute reads).
-        rec.buffer_barriers(&[buffer_after_compute_write(&neighbor_motion)]);
+        rec.buffer_barriers(&[
+            args_for_indirect(&args),
+            buffer_after_compute_write(&neighbor_motion),
+            buffer_after_compute_write(&tile_list),
+        ]);
         rec.image_barriers(&[after_compute_write(&color), overwrite(&output)]);
         let bindings = MbGatherBindings {
             color_in: &color,
@@ -272,6 +296,7 @@ impl Pass for MotionBlur {
             color_out: &output,
             neighbor_motion: &neighbor_motion,
             tile_motion: &tile_motion,
+            tile_list: &tile_list,
         };
         let push = MbGatherPush {
             size,
@@ -280,7 +305,19 @@ impl Pass for MotionBlur {
             max_speed_px: m.max_speed_px,
             samples_per_line: p.samples_per_line,
         };
-        self.gather.dispatch(rec, &bindings, &push, groups_for(m.width, m.height))?;
+        self.gather.dispatch_indirect(rec, &bindings, &push, &args, MB_TILE_ARGS_MOVING as u64 * 4)?;
+        rec.begin_pass(still::NAME);
+        // output: the gather wrote the moving tiles' pixels, this writes the still tiles': other
+        //   texels of the same image, which synchronization validation tracks as one (WAW).
+        rec.image_barriers(&[write_after_write(&output)]);
+        let bindings = MbStillBindings { color_in: &color, color_out: &output, tile_list: &tile_list };
+        self.still.dispatch_indirect(
+            rec,
+            &bindings,
+            &MbStillPush { size, tiles },
+            &args,
+            MB_TILE_ARGS_STILL as u64 * 4,
+        )?;
         rec.end_pass();
         images.set_color(None, output);
         Ok(())

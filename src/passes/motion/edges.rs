@@ -1,28 +1,43 @@
 //! Motion blur, step 0: the anti-aliased-edge resolve of the velocity and depth (see
 //! glsl/motion/mb_edges.comp for the model; the layer is decided as the depth of field decides
-//! it, by [`edge_layer`]). Both methods (`blur`, `reference`) blur from its output. Two
-//! dispatches: glsl/motion/mb_edge_list.comp copies every pixel's velocity and depth and lists
+//! it, by [`edge_layer`]). Both methods (`blur`, `reference`) blur from its output. Steps:
+//! mb_tiles and mb_neighbor on the velocity as stored list the tiles where a candidate can be
+//! (anything within a tile moving a quarter pixel: [`EDGE_TILE_FROM_PX`]); the outputs start as
+//! copies of the velocity and depth; glsl/motion/mb_edge_list.comp, over the listed tiles, lists
 //! the candidate pixels (two depth layers moving differently around them) with an atomic
-//! counter; glsl/motion/mb_edges.comp, dispatched indirectly over the list, resolves them.
+//! counter; glsl/motion/mb_edges.comp, dispatched indirectly over that list, resolves them.
 
-use super::path::clamped_velocity;
+use super::gather::listed_tile_pixels;
+use super::neighbor::{MbNeighborPush, MbNeighborShader, NeighborOutputs};
+use super::path::{clamped_velocity, ShutterPush};
+use super::tiles::{MbTilesPush, MbTilesShader};
+use super::{neighbor, tiles};
 use crate::gpu::shaders::motion::{
     MB_EDGE_ARGS_CHANGED, MB_EDGE_ARGS_COUNT, MB_EDGE_ARGS_DISPATCH, MB_EDGE_ARGS_WORDS, MB_EDGE_GROUP_SIZE,
+    MB_TILE_ARGS_MOVING, MB_TILE_ARGS_WORDS,
 };
 use crate::gpu::{Gpu, GpuImage, GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::{
-    after_compute_write, args_for_indirect, buffer_after_compute_write, buffer_after_fill, overwrite, write_after_write,
+    after_compute_write, after_copy, args_for_indirect, buffer_after_compute_write, buffer_after_fill, copy_source,
+    copy_target,
 };
 use crate::passes::dof::coc_edges::{pack_pixel, unpack_pixel};
 use crate::passes::edge_layers::{edge_layer, EDGE_NEAR, EDGE_OWN};
-use crate::passes::groups_for;
 use crate::passes::twin::finite_or_zero;
+use crate::passes::TILE_SIZE;
 use ash::vk;
 use std::sync::Arc;
 
 pub const NAME: &str = "mb_edges";
 /// The candidates' list (glsl/motion/mb_edge_list.comp), its span in `--profile`.
 pub const LIST_NAME: &str = "mb_edge_list";
+/// The tiles the list looks at, and the outputs' copies, its span in `--profile`.
+pub const TILES_NAME: &str = "mb_edge_tiles";
+
+/// A candidate's 3x3 neighbourhood holds two motions more than half a pixel apart over the open
+/// time, so one of them reaches more than a quarter pixel: the tiles whose neighbourhood's
+/// longest velocity reaches less (with a margin for rounding) hold no candidate.
+pub const EDGE_TILE_FROM_PX: f32 = 0.25 * 0.999;
 
 /// The share of a pixel's light the other layer must bring before the pixel takes that layer's
 /// motion. Below it a textured background's brighter texel next to a bright mover could read as
@@ -64,14 +79,13 @@ crate::shader_bindings! {
     pub struct MbEdgeListBindings {
         depth_m: image(depth_m),
         velocity: image(velocity),
-        velocity_out: image(velocity_out),
-        depth_out: image(depth_out),
         args: buffer(Args),
         edge_pixels: buffer(EdgePixels),
+        tile_list: buffer(TileList),
     }
 }
 
-/// glsl/motion/mb_edge_list.comp: one invocation per pixel.
+/// glsl/motion/mb_edge_list.comp: one invocation per pixel of the listed tiles.
 pub struct MbEdgeListShader;
 
 impl Shader for MbEdgeListShader {
@@ -102,15 +116,22 @@ impl Shader for MbEdgesShader {
     type Push = MbEdgesPush;
 }
 
-/// The resolve's two pipelines: the list, then the resolve over it.
+/// The resolve's pipelines: the tiles and their list, the candidates' list, the resolve.
 pub struct EdgeKernels {
+    tiles: Kernel<MbTilesShader>,
+    neighbor: Kernel<MbNeighborShader>,
     list: Kernel<MbEdgeListShader>,
     resolve: Kernel<MbEdgesShader>,
 }
 
 impl EdgeKernels {
     pub fn new(gpu: &Gpu) -> GpuResult<EdgeKernels> {
-        Ok(EdgeKernels { list: Kernel::new(gpu)?, resolve: Kernel::new(gpu)? })
+        Ok(EdgeKernels {
+            tiles: Kernel::new(gpu)?,
+            neighbor: Kernel::new(gpu)?,
+            list: Kernel::new(gpu)?,
+            resolve: Kernel::new(gpu)?,
+        })
     }
 }
 
@@ -208,35 +229,33 @@ fn edge_inputs<'a>(pc: &MbEdgesPush, color: &'a [f32], depth: &'a [f32], velocit
 }
 
 impl Twin for MbEdgeListShader {
-    fn cpu(pc: &MbEdgesPush, _groups: [u32; 3], b: &mut [HostData]) {
+    fn cpu(pc: &MbEdgesPush, groups: [u32; 3], b: &mut [HostData]) {
         let (depth, velocity) = (b[0].image().clone(), b[1].image().clone());
         // The list's test reads no colour.
         let input = edge_inputs(pc, &[], &depth.texels, &velocity.texels);
-        let mut listed = Vec::new();
-        for y in 0..pc.size[1] {
-            for x in 0..pc.size[0] {
-                let i = input.index(x, y);
-                b[2].image_mut().texel_mut(x as u32, y as u32).copy_from_slice(&velocity.texels[4 * i..4 * i + 4]);
-                b[3].image_mut().texel_mut(x as u32, y as u32)[0] = depth.texels[i];
-                if candidate(&input, pc, x, y) {
-                    listed.push(pack_pixel(x, y));
-                }
-            }
+        let tiles = b[4].words()[..groups[0] as usize].to_vec();
+        let listed: Vec<u32> = tiles
+            .into_iter()
+            .flat_map(|t| listed_tile_pixels(t, pc.size))
+            .filter(|&[x, y]| candidate(&input, pc, x, y))
+            .map(|[x, y]| pack_pixel(x, y))
+            .collect();
+        let args = b[2].words_mut();
+        if groups[0] > 0 {
+            args[MB_EDGE_ARGS_DISPATCH as usize + 1] = 1;
+            args[MB_EDGE_ARGS_DISPATCH as usize + 2] = 1;
         }
-        let args = b[4].words_mut();
-        args[MB_EDGE_ARGS_DISPATCH as usize + 1] = 1;
-        args[MB_EDGE_ARGS_DISPATCH as usize + 2] = 1;
         let first = args[MB_EDGE_ARGS_COUNT as usize];
         let groups = (first..first + listed.len() as u32).filter(|slot| slot % MB_EDGE_GROUP_SIZE == 0).count() as u32;
         args[MB_EDGE_ARGS_COUNT as usize] += listed.len() as u32;
         args[MB_EDGE_ARGS_DISPATCH as usize] += groups;
-        b[5].words_mut()[first as usize..first as usize + listed.len()].copy_from_slice(&listed);
+        b[3].words_mut()[first as usize..first as usize + listed.len()].copy_from_slice(&listed);
     }
 
     /// Pixels take slots of the edge list with atomics, in any order: sort the list.
     fn canonical(_pc: &MbEdgesPush, b: &mut [HostData]) {
-        let count = b[4].words()[MB_EDGE_ARGS_COUNT as usize] as usize;
-        let words = b[5].words_mut();
+        let count = b[2].words()[MB_EDGE_ARGS_COUNT as usize] as usize;
+        let words = b[3].words_mut();
         let count = count.min(words.len());
         words[..count].sort_unstable();
     }
@@ -286,30 +305,61 @@ pub fn record(
     push: &MbEdgesPush,
 ) -> GpuResult<(Arc<GpuImage>, Arc<GpuImage>)> {
     let (w, h) = (push.size[0] as u32, push.size[1] as u32);
-    rec.begin_pass(LIST_NAME);
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    rec.begin_pass(TILES_NAME);
+    let tiles = [w.div_ceil(TILE_SIZE) as i32, h.div_ceil(TILE_SIZE) as i32];
+    let tile_count = (tiles[0] * tiles[1]) as u64;
+    let tile_motion = rec.create_buffer("motion edge tiles' longest velocities", tile_count * 16, storage)?;
+    let neighbor_motion = rec.create_buffer("motion edge tiles' neighbourhoods", tile_count * 16, storage)?;
+    let tile_args = rec.create_args_buffer("motion edge tile list (indirect dispatch)", MB_TILE_ARGS_WORDS)?;
+    let tile_list = rec.create_buffer("motion edge tile list", 2 * tile_count * 4, storage)?;
+    tiles::record(
+        &kernels.tiles,
+        rec,
+        velocity,
+        &tile_motion,
+        &MbTilesPush { size: push.size, tiles, max_speed_px: push.max_speed_px },
+    )?;
+    let lists = NeighborOutputs { neighbor_motion: &neighbor_motion, args: &tile_args, tile_list: &tile_list };
+    let neighbor = MbNeighborPush {
+        size: push.size,
+        tiles,
+        // Every pixel's open time the whole extent: the list's test uses the extent's ends.
+        shutter: ShutterPush::spanning(-push.t_back, push.t_fwd),
+        search_tiles: 1,
+        gather_from_px: EDGE_TILE_FROM_PX,
+    };
+    neighbor::record(&kernels.neighbor, rec, &tile_motion, &lists, &neighbor)?;
     let velocity_out = rec.create_image("velocity (edges resolved)", w, h, vk::Format::R32G32B32A32_SFLOAT)?;
     let depth_out = rec.create_image("depth (edges resolved)", w, h, vk::Format::R32_SFLOAT)?;
+    // depth, velocity: written by the upload or a compute pass, now read by copies.
+    // velocity_out, depth_out: overwritten by the copies.
+    rec.image_barriers(&[
+        copy_source(depth),
+        copy_source(velocity),
+        copy_target(&velocity_out),
+        copy_target(&depth_out),
+    ]);
+    rec.copy_image(velocity, &velocity_out);
+    rec.copy_image(depth, &depth_out);
+    rec.begin_pass(LIST_NAME);
     let args = rec.create_args_buffer("motion edge resolve args (indirect dispatch, counts)", MB_EDGE_ARGS_WORDS)?;
-    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let edge_pixels = rec.create_buffer("motion edge pixels", (w as u64 * h as u64).max(1) * 4, storage)?;
     // args: the counts and the dispatch's x start at zero every run (counted up with atomics):
     //   transfer write -> compute read/write. The edge list is this run's own buffer, written
     //   by the list first.
-    // velocity_out, depth_out: written from scratch by the list (every pixel's as stored).
-    // depth, velocity: written by the upload (its own barrier; the motion blur is the first
-    //   pass), read around each pixel here and by the resolve.
+    // tile_args, tile_list: written by mb_neighbor, read as this dispatch's size and by the shader.
+    // depth, velocity: read around each pixel here and by the resolve (read-after-read since
+    //   the upload's barrier and the copies).
     rec.fill_buffer(&args, 0);
-    rec.buffer_barriers(&[buffer_after_fill(&args)]);
-    rec.image_barriers(&[overwrite(&velocity_out), overwrite(&depth_out)]);
-    let list = MbEdgeListBindings {
-        depth_m: depth,
-        velocity,
-        velocity_out: &velocity_out,
-        depth_out: &depth_out,
-        args: &args,
-        edge_pixels: &edge_pixels,
-    };
-    kernels.list.dispatch(rec, &list, push, groups_for(w, h))?;
+    rec.buffer_barriers(&[
+        buffer_after_fill(&args),
+        args_for_indirect(&tile_args),
+        buffer_after_compute_write(&tile_list),
+    ]);
+    let list =
+        MbEdgeListBindings { depth_m: depth, velocity, args: &args, edge_pixels: &edge_pixels, tile_list: &tile_list };
+    kernels.list.dispatch_indirect(rec, &list, push, &tile_args, MB_TILE_ARGS_MOVING as u64 * 4)?;
     rec.begin_pass(NAME);
     // args (this dispatch's size, the counts) and the edge list: written by the list with
     //   atomics; read here as indirect arguments and by the shader (the changed count updated).
@@ -318,7 +368,7 @@ pub fn record(
     // color: written by the upload (its own barrier) or an earlier compute pass, read around
     //   each listed pixel.
     rec.buffer_barriers(&[args_for_indirect(&args), buffer_after_compute_write(&edge_pixels)]);
-    rec.image_barriers(&[after_compute_write(color), write_after_write(&velocity_out), write_after_write(&depth_out)]);
+    rec.image_barriers(&[after_compute_write(color), after_copy(&velocity_out), after_copy(&depth_out)]);
     let resolve = MbEdgesBindings {
         color_in: color,
         depth_m: depth,

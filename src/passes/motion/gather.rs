@@ -27,10 +27,11 @@ crate::shader_bindings! {
         color_out: image(color_out),
         neighbor_motion: buffer(NeighborMotion),
         tile_motion: buffer(TileMotion),
+        tile_list: buffer(TileList),
     }
 }
 
-/// glsl/motion/mb_gather.comp: one invocation per pixel.
+/// glsl/motion/mb_gather.comp: one invocation per pixel of the listed tiles (mb_neighbor's).
 pub struct MbGatherShader;
 
 impl Shader for MbGatherShader {
@@ -208,18 +209,27 @@ pub fn gather_pixel(input: &GatherInputs, pc: &MbGatherPush, p: [i32; 2]) -> [f3
     std::array::from_fn(|k| finite_or_zero(fg[k] + (1.0 - fg_a) * (own[k] + (1.0 - own_a) * behind[k])))
 }
 
+/// The pixels of a tile list's tile (column | row << 16) within a `size` frame (the shaders'
+/// `listed_tile_pixel` over a workgroup).
+pub fn listed_tile_pixels(packed_tile: u32, size: [i32; 2]) -> impl Iterator<Item = [i32; 2]> {
+    let side = crate::passes::TILE_SIZE as i32;
+    let (tx, ty) = crate::passes::dof::coc_edges::unpack_pixel(packed_tile);
+    let first = [tx * side, ty * side];
+    (first[1]..(first[1] + side).min(size[1]))
+        .flat_map(move |y| (first[0]..(first[0] + side).min(size[0])).map(move |x| [x, y]))
+}
+
 impl Twin for MbGatherShader {
-    fn cpu(pc: &MbGatherPush, _groups: [u32; 3], b: &mut [HostData]) {
+    fn cpu(pc: &MbGatherPush, groups: [u32; 3], b: &mut [HostData]) {
         let (neighbor, tile) = (crate::passes::twin::floats(b[4].words()), crate::passes::twin::floats(b[5].words()));
         let (color, depth, velocity) = (b[0].image().clone(), b[1].image().clone(), b[2].image().clone());
         let input =
             GatherInputs { color: &color, depth: &depth, velocity: &velocity, neighbor: &neighbor, tile: &tile };
+        let listed = b[6].words()[..groups[0] as usize].to_vec();
         let out = b[3].image_mut();
-        for y in 0..pc.size[1] {
-            for x in 0..pc.size[0] {
-                let v = gather_pixel(&input, pc, [x, y]);
-                out.texel_mut(x as u32, y as u32).copy_from_slice(&v);
-            }
+        for p in listed.into_iter().flat_map(|t| listed_tile_pixels(t, pc.size)) {
+            let v = gather_pixel(&input, pc, p);
+            out.texel_mut(p[0] as u32, p[1] as u32).copy_from_slice(&v);
         }
     }
 

@@ -40,6 +40,20 @@ impl ShutterPush {
         }
     }
 
+    /// A global box shutter open from `open_frames` to `close_frames` on every line: the
+    /// extent of a rolling one, as a test that must hold for every line's open time reads it.
+    pub fn spanning(open_frames: f32, close_frames: f32) -> ShutterPush {
+        ShutterPush {
+            open_frames,
+            close_frames,
+            ramp_frames: 0.0,
+            roll_x: 0.0,
+            roll_y: 0.0,
+            roll_c: 0.0,
+            band_top_px: 0,
+        }
+    }
+
     /// The open time of the pixel whose centre is `q` (in the band's pixels; its row in the
     /// frame's).
     pub fn window(&self, q: [f32; 2]) -> [f32; 2] {
