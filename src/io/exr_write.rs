@@ -466,7 +466,11 @@ fn write_exr_planes_to(
     let layer = Layer::new(size, attrs, opts.compression.encoding(), AnyChannels::sort(list));
     shared.display_window = display;
     let image = exr::image::Image::new(shared, layer);
-    image.write().to_buffered(out).map_err(|source| IoError::ExrEncode { path: path.into(), source })
+    let written = match super::exr_zip::writes(opts.compression.encoding().compression) {
+        true => super::exr_zip::write_image(out, &image),
+        false => image.write().to_buffered(out),
+    };
+    written.map_err(|source| IoError::ExrEncode { path: path.into(), source })
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ pub mod camera_file;
 pub mod colour_config;
 pub mod exr_read;
 pub mod exr_write;
+mod exr_zip;
 pub mod film_file;
 pub mod flare_lights;
 pub mod lens_analysis;

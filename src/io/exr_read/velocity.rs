@@ -192,14 +192,16 @@ pub(super) fn vector_image(v: &Vector, factor: [f32; 2], scale: f32, flip_y: boo
     let mut im = interleave(&[v.x, v.y], 2, 0.0);
     let flip = if flip_y { -1.0 } else { 1.0 };
     let s = [v.sx * factor[0] * scale, v.sy * factor[1] * scale * flip];
-    for (px, s) in im.data.iter_mut().zip(s.iter().cycle()) {
-        *px = if px.is_finite() {
-            // `+ 0.0` turns -0 into +0.
-            *px * s + 0.0
-        } else {
-            *nonfinite += 1;
-            0.0
-        };
+    for pair in im.data.chunks_exact_mut(2) {
+        for (px, s) in pair.iter_mut().zip(s) {
+            *px = if px.is_finite() {
+                // `+ 0.0` turns -0 into +0.
+                *px * s + 0.0
+            } else {
+                *nonfinite += 1;
+                0.0
+            };
+        }
     }
     im
 }

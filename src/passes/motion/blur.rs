@@ -10,7 +10,7 @@
 use super::edges::{changed_pixels, EdgeInputs, EdgeKernels, MbEdgesPush};
 use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
 use super::neighbor::{MbNeighborPush, MbNeighborShader, NeighborOutputs, GATHER_FROM_PX};
-use super::path::{clamped_velocity, ShutterPush};
+use super::path::ShutterPush;
 use super::still::{MbStillBindings, MbStillPush, MbStillShader};
 use super::tiles::{MbTilesPush, MbTilesShader};
 use super::{edges, gather, neighbor, still, tiles};
@@ -167,21 +167,33 @@ pub fn motion_extent(
     let max_speed_px = (motion.max_blur_px / timing.open_length_frames().max(1e-9)) as f32;
     let (earliest, latest) = timing.extent_frames();
     let (t_fwd, t_back) = (latest.max(0.0), (-earliest).max(0.0));
-    let (mut speed_px, mut reach_px, mut blur_px) = (0.0f64, 0.0f64, 0.0f64);
+    // The longest path over one line's open time (both halves when it straddles the frame
+    // time): |next| times the open time after the frame time plus |prev| times the time before.
+    let (o, c) = (timing.open_frames, timing.close_frames);
+    let (after, before) = ((c.max(0.0) - o.max(0.0)) as f32, ((-o).max(0.0) - (-c).max(0.0)) as f32);
+    let (t_fwd_f, t_back_f) = (t_fwd as f32, t_back as f32);
+    // A velocity's length after clamped_velocity's clamp (the shaders' clamp_speed), to f32
+    // rounding: the limit where it is longer, 0 where its length overflows (clamp_speed scales
+    // it by 0 there), NaN kept (no max below takes it). One f32 square root per vector: in f64,
+    // or with libm's hypot, this loop over the pixels was 4-5% of a shot's CPU time.
+    let clamped_length = |x: f32, y: f32| {
+        let l = (x * x + y * y).sqrt();
+        match l > max_speed_px {
+            true if l.is_finite() => max_speed_px,
+            true => 0.0,
+            false => l,
+        }
+    };
+    let (mut speed, mut reach, mut blur) = (0.0f32, 0.0f32, 0.0f32);
     for i in 0..next.len() / 2 {
         let (nx, ny) = (next[2 * i], next[2 * i + 1]);
         let (px, py) = prev.map_or((-nx + 0.0, -ny + 0.0), |p| (p[2 * i], p[2 * i + 1]));
-        let v = clamped_velocity(&[nx, ny, px, py], max_speed_px);
-        // sqrt of the squares (exact in f64 for any f32), not hypot: libm's hypot made this loop
-        // over the pixels 5% of a shot's CPU time.
-        let length = |x: f32, y: f32| (x as f64 * x as f64 + y as f64 * y as f64).sqrt();
-        let (next, prev) = (length(v[0], v[1]), length(v[2], v[3]));
-        speed_px = speed_px.max(next).max(prev);
-        reach_px = reach_px.max(next * t_fwd).max(prev * t_back);
-        // The longest path over one line's open time (both halves when it straddles the frame time).
-        let (o, c) = (timing.open_frames, timing.close_frames);
-        blur_px = blur_px.max(next * c.max(0.0) - next * o.max(0.0) + prev * (-o).max(0.0) - prev * (-c).max(0.0));
+        let (next, prev) = (clamped_length(nx, ny), clamped_length(px, py));
+        speed = speed.max(next).max(prev);
+        reach = reach.max(next * t_fwd_f).max(prev * t_back_f);
+        blur = blur.max(next * after + prev * before);
     }
+    let (speed_px, mut reach_px, blur_px) = (speed as f64, reach as f64, blur as f64);
     if timing.readout_frames > 0.0 {
         reach_px = reach_px.max(speed_px * timing.readout_frames);
     }
@@ -321,5 +333,51 @@ impl Pass for MotionBlur {
         rec.end_pass();
         images.set_color(None, output);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::camera::Motion;
+    use crate::model::frame::Frame;
+    use crate::optics::shutter::{RollingDirection, ShutterCurve, ShutterPosition, ShutterTiming};
+    use crate::passes::motion::path::clamped_velocity;
+
+    #[test]
+    fn the_extent_is_that_of_the_clamped_vectors_the_shaders_move() {
+        // The plan's extent (the reach sizes the gather's neighbourhood and a band's apron) must
+        // be that of the velocities after clamp_speed, the clamp every shader applies: measured
+        // here in f64 from path.rs's clamped_velocity, on ordinary, clamped, overflowing and NaN
+        // vectors, with a shutter opening before the frame time and a rolling readout.
+        let values = [3.0f32, -40.0, 0.2, 250.0, 1e30, f32::NAN, -0.0, 7.5, f32::INFINITY, -12.0, 0.0, 60.0];
+        let next: Vec<f32> = values.iter().cycle().take(2 * 30).copied().collect();
+        let prev: Vec<f32> = values.iter().rev().cycle().take(2 * 30).map(|v| -0.5 * v).collect();
+        let timing = ShutterTiming::new(0.6 / 24.0, 24.0, ShutterPosition::Centred, ShutterCurve::Box).with_rolling(
+            0.01,
+            24.0,
+            RollingDirection::Down,
+        );
+        let motion = Motion { fps: 24.0, fps_given: true, timing, mode: MotionBlurMode::Fast, max_blur_px: 48.0 };
+        let frame = Frame::new(6, 5, vec![0.0; 4 * 30], vec![1.0; 30]).with_velocity(next.clone(), Some(prev.clone()));
+        let got = motion_extent(&frame, &motion).expect("a velocity pass");
+        let max_speed = (48.0 / timing.open_length_frames()) as f32;
+        let (earliest, latest) = timing.extent_frames();
+        let (o, c) = (timing.open_frames, timing.close_frames);
+        let (mut speed, mut reach, mut blur) = (0.0f64, 0.0f64, 0.0f64);
+        for i in 0..30 {
+            let v = clamped_velocity(&[next[2 * i], next[2 * i + 1], prev[2 * i], prev[2 * i + 1]], max_speed);
+            let (n, p) = ((v[0] as f64).hypot(v[1] as f64), (v[2] as f64).hypot(v[3] as f64));
+            speed = speed.max(n).max(p);
+            reach = reach.max(n * latest.max(0.0)).max(p * (-earliest).max(0.0));
+            blur = blur.max(n * (c.max(0.0) - o.max(0.0)) + p * ((-o).max(0.0) - (-c).max(0.0)));
+        }
+        reach = reach.max(speed * timing.readout_frames);
+        assert!(speed > 0.99 * max_speed as f64, "some vector is clamped: {speed} against {max_speed}");
+        for (what, g, want) in
+            [("speed", got.speed_px, speed), ("reach", got.reach_px, reach), ("blur", got.blur_px, blur)]
+        {
+            assert!((g - want).abs() <= 1e-5 * want, "{what}: {g} px, the clamped vectors' {want} px");
+        }
     }
 }

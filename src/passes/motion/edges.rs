@@ -279,6 +279,23 @@ impl Twin for MbEdgesShader {
     }
 }
 
+/// The pushes of the steps that list the tiles where a candidate can be: `mb_tiles` on the
+/// velocity as stored, then `mb_neighbor` over each tile's 3x3 tiles (a candidate's neighbours
+/// lie within one pixel) with every line's open time the whole extent (the list's test takes
+/// the extent's ends), from [`EDGE_TILE_FROM_PX`] of reach.
+pub fn tile_pushes(push: &MbEdgesPush) -> (MbTilesPush, MbNeighborPush) {
+    let size = push.size;
+    let tiles = [(size[0] as u32).div_ceil(TILE_SIZE) as i32, (size[1] as u32).div_ceil(TILE_SIZE) as i32];
+    let neighbor = MbNeighborPush {
+        size,
+        tiles,
+        shutter: ShutterPush::spanning(-push.t_back, push.t_fwd),
+        search_tiles: 1,
+        gather_from_px: EDGE_TILE_FROM_PX,
+    };
+    (MbTilesPush { size, tiles, max_speed_px: push.max_speed_px }, neighbor)
+}
+
 /// The frame's colour, and its depth and velocity with the anti-aliased edges resolved when
 /// `push` asks for it (else as stored): the inputs both motion-blur paths start from.
 pub fn inputs(
@@ -307,28 +324,14 @@ pub fn record(
     let (w, h) = (push.size[0] as u32, push.size[1] as u32);
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     rec.begin_pass(TILES_NAME);
-    let tiles = [w.div_ceil(TILE_SIZE) as i32, h.div_ceil(TILE_SIZE) as i32];
-    let tile_count = (tiles[0] * tiles[1]) as u64;
+    let tile_count = (w.div_ceil(TILE_SIZE) * h.div_ceil(TILE_SIZE)) as u64;
     let tile_motion = rec.create_buffer("motion edge tiles' longest velocities", tile_count * 16, storage)?;
     let neighbor_motion = rec.create_buffer("motion edge tiles' neighbourhoods", tile_count * 16, storage)?;
     let tile_args = rec.create_args_buffer("motion edge tile list (indirect dispatch)", MB_TILE_ARGS_WORDS)?;
     let tile_list = rec.create_buffer("motion edge tile list", 2 * tile_count * 4, storage)?;
-    tiles::record(
-        &kernels.tiles,
-        rec,
-        velocity,
-        &tile_motion,
-        &MbTilesPush { size: push.size, tiles, max_speed_px: push.max_speed_px },
-    )?;
+    let (tiles_push, neighbor) = tile_pushes(push);
+    tiles::record(&kernels.tiles, rec, velocity, &tile_motion, &tiles_push)?;
     let lists = NeighborOutputs { neighbor_motion: &neighbor_motion, args: &tile_args, tile_list: &tile_list };
-    let neighbor = MbNeighborPush {
-        size: push.size,
-        tiles,
-        // Every pixel's open time the whole extent: the list's test uses the extent's ends.
-        shutter: ShutterPush::spanning(-push.t_back, push.t_fwd),
-        search_tiles: 1,
-        gather_from_px: EDGE_TILE_FROM_PX,
-    };
     neighbor::record(&kernels.neighbor, rec, &tile_motion, &lists, &neighbor)?;
     let velocity_out = rec.create_image("velocity (edges resolved)", w, h, vk::Format::R32G32B32A32_SFLOAT)?;
     let depth_out = rec.create_image("depth (edges resolved)", w, h, vk::Format::R32_SFLOAT)?;
@@ -426,30 +429,43 @@ mod tests {
         let (w, h) = (pc.size[0] as u32, pc.size[1] as u32);
         let image = |channels, texels: Vec<f32>| HostData::Image(HostImage::new(w, h, channels, texels));
         let n = (w * h) as usize;
+        // The tiles' step: mb_tiles, then mb_neighbor's lists.
+        let (tiles_push, neighbor_push) = tile_pushes(pc);
+        let tile_count = (tiles_push.tiles[0] * tiles_push.tiles[1]) as usize;
+        let mut tiles = vec![image(4, velocity.to_vec()), HostData::Buffer(vec![0; 4 * tile_count])];
+        MbTilesShader::cpu(&tiles_push, [1, 1, 1], &mut tiles);
+        let mut lists = vec![
+            tiles[1].clone(),
+            HostData::Buffer(vec![0; 4 * tile_count]),
+            HostData::Buffer(vec![0; MB_TILE_ARGS_WORDS as usize]),
+            HostData::Buffer(vec![u32::MAX; 2 * tile_count]),
+        ];
+        MbNeighborShader::cpu(&neighbor_push, [1, 1, 1], &mut lists);
+        let listed_tiles = lists[2].words()[MB_TILE_ARGS_MOVING as usize];
         let mut list = vec![
             image(1, depth.to_vec()),
             image(4, velocity.to_vec()),
-            image(4, vec![f32::NAN; 4 * n]),
-            image(1, vec![f32::NAN; n]),
             HostData::Buffer(vec![0; MB_EDGE_ARGS_WORDS as usize]),
             HostData::Buffer(vec![u32::MAX; n]),
+            lists[3].clone(),
         ];
-        MbEdgeListShader::cpu(pc, [1, 1, 1], &mut list);
-        let args = list[4].words().to_vec();
+        MbEdgeListShader::cpu(pc, [listed_tiles, 1, 1], &mut list);
+        let args = list[2].words().to_vec();
         let count = args[MB_EDGE_ARGS_COUNT as usize];
         assert_eq!(args[MB_EDGE_ARGS_DISPATCH as usize], count.div_ceil(MB_EDGE_GROUP_SIZE));
         assert_eq!(args[1..3], [1, 1]);
+        // The resolve's outputs start as copies of the velocity and depth (transfer copies).
         let mut resolve = vec![
             image(4, color.to_vec()),
             list[0].clone(),
             list[1].clone(),
+            list[1].clone(),
+            list[0].clone(),
             list[2].clone(),
             list[3].clone(),
-            list[4].clone(),
-            list[5].clone(),
         ];
         MbEdgesShader::cpu(pc, [args[MB_EDGE_ARGS_DISPATCH as usize], 1, 1], &mut resolve);
-        let mut listed = list[5].words()[..count as usize].to_vec();
+        let mut listed = list[3].words()[..count as usize].to_vec();
         listed.sort_unstable();
         let changed = resolve[5].words()[MB_EDGE_ARGS_CHANGED as usize];
         (resolve[3].image().texels.clone(), resolve[4].image().texels.clone(), listed, changed)
