@@ -1,4 +1,5 @@
 #version 450
+#extension GL_EXT_control_flow_attributes : require
 // Motion blur, step 3: the reconstruction gather (after McGuire et al. 2012 and Guertin,
 // McGuire & Nowrouzezahrai 2014), written as the scatter it stands for: a texel Y spreads its
 // light along its own path over the shutter, and pixel X receives the share of the shutter's
@@ -153,10 +154,15 @@ void main() {
     float same_prev = same_direction(prev_n, prev_x);
     // Sources whose forward half ends on X lie back along their next velocity; those whose
     // backward half ends on X, back along their previous velocity.
-    sample_line(l, p, z_x, win, -next_n, reach_next_n + 0.5, same_next, reach_next_x + 0.5, false, 0);
-    sample_line(l, p, z_x, win, -next_x, reach_next_x + 0.5, same_next, reach_next_n + 0.5, true, 1);
-    sample_line(l, p, z_x, win, -prev_n, reach_prev_n + 0.5, same_prev, reach_prev_x + 0.5, false, 2);
-    sample_line(l, p, z_x, win, -prev_x, reach_prev_x + 0.5, same_prev, reach_prev_n + 0.5, true, 3);
+    // The four lines in a loop rather than four inlined calls: the same samples, and a quarter
+    // of the code for the driver to compile (lavapipe took 60-75 ms to create the pipeline).
+    vec2 dirs[4] = vec2[4](-next_n, -next_x, -prev_n, -prev_x);
+    float reaches[4] = float[4](reach_next_n, reach_next_x, reach_prev_n, reach_prev_x);
+    [[dont_unroll]] for (int k = 0; k < 4; ++k) {
+        int other = k ^ 1;
+        float same = k < 2 ? same_next : same_prev;
+        sample_line(l, p, z_x, win, dirs[k], reaches[k] + 0.5, same, reaches[other] + 0.5, (k & 1) == 1, k);
+    }
 
     float fg_a = min(l.fg_a, 1.0);
     vec4 fg = l.fg_a > 0.0 ? l.fg * (fg_a / l.fg_a) : vec4(0.0);
