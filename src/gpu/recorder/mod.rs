@@ -224,27 +224,6 @@ impl Recorder {
         unsafe { self.gpu.device().cmd_fill_buffer(self.cb, buffer.buffer, 0, vk::WHOLE_SIZE, value) };
     }
 
-    /// Copy all of `src` into `dst` (same size and format, both in layout GENERAL): a transfer
-    /// read and write, ordered and made visible by the caller's barriers before and after.
-    pub fn copy_image(&mut self, src: &GpuImage, dst: &GpuImage) {
-        let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
-        let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
-            width: src.width.min(dst.width),
-            height: src.height.min(dst.height),
-            depth: 1,
-        });
-        unsafe {
-            self.gpu.device().cmd_copy_image(
-                self.cb,
-                src.image,
-                vk::ImageLayout::GENERAL,
-                dst.image,
-                vk::ImageLayout::GENERAL,
-                &[region],
-            )
-        };
-    }
-
     /// A storage image (also a copy source and target) that lives until the recording is
     /// dropped, after the submission completed.
     pub fn create_image(

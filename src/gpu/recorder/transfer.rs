@@ -1,8 +1,30 @@
-//! Uploads into images and buffers, and read-backs of images after the submission.
+//! Uploads into images and buffers, copies between images, and read-backs of images after the
+//! submission.
 
 use super::*;
 
 impl Recorder {
+    /// Copy all of `src` into `dst` (same size and format, both in layout GENERAL): a transfer
+    /// read and write, ordered and made visible by the caller's barriers before and after.
+    pub fn copy_image(&mut self, src: &GpuImage, dst: &GpuImage) {
+        let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
+        let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
+            width: src.width.min(dst.width),
+            height: src.height.min(dst.height),
+            depth: 1,
+        });
+        unsafe {
+            self.gpu.device().cmd_copy_image(
+                self.cb,
+                src.image,
+                vk::ImageLayout::GENERAL,
+                dst.image,
+                vk::ImageLayout::GENERAL,
+                &[region],
+            )
+        };
+    }
+
     /// Upload f32 pixels into images. Afterwards each image is in layout GENERAL and its
     /// contents are visible to compute-shader reads: the barriers below are the hand-off from
     /// the host's writes or the copy to whichever pass reads the image first.
