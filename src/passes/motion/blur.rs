@@ -9,10 +9,10 @@
 
 use super::edges::{changed_pixels, EdgeInputs, EdgeKernels, MbEdgesPush};
 use super::gather::{MbGatherBindings, MbGatherPush, MbGatherShader};
-use super::neighbor::{MbNeighborPush, MbNeighborShader, NeighborOutputs, GATHER_FROM_PX};
+use super::neighbor::{MbNeighborPush, NeighborOutputs, GATHER_FROM_PX};
 use super::path::ShutterPush;
 use super::still::{MbStillBindings, MbStillPush, MbStillShader};
-use super::tiles::{MbTilesPush, MbTilesShader};
+use super::tiles::MbTilesPush;
 use super::{edges, gather, neighbor, still, tiles};
 use crate::gpu::shaders::motion::{MB_TILE_ARGS_MOVING, MB_TILE_ARGS_STILL, MB_TILE_ARGS_WORDS};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
@@ -211,11 +211,9 @@ pub struct MotionBlurParams {
     pub search_tiles: i32,
 }
 
-/// The pipelines of the fast path, one per step.
+/// The pipelines of the fast path, one per step (the tile steps' shared with the edge resolve).
 pub struct MotionBlur {
     edges: EdgeKernels,
-    tiles: Kernel<MbTilesShader>,
-    neighbor: Kernel<MbNeighborShader>,
     gather: Kernel<MbGatherShader>,
     still: Kernel<MbStillShader>,
 }
@@ -247,13 +245,7 @@ impl Pass for MotionBlur {
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
-        Ok(MotionBlur {
-            edges: EdgeKernels::new(gpu)?,
-            tiles: Kernel::new(gpu)?,
-            neighbor: Kernel::new(gpu)?,
-            gather: Kernel::new(gpu)?,
-            still: Kernel::new(gpu)?,
-        })
+        Ok(MotionBlur { edges: EdgeKernels::new(gpu)?, gather: Kernel::new(gpu)?, still: Kernel::new(gpu)? })
     }
 
     /// The colour, depth and velocity in; a new colour written for every pixel.
@@ -268,7 +260,7 @@ impl Pass for MotionBlur {
         let size = [m.width as i32, m.height as i32];
         rec.begin_pass(tiles::NAME);
         tiles::record(
-            &self.tiles,
+            &self.edges.tiles,
             rec,
             &velocity,
             &tile_motion,
@@ -285,7 +277,7 @@ impl Pass for MotionBlur {
             search_tiles: p.search_tiles,
             gather_from_px: GATHER_FROM_PX,
         };
-        neighbor::record(&self.neighbor, rec, &tile_motion, &lists, &neighbor)?;
+        neighbor::record(&self.edges.neighbor, rec, &tile_motion, &lists, &neighbor)?;
         rec.begin_pass(gather::NAME);
         let output = rec.create_image("color (motion blur)", m.width, m.height, vk::Format::R32G32B32A32_SFLOAT)?;
         // args: written by mb_neighbor with atomics, read as the indirect dispatches' sizes.

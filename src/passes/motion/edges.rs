@@ -118,8 +118,9 @@ impl Shader for MbEdgesShader {
 
 /// The resolve's pipelines: the tiles and their list, the candidates' list, the resolve.
 pub struct EdgeKernels {
-    tiles: Kernel<MbTilesShader>,
-    neighbor: Kernel<MbNeighborShader>,
+    /// Also the fast path's own tile steps (src/passes/motion/blur.rs): one pipeline each.
+    pub(super) tiles: Kernel<MbTilesShader>,
+    pub(super) neighbor: Kernel<MbNeighborShader>,
     list: Kernel<MbEdgeListShader>,
     resolve: Kernel<MbEdgesShader>,
 }
