@@ -4,6 +4,10 @@
 //! `#include "x.glsl"` resolves against `glsl/include/`. A shader error fails the build and
 //! prints file:line.
 //!
+//! A shader may also be compiled a second time with a macro defined, as a shader of its own: a
+//! line `// variant <name>: <MACRO>` in its source (e.g. a fallback for devices without subgroup
+//! operations, whose SPIR-V must not even declare their capability).
+//!
 //! The integer `#define`s of each include (`#define NAME 12`) become Rust constants in a module
 //! named after the file (`realcam::gpu::shaders::dof_tiles::ARGS_WORDS`), so buffer layouts and
 //! indirect-argument offsets are written once, in GLSL, and shared.
@@ -52,33 +56,30 @@ fn main() {
 
     let compiler = shaderc::Compiler::new().expect("shaderc compiler");
     let mut errors = Vec::new();
+    let mut variant_stems: Vec<String> = Vec::new();
     let mut table =
         String::from("/// Every embedded shader: (name, SPIR-V bytes).\npub static ALL: &[(&str, &[u8])] = &[\n");
     for name in &names {
         let path = glsl.join(name);
         println!("cargo:rerun-if-changed={}", path.display());
         let source = std::fs::read_to_string(&path).expect("readable shader");
-        let mut options = shaderc::CompileOptions::new().expect("shaderc options");
-        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
-        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-        options.set_generate_debug_info();
-        let inc = include_dir.clone();
-        options.set_include_callback(move |requested, _kind, from, _depth| {
-            let p = inc.join(requested);
-            std::fs::read_to_string(&p)
-                .map(|content| shaderc::ResolvedInclude { resolved_name: p.display().to_string(), content })
-                .map_err(|e| format!("{from}: cannot include {requested}: {e}"))
-        });
         let shown = format!("glsl/{}", name.display());
-        match compiler.compile_into_spirv(&source, shaderc::ShaderKind::Compute, &shown, "main", Some(&options)) {
-            Ok(artifact) => {
-                let stem = stem_of(name);
-                let spv = out.join(format!("{stem}.spv"));
-                std::fs::write(&spv, artifact.as_binary_u8()).expect("write spv");
-                table += &format!("    (\"{stem}\", include_bytes!(\"{}\")),\n", spv.display());
+        let mut builds = vec![(stem_of(name).to_string(), None)];
+        builds.extend(variants(&source));
+        for (stem, define) in builds {
+            if variant_stems.contains(&stem) || (define.is_some() && stems.contains(&stem.as_str())) {
+                errors.push(format!("{shown}: a second shader is named {stem}"));
             }
-            // shaderc's message already reads "glsl/effect/name.comp:LINE: error: ..."
-            Err(e) => errors.push(e.to_string()),
+            variant_stems.push(stem.clone());
+            match compile(&compiler, &include_dir, &source, &shown, define.as_deref()) {
+                Ok(spirv) => {
+                    let spv = out.join(format!("{stem}.spv"));
+                    std::fs::write(&spv, spirv).expect("write spv");
+                    table += &format!("    (\"{stem}\", include_bytes!(\"{}\")),\n", spv.display());
+                }
+                // shaderc's message already reads "glsl/effect/name.comp:LINE: error: ..."
+                Err(e) => errors.push(e),
+            }
         }
     }
     if !errors.is_empty() {
@@ -93,6 +94,44 @@ fn main() {
     table += "];\n";
     table += &constants;
     std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
+}
+
+/// The variants a shader's source declares: `// variant <name>: <MACRO>` lines, as (name, macro).
+fn variants(source: &str) -> Vec<(String, Option<String>)> {
+    source
+        .lines()
+        .filter_map(|line| line.trim().strip_prefix("// variant "))
+        .filter_map(|rest| rest.split_once(':'))
+        .map(|(name, define)| (name.trim().to_string(), Some(define.trim().to_string())))
+        .collect()
+}
+
+/// One shader's SPIR-V, with `define` defined when given.
+fn compile(
+    compiler: &shaderc::Compiler,
+    include_dir: &Path,
+    source: &str,
+    shown: &str,
+    define: Option<&str>,
+) -> Result<Vec<u8>, String> {
+    let mut options = shaderc::CompileOptions::new().expect("shaderc options");
+    if let Some(define) = define {
+        options.add_macro_definition(define, None);
+    }
+    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+    options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    options.set_generate_debug_info();
+    let inc = include_dir.to_path_buf();
+    options.set_include_callback(move |requested, _kind, from, _depth| {
+        let p = inc.join(requested);
+        std::fs::read_to_string(&p)
+            .map(|content| shaderc::ResolvedInclude { resolved_name: p.display().to_string(), content })
+            .map_err(|e| format!("{from}: cannot include {requested}: {e}"))
+    });
+    compiler
+        .compile_into_spirv(source, shaderc::ShaderKind::Compute, shown, "main", Some(&options))
+        .map(|artifact| artifact.as_binary_u8().to_vec())
+        .map_err(|e| e.to_string())
 }
 
 /// Collects the `.comp` files under `root/dir` (paths relative to `root`), `include/` left out.

@@ -78,6 +78,7 @@ fn gpu_with_budget(max_memory_bytes: Option<u64>) -> Gpu {
         device: std::env::var("REALCAM_DEVICE").ok(),
         pipeline_cache_dir: Some(std::env::temp_dir().join("realcam-test-pipeline-cache")),
         max_memory_bytes,
+        no_subgroup_ops: false,
     };
     Gpu::new(&options).unwrap_or_else(|e| panic!("opening the GPU: {e}"))
 }

@@ -347,6 +347,22 @@ fn every_dispatch_of_every_pass_matches_its_cpu_twin() {
         }
         ran.extend(plan.passes.iter().filter(|p| p.runs()).map(|p| p.name));
     }
+    // The shaders' variants for devices without subgroup operations (dof_sprites_plain), on the
+    // cases that run them.
+    let plain = gpu_without_subgroup_ops();
+    let plain_cases = twin_cases().into_iter().filter(|(name, ..)| name.starts_with("tiled"));
+    for (name, frame, camera) in plain_cases {
+        let plan = planner::plan(&frame, &camera);
+        let (_, checks) =
+            Renderer::new(&plain, &plan).expect("pipelines").render_with_twin_checks(&frame, &plan).expect("render");
+        assert_validation_clean(&plain);
+        for c in checks.iter().filter(|c| c.shader.ends_with("_plain")) {
+            checked.insert(c.shader);
+            if let Err(e) = &c.result {
+                failures.push(format!("{name}, no subgroup operations: pass {}: {e}", c.pass));
+            }
+        }
+    }
     assert!(failures.is_empty(), "{} dispatches differ from their twins:\n{}", failures.len(), failures.join("\n"));
     for entry in PASS_ORDER {
         assert!(ran.contains(entry.name), "pass {} ran in no case: add one to twin_cases", entry.name);
@@ -432,6 +448,24 @@ fn the_tiled_depth_of_field_gives_the_same_bits_on_every_run() {
         let differing = r.iter().zip(&renders[0]).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "run {i}: {differing} values differ from run 0's");
     }
+}
+
+#[test]
+fn the_sprites_give_the_same_bits_with_and_without_subgroup_operations() {
+    // dof_sprites reads each tile's sprites once per subgroup and broadcasts them where the device
+    // can (lavapipe can); dof_sprites_plain, for devices that cannot, reads them in every
+    // invocation. Both add the same sprites in the same order: the same bits.
+    let frame = banded_frame(320, 96);
+    let mut camera = dof_camera(50.0, 1.4, 2.0, 6);
+    camera.max_coc = realcam::model::camera::CocLimit::Px(64.0);
+    camera.bokeh = BokehMode::Tiled;
+    let plan = planner::plan(&frame, &camera);
+    let (subgroup, profile) = render_plan(&gpu(), &frame, &plan);
+    let (plain, plain_profile) = render_plan(&gpu_without_subgroup_ops(), &frame, &plan);
+    let ran = |p: &realcam::gpu::Profile| p.passes.iter().filter(|t| t.name == "dof_sprites").count();
+    assert!(ran(&profile) > 0 && ran(&plain_profile) > 0, "the frame drew no sprites");
+    let differing = subgroup.iter().zip(&plain).filter(|(a, b)| a.to_bits() != b.to_bits()).count();
+    assert_eq!(differing, 0, "{differing} values differ between the two variants");
 }
 
 #[test]

@@ -44,24 +44,8 @@ layout(push_constant) uniform Push {
     float small_radius_px;      // in level units: larger CoC samples also go to fg_big
 } pc;
 
-// Bit (dy + 1) * 3 + (dx + 1): the tile at (dx, dy) from tile tc (the tile itself at bit 4) is of
-// this level's class.
-uint level_neighbours(ivec2 tc) {
-    int tile_count = pc.tiles.x * pc.tiles.y;
-    uint near = 0u;
-    for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-            ivec2 n = tc + ivec2(dx, dy);
-            if (outside(n, pc.tiles)) continue;
-            int cls = int(tile_radius_px[2 * tile_count + n.y * pc.tiles.x + n.x]);
-            if (cls == CLASS_LEVEL1 + pc.level - 1) near |= 1u << uint((dy + 1) * 3 + dx + 1);
-        }
-    }
-    return near;
-}
-
 // Whether a composite reads texel xy (in the tile, of side `side`): the tiles it is next to, in
-// the bits of level_neighbours (the tile itself takes every texel), against `near`.
+// the bits of level_list_near (the tile itself takes every texel), against `near`.
 bool texel_read(ivec2 xy, int side, uint near) {
     uint xs = 2u | (xy.x == 0 ? 1u : 0u) | (xy.x == side - 1 ? 4u : 0u);
     uint ys = 2u | (xy.y == 0 ? 1u : 0u) | (xy.y == side - 1 ? 4u : 0u);
@@ -93,10 +77,11 @@ void main() {
     int slot = int(gl_WorkGroupID.x) * (GROUP_SIZE / texels) + int(gl_LocalInvocationIndex) / texels;
     if (slot >= int(args[ARGS_LEVEL_TILES(pc.level)])) return;
     int tile_count = pc.tiles.x * pc.tiles.y;
-    uint t = level_list[(pc.level - 1) * tile_count + slot];
+    uint entry = level_list[(pc.level - 1) * tile_count + slot];
+    uint t = level_list_tile(entry);
     int lane = int(gl_LocalInvocationIndex) % texels;
     ivec2 tc = ivec2(t % uint(pc.tiles.x), t / uint(pc.tiles.x));
-    uint near = level_neighbours(tc);
+    uint near = level_list_near(entry);
     // A tile of the level: its texels row by row; a neighbour: in ring order.
     ivec2 xy = (near & 16u) != 0u ? ivec2(lane % side, lane / side) : ring_texel(lane, side);
     ivec2 p = tc * side + xy;

@@ -29,6 +29,16 @@
 #define LIST_SPRITE_TILES 10
 #define LIST_COUNT 11
 
+// An entry of a level's gather list (dof_level_lists.comp): the tile's index in the low
+// LEVEL_LIST_TILE_BITS bits, above them the tiles of its 3x3 neighbourhood of the level's class
+// (bit (dy + 1) * 3 + dx + 1; bit 4 the tile itself), which decide the texels its composites
+// read (dof_level_gather.comp). Worked out once per tile there rather than by every texel of the
+// gather: lavapipe reads a buffer lane by lane at an index it cannot prove uniform, and the nine
+// class reads were a fifth of the level-2 gather's time.
+#define LEVEL_LIST_TILE_BITS 23
+uint level_list_tile(uint entry) { return entry & ((1u << LEVEL_LIST_TILE_BITS) - 1u); }
+uint level_list_near(uint entry) { return entry >> LEVEL_LIST_TILE_BITS; }
+
 // The args buffer of indirect dispatches (x, y, z): per class one workgroup per tile (its x is
 // the class's tile count), per level the level gather's workgroups, the sprite binning's (one
 // invocation per sprite); the sprite counters; the level gathers' tile counts; the highlight

@@ -25,14 +25,19 @@ pub struct GpuOptions {
     /// At most this much GPU memory for a frame's images (`--max-gpu-memory`); a frame that needs
     /// more is rendered in bands. `None`: the device's local heap.
     pub max_memory_bytes: Option<u64>,
+    /// Use no subgroup operations even where the device has them: the shaders' variants for
+    /// devices without them run instead (tests of those variants).
+    pub no_subgroup_ops: bool,
 }
 
 impl GpuOptions {
-    /// Options from the environment: `REALCAM_VALIDATE=1` turns validation on, `REALCAM_DEVICE` picks a device.
+    /// Options from the environment: `REALCAM_VALIDATE=1` turns validation on, `REALCAM_DEVICE` picks a device,
+    /// `REALCAM_NO_SUBGROUP_OPS=1` runs the shaders' variants without subgroup operations.
     pub fn from_env() -> Self {
         let validation = std::env::var("REALCAM_VALIDATE").is_ok_and(|v| v != "0" && !v.is_empty());
         let device = std::env::var("REALCAM_DEVICE").ok().filter(|d| !d.is_empty());
-        GpuOptions { validation, device, pipeline_cache_dir: None, max_memory_bytes: None }
+        let no_subgroup_ops = std::env::var("REALCAM_NO_SUBGROUP_OPS").is_ok_and(|v| v != "0" && !v.is_empty());
+        GpuOptions { validation, device, pipeline_cache_dir: None, max_memory_bytes: None, no_subgroup_ops }
     }
 }
 
@@ -94,6 +99,9 @@ pub(crate) struct Shared {
     pub device_local_bytes: u64,
     /// Compute pipelines created so far (see [`Gpu::pipelines_created`]).
     pub pipelines_created: AtomicU64,
+    /// Whether compute shaders may broadcast a value within a subgroup (subgroupBroadcast:
+    /// VK_SUBGROUP_FEATURE_BALLOT_BIT in the compute stage), unless the options turn it off.
+    pub subgroup_broadcast: bool,
     /// The formats whose images live in mapped host memory, linear (see [`Gpu::create_image`]):
     /// on a device that runs on the CPU, those it can store to and copy with linear tiling.
     pub host_image_formats: Vec<vk::Format>,
@@ -234,6 +242,7 @@ impl Gpu {
             (heap, _) => heap,
         };
         let host_image_formats = Self::host_image_formats(&instance, physical_device, &info);
+        let subgroup_broadcast = !options.no_subgroup_ops && Self::has_subgroup_broadcast(&instance, physical_device);
         log::info!("GPU: {info}");
         let shared = Shared {
             _entry: entry,
@@ -258,6 +267,7 @@ impl Gpu {
             device_local_bytes,
             pipelines_created: AtomicU64::new(0),
             host_image_formats,
+            subgroup_broadcast,
         };
         let gpu = Gpu { shared: Arc::new(shared) };
         gpu.set_name(gpu.shared.queue, "realcam compute queue");
@@ -374,6 +384,15 @@ impl Gpu {
             .unwrap_or(0)
     }
 
+    /// Whether the device's compute stage has subgroup ballot operations (subgroupBroadcast).
+    unsafe fn has_subgroup_broadcast(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> bool {
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+        instance.get_physical_device_properties2(physical_device, &mut props2);
+        subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT)
+    }
+
     /// The formats of [`HOST_IMAGE_FORMATS`] a CPU device can keep as linear storage images.
     unsafe fn host_image_formats(
         instance: &ash::Instance,
@@ -481,6 +500,12 @@ impl Gpu {
 
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
+    }
+
+    /// Whether compute shaders may use subgroupBroadcast (see [`GpuOptions::no_subgroup_ops`]);
+    /// passes whose shader has a variant without subgroup operations pick it where not.
+    pub fn subgroup_broadcast(&self) -> bool {
+        self.shared.subgroup_broadcast
     }
 
     /// The device memory in use now (the live allocations) and held (the allocator's blocks,

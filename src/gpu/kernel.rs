@@ -67,6 +67,27 @@ pub trait Shader: 'static {
     type Bindings<'a>: ShaderBindings;
     /// The `push_constant` block, byte for byte (`#[repr(C)]`, no padding).
     type Push: bytemuck::Pod;
+    /// The name of the shader's variant compiled without subgroup operations (a `// variant`
+    /// line in its source: build.rs), for devices that have none; `None` when the shader uses
+    /// none. The same bindings, push constants and twin.
+    const WITHOUT_SUBGROUP_OPS: Option<&'static str> = None;
+}
+
+/// The SPIR-V module shader `S` runs as on `gpu`: its variant without subgroup operations
+/// where the device cannot broadcast within a subgroup.
+fn module_name<S: Shader>(gpu: &Gpu) -> &'static str {
+    match S::WITHOUT_SUBGROUP_OPS {
+        Some(plain) if !gpu.subgroup_broadcast() => plain,
+        _ => S::NAME,
+    }
+}
+
+/// The module's SPIR-V, its interface checked against `S`'s declaration.
+fn checked_spirv<S: Shader>(name: &'static str) -> GpuResult<&'static [u8]> {
+    let spirv = shaders::spirv(name)?;
+    let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: name, message })?;
+    check_interface(name, declaration::<S>(), std::mem::size_of::<S::Push>() as u32, &reflected)?;
+    Ok(spirv)
 }
 
 /// The bindings of shader `S` in binding order.
@@ -236,11 +257,10 @@ impl<S: Twin> Kernel<S> {
     /// Create the pipeline after checking the SPIR-V's bindings and push-constant size against
     /// `S::BINDINGS` and `S::Push`.
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let spirv = shaders::spirv(S::NAME)?;
-        let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: S::NAME, message })?;
+        let name = module_name::<S>(gpu);
+        let spirv = checked_spirv::<S>(name)?;
         let push_bytes = std::mem::size_of::<S::Push>() as u32;
-        check_interface(S::NAME, declaration::<S>(), push_bytes, &reflected)?;
-        let pipeline = ComputePipeline::new(gpu, S::NAME, spirv, declaration::<S>(), push_bytes, &[])?;
+        let pipeline = ComputePipeline::new(gpu, name, spirv, declaration::<S>(), push_bytes, &[])?;
         Ok(Kernel { pipeline, _shader: PhantomData })
     }
 
@@ -277,6 +297,8 @@ impl<S: Twin> Kernel<S> {
 /// branching it saves registers.
 pub struct SpecializedKernel<S: Twin> {
     gpu: Gpu,
+    /// The SPIR-V module (`S::NAME`, or its variant without subgroup operations).
+    module: &'static str,
     variants: std::sync::Mutex<Vec<(Vec<u32>, std::sync::Arc<ComputePipeline>)>>,
     _shader: PhantomData<S>,
 }
@@ -285,10 +307,9 @@ impl<S: Twin> SpecializedKernel<S> {
     /// Check the SPIR-V's interface against `S` now; pipelines come with the first dispatch of
     /// each set of constants.
     pub fn new(gpu: &Gpu) -> GpuResult<Self> {
-        let spirv = shaders::spirv(S::NAME)?;
-        let reflected = interface(spirv).map_err(|message| GpuError::Interface { shader: S::NAME, message })?;
-        check_interface(S::NAME, declaration::<S>(), std::mem::size_of::<S::Push>() as u32, &reflected)?;
-        Ok(SpecializedKernel { gpu: gpu.clone(), variants: Default::default(), _shader: PhantomData })
+        let module = module_name::<S>(gpu);
+        checked_spirv::<S>(module)?;
+        Ok(SpecializedKernel { gpu: gpu.clone(), module, variants: Default::default(), _shader: PhantomData })
     }
 
     fn pipeline(&self, constants: &[u32]) -> GpuResult<std::sync::Arc<ComputePipeline>> {
@@ -299,10 +320,10 @@ impl<S: Twin> SpecializedKernel<S> {
             return Ok(p.clone());
         }
         let push_bytes = std::mem::size_of::<S::Push>() as u32;
-        let spirv = shaders::spirv(S::NAME)?;
+        let spirv = shaders::spirv(self.module)?;
         let p = std::sync::Arc::new(ComputePipeline::new(
             &self.gpu,
-            S::NAME,
+            self.module,
             spirv,
             declaration::<S>(),
             push_bytes,

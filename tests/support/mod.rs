@@ -12,11 +12,22 @@ use std::path::PathBuf;
 /// The GPU with the Khronos validation layer and synchronization validation on. Tests fail if
 /// the layer is missing: CI installs it (vulkan-validationlayers).
 pub fn gpu() -> Gpu {
+    gpu_with(false)
+}
+
+/// [`gpu`] that uses no subgroup operations even where the device has them: the shaders'
+/// variants for devices without them run (GpuOptions::no_subgroup_ops).
+pub fn gpu_without_subgroup_ops() -> Gpu {
+    gpu_with(true)
+}
+
+fn gpu_with(no_subgroup_ops: bool) -> Gpu {
     let options = GpuOptions {
         validation: true,
         device: std::env::var("REALCAM_DEVICE").ok(),
         pipeline_cache_dir: Some(std::env::temp_dir().join("realcam-test-pipeline-cache")),
         max_memory_bytes: None,
+        no_subgroup_ops,
     };
     Gpu::new(&options).unwrap_or_else(|e| panic!("opening the GPU with validation: {e}"))
 }

@@ -3,7 +3,7 @@
 
 use super::aperture::{gather_reach, tap_disc_rows, tap_weight_at_reach, ApertureConstants, ApertureData};
 use super::classify::tiles_per_group;
-use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1};
+use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1, LEVEL_LIST_TILE_BITS};
 use crate::gpu::{GpuResult, HostData, Recorder, Shader, SpecializedKernel, Twin};
 use crate::passes::barriers::{after_compute_write, overwrite};
 use crate::passes::twin::floats;
@@ -89,7 +89,6 @@ impl Twin for LevelGatherShader {
         let (color, coc) = (b[0].image().clone(), b[1].image().clone());
         let (lists, radii) = (b[4].words().to_vec(), floats(b[5].words()));
         let tile_count = (pc.tiles[0] * pc.tiles[1]) as usize;
-        let class = &radii[2 * tile_count..3 * tile_count];
         let data = ApertureData::from_bindings(&b[6], &b[9], pc.aperture.shape_radius);
         let count = b[8].words()[(ARGS_LEVEL_TILES_BASE + pc.level as u32 - 1) as usize] as usize;
         let side = (crate::passes::TILE_SIZE >> pc.level) as i32;
@@ -99,10 +98,10 @@ impl Twin for LevelGatherShader {
         let mut coverage_out = b[10].image().clone();
         let slots = (groups[0] as usize * per_group).min(count);
         for slot in 0..slots {
-            let t = lists[(pc.level as usize - 1) * tile_count + slot] as usize;
+            let entry = lists[(pc.level as usize - 1) * tile_count + slot];
+            let (t, near) = ((entry & ((1 << LEVEL_LIST_TILE_BITS) - 1)) as usize, entry >> LEVEL_LIST_TILE_BITS);
             let tc = [(t % pc.tiles[0] as usize) as i32, (t / pc.tiles[0] as usize) as i32];
             let origin = [tc[0] * side, tc[1] * side];
-            let near = level_neighbours(class, pc.tiles, tc, pc.level);
             for texel in 0..side * side {
                 let xy = [texel % side, texel / side];
                 let p = [origin[0] + xy[0], origin[1] + xy[1]];

@@ -1,8 +1,10 @@
 //! Tiled depth of field: the tiles each pyramid level gathers, its own and their neighbours (so
-//! the composite's upsampling finds every texel it reads). Shader: glsl/dof/dof_level_lists.comp.
+//! the composite's upsampling finds every texel it reads), each entry with the tile's neighbours
+//! of the level (dof_tiles.glsl `level_list_near`). Shader: glsl/dof/dof_level_lists.comp.
 
 use super::classify::{level_gather_args_words, tiles_per_group};
-use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, CLASS_LEVEL1, LEVELS};
+use super::level_gather::level_neighbours;
+use crate::gpu::shaders::dof_tiles::{ARGS_LEVEL_TILES_BASE, LEVELS, LEVEL_LIST_TILE_BITS};
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::twin::floats;
 
@@ -32,23 +34,11 @@ impl Twin for LevelListsShader {
         let class = floats(&b[1].words()[2 * tile_count..3 * tile_count]);
         let mut lists = vec![Vec::new(); LEVELS as usize];
         for t in 0..tile_count {
-            let (tx, ty) = ((t as i32) % tiles[0], (t as i32) / tiles[0]);
-            let mut levels = 0u32;
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (nx, ny) = (tx + dx, ty + dy);
-                    if nx < 0 || ny < 0 || nx >= tiles[0] || ny >= tiles[1] {
-                        continue;
-                    }
-                    let c = class[(ny * tiles[0] + nx) as usize] as u32;
-                    if c >= CLASS_LEVEL1 {
-                        levels |= 1 << (c - CLASS_LEVEL1);
-                    }
-                }
-            }
+            let tc = [(t as i32) % tiles[0], (t as i32) / tiles[0]];
             for level in 1..=LEVELS {
-                if levels & (1 << (level - 1)) != 0 {
-                    lists[level as usize - 1].push(t as u32);
+                let near = level_neighbours(&class, *tiles, tc, level as i32);
+                if near != 0 {
+                    lists[level as usize - 1].push(t as u32 | near << LEVEL_LIST_TILE_BITS);
                 }
             }
         }
