@@ -79,7 +79,8 @@ void main() {
     tile_radius_px[2 * tile_count + t] = float(cls);
     // The tile's own pixels: the smallest |CoC| of its signed range (0 if the range holds 0).
     float own_min_radius = 0.5 * (own.x > 0.0 ? own.x : (own.y < 0.0 ? -own.y : 0.0));
-    bool blurred = cls >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px + float(EXACT_BLEND_ABOVE_SMALL_PX);
+    bool blurred = cls >= CLASS_LEVEL1
+        && own_min_radius >= exact_radius_px(cls - CLASS_LEVEL1 + 1, pc.small_radius_px) + float(EXACT_BLEND_ABOVE_SMALL_PX);
     int list = blurred ? LIST_BLURRED_LEVEL1 + cls - CLASS_LEVEL1 : cls;
     uint slot = atomicAdd(args[blurred ? ARGS_BLURRED_TILES(cls - CLASS_LEVEL1 + 1) : ARGS_TILES(cls)], 1u);
     tile_list[list * tile_count + int(slot)] = uint(t);

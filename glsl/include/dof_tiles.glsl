@@ -21,6 +21,17 @@
 // 1.5 px of radius, so that a rack focus moves a pixel across it over several frames rather
 // than one (a tile's mean jumped 4% in one frame where the two disagree).
 #define EXACT_BLEND_ABOVE_SMALL_PX 1
+// A pixel of a level tile whose own CoC radius is below the level's range (the level a
+// foreground's radius chose: a sharper subject or a nearer wall beside a strongly defocused
+// foreground or background) would be blurred by the level's texels more than its own CoC asks.
+// Up to EXACT_MAX_RADIUS_PX it takes the exact gather at full resolution instead, as a nearly
+// sharp pixel does (dof_composite.comp): the exact-gather radius of level L (exact_radius_px)
+// is the small-CoC radius at level 1, the largest radius of level L - 1 above, at most this.
+#define EXACT_MAX_RADIUS_PX 5
+float exact_radius_px(int level, float small_radius_px) {
+    if (level <= 1) return small_radius_px;
+    return max(small_radius_px, min(float(LEVEL_RADIUS << (level - 1)), float(EXACT_MAX_RADIUS_PX)));
+}
 // The tile lists: one per class, then per level the level's tiles with no nearly sharp pixel
 // (every pixel's CoC radius at least the small-CoC radius), which the composite takes without
 // its exact gather; the level classes' own lists keep the others. Last, the level tiles whose

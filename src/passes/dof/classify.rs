@@ -5,8 +5,8 @@
 
 use crate::gpu::shaders::dof_tiles::{
     ARGS_BIN_DISPATCH, ARGS_BLURRED_TILES_BASE, ARGS_DISPATCH_WORDS, ARGS_HIGHLIGHT_DISPATCH, ARGS_LEVEL_GATHER_BASE,
-    ARGS_SPRITE_TILES, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL, EXACT_BLEND_ABOVE_SMALL_PX, GROUP_SIZE,
-    LEVELS, LEVEL_RADIUS, LIST_BLURRED_LEVEL1, LIST_COUNT, LIST_SPRITE_TILES,
+    ARGS_SPRITE_TILES, CLASS_COPY, CLASS_COUNT, CLASS_LEVEL1, CLASS_SMALL, EXACT_BLEND_ABOVE_SMALL_PX,
+    EXACT_MAX_RADIUS_PX, GROUP_SIZE, LEVELS, LEVEL_RADIUS, LIST_BLURRED_LEVEL1, LIST_COUNT, LIST_SPRITE_TILES,
 };
 use crate::gpu::{GpuResult, HostData, Kernel, Recorder, Shader, Twin};
 use crate::passes::barriers::{buffer_after_compute_write, buffer_after_fill};
@@ -41,6 +41,16 @@ impl Shader for ClassifyShader {
     const NAME: &'static str = NAME;
     type Bindings<'a> = ClassifyBindings<'a>;
     type Push = ClassifyPush;
+}
+
+/// The radius below which a pixel of a tile of pyramid level `level` takes the exact gather
+/// (glsl/include/dof_tiles.glsl `exact_radius_px`): the small-CoC radius at level 1, above it
+/// the largest radius of the level below, at most EXACT_MAX_RADIUS_PX.
+pub fn exact_radius_px(level: u32, small_radius_px: f32) -> f32 {
+    if level <= 1 {
+        return small_radius_px;
+    }
+    small_radius_px.max(((LEVEL_RADIUS << (level - 1)) as f32).min(EXACT_MAX_RADIUS_PX as f32))
 }
 
 impl Twin for ClassifyShader {
@@ -86,12 +96,11 @@ impl Twin for ClassifyShader {
             radii[tile_count + t] = fg_radius;
             radii[2 * tile_count + t] = class as f32;
             let own_min_radius = 0.5 * if own[0] > 0.0 { own[0] } else { (-own[1]).max(0.0) };
-            let list =
-                if class >= CLASS_LEVEL1 && own_min_radius >= pc.small_radius_px + EXACT_BLEND_ABOVE_SMALL_PX as f32 {
-                    LIST_BLURRED_LEVEL1 + class - CLASS_LEVEL1
-                } else {
-                    class
-                };
+            let blurred = class >= CLASS_LEVEL1
+                && own_min_radius
+                    >= exact_radius_px(class - CLASS_LEVEL1 + 1, pc.small_radius_px)
+                        + EXACT_BLEND_ABOVE_SMALL_PX as f32;
+            let list = if blurred { LIST_BLURRED_LEVEL1 + class - CLASS_LEVEL1 } else { class };
             lists[list as usize].push(t as u32);
         }
         let args = b[1].words_mut();

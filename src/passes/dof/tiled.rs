@@ -12,7 +12,7 @@
 use super::aperture::{shape_radius_for, ApertureConstants, ApertureData};
 use super::bin::{BinBindings, BinPush, BinShader};
 use super::bin_order::{BinOrderBindings, BinOrderShader};
-use super::classify::{ClassifyBindings, ClassifyPush, ClassifyShader};
+use super::classify::{exact_radius_px, ClassifyBindings, ClassifyPush, ClassifyShader};
 use super::composite::{CompositeBindings, CompositePush, CompositeShader};
 use super::downsample::{
     candidate_buffer_bytes, sprite_buffer_bytes, DownsampleBindings, DownsamplePush, DownsampleShader,
@@ -520,7 +520,7 @@ impl TiledDof {
                 level: level as i32,
                 aperture: r.aperture.at_level(level),
                 layer_transition_px: r.layer_transition_px * to_level,
-                small_radius_px: p.small_radius_px * to_level,
+                small_radius_px: exact_radius_px(level, p.small_radius_px) * to_level,
             };
             let b = LevelGatherBindings {
                 color_level: &l.color,
@@ -555,7 +555,7 @@ impl TiledDof {
                     level_size: [l.color.width as i32, l.color.height as i32],
                     tiles: r.tiles,
                     level,
-                    small_radius_px: p.small_radius_px,
+                    small_radius_px: exact_radius_px(level as u32, p.small_radius_px),
                     aperture: r.aperture,
                     layer_transition_px: r.layer_transition_px,
                     list: list as i32,
