@@ -7,7 +7,7 @@ mod support;
 use ash::vk;
 use realcam::pipeline::planner::plan;
 use realcam::pipeline::render::Renderer;
-use support::{assert_validation_clean, dof_camera, gpu};
+use support::{assert_validation_clean, dof_camera, gpu, motion_camera, moving_bar_frame};
 
 #[test]
 fn an_image_beyond_the_device_limit_is_an_error_naming_it() {
@@ -91,7 +91,7 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
 
         let warm = gpu();
         let renderer = Renderer::empty(&warm);
-        renderer.create_likely(&camera).expect("likely pipelines");
+        renderer.create_likely(&camera, false).expect("likely pipelines");
         let likely = warm.pipelines_created();
         renderer.prepare(&p).expect("the plan's pipelines");
         let added = warm.pipelines_created() - likely;
@@ -108,6 +108,33 @@ fn the_pipelines_created_before_the_frame_is_read_are_those_its_plan_uses() {
         let cold = gpu();
         Renderer::new(&cold, &p).expect("pipelines");
         assert_eq!(cold.pipelines_created(), coc_pipelines + 14);
+    }
+}
+
+#[test]
+fn the_motion_blurs_pipelines_are_created_before_the_frame_when_its_headers_name_velocity() {
+    // The headers of the first frame's files say whether it likely holds a velocity pass
+    // (io::velocity_likely): then the motion blur's six pipelines are created beside the read,
+    // and the plan adds none;
+    // without the hint the plan creates them after the read.
+    let frame = moving_bar_frame(64, 48, (20, 30), [0.9, 0.4, 0.1], (1.0, 5.0), [6.0, 0.0], None, |x, _| {
+        [0.1 + (x % 5) as f32 * 0.1, 0.3, 0.2]
+    });
+    let camera = motion_camera(24.0, 0.5);
+    let p = plan(&frame, &camera);
+    assert!(p.runs("motion_blur"), "{}", p.explain());
+    for velocity in [true, false] {
+        let warm = gpu();
+        let renderer = Renderer::empty(&warm);
+        renderer.create_likely(&camera, velocity).expect("likely pipelines");
+        let likely = warm.pipelines_created();
+        renderer.prepare(&p).expect("the plan's pipelines");
+        let added = warm.pipelines_created() - likely;
+        // The gather, the still tiles' copy, and the edge resolve's tiles, neighbours, list and
+        // resolve.
+        assert_eq!(added, if velocity { 0 } else { 6 }, "velocity hint {velocity}");
+        renderer.render(&frame, &p, false).expect("render");
+        assert_validation_clean(&warm);
     }
 }
 

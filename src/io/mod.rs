@@ -31,7 +31,9 @@ pub mod sequence;
 pub mod usd_camera;
 
 pub use exr_read::STRUCTURAL_ATTRIBUTES;
-pub use exr_read::{describes_channels, load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within};
+pub use exr_read::{
+    describes_channels, load_passes, read_exr_channel, read_exr_rgba, read_exr_rgba_within, velocity_likely,
+};
 pub use exr_write::{
     encode_exr_channels, encode_exr_planes, encode_exr_rgba, rgba_planes, write_exr_channels, write_exr_planes_to_file,
     write_exr_rgba, ExrAttribute, ExrCompression, ExrWriteOptions,

@@ -89,10 +89,11 @@ pub trait Pass: Sized + Send + Sync + 'static {
     fn new(gpu: &Gpu) -> GpuResult<Self>;
 
     /// Whether a frame through `camera` will likely run this pass, judged before the frame is
-    /// read: a session then creates its pipelines ([`Pass::new`]) while the first frame's
-    /// files are still being read. Optional: a guess that is wrong costs CPU time beside the
-    /// read, or leaves the pipelines to be created once the plan is known.
-    fn likely(_camera: &Camera) -> bool {
+    /// read (`velocity`: the input files' headers name a velocity pass, `io::velocity_likely`):
+    /// a session then creates its pipelines ([`Pass::new`]) while the first frame's files are
+    /// still being read. Optional: a guess that is wrong costs CPU time beside the read, or
+    /// leaves the pipelines to be created once the plan is known.
+    fn likely(_camera: &Camera, _velocity: bool) -> bool {
         false
     }
 
@@ -159,7 +160,7 @@ pub struct PassEntry {
     pub inputs: &'static [Input],
     plan: fn(&PlanInput<'_>) -> PlannedPass,
     create: fn(&Gpu) -> GpuResult<Box<dyn RecordPass>>,
-    likely: fn(&Camera) -> bool,
+    likely: fn(&Camera, bool) -> bool,
     reach: fn(&(dyn Any + Send + Sync)) -> Option<f64>,
 }
 
@@ -244,8 +245,8 @@ impl PassEntry {
     }
 
     /// [`Pass::likely`].
-    pub fn likely(&self, camera: &Camera) -> bool {
-        (self.likely)(camera)
+    pub fn likely(&self, camera: &Camera, velocity: bool) -> bool {
+        (self.likely)(camera, velocity)
     }
 
     /// [`Pass::reach_px`] of one run of this pass.

@@ -66,11 +66,12 @@ impl Renderer {
         })
     }
 
-    /// Creates, side by side, the pipelines of the passes likely to run through `camera`
-    /// ([`crate::passes::Pass::likely`]) before a frame is known: a session does this while
+    /// Creates, side by side, the pipelines of the passes likely to run through `camera` on
+    /// inputs with (`velocity`) or without a velocity pass ([`crate::passes::Pass::likely`])
+    /// before a frame is known: a session does this while
     /// its first frame is still being read.
-    pub fn create_likely(&self, camera: &Camera) -> GpuResult<()> {
-        let likely: Vec<usize> = (0..PASS_ORDER.len()).filter(|&i| PASS_ORDER[i].likely(camera)).collect();
+    pub fn create_likely(&self, camera: &Camera, velocity: bool) -> GpuResult<()> {
+        let likely: Vec<usize> = (0..PASS_ORDER.len()).filter(|&i| PASS_ORDER[i].likely(camera, velocity)).collect();
         self.side_by_side(&likely, |i| self.pass(i)?.prepare_likely(camera))
     }
 

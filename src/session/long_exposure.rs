@@ -61,7 +61,9 @@ pub(super) fn render(
     let jobs = range.frames.iter().zip(held).map(|(&f, held)| (f, patterns.at_frame(settings, f), held));
     let stop = AtomicBool::new(false);
     let priority = IoPriority::default();
-    let mut session = Session::opening(&settings.gpu, &sensor, report.clone());
+    let velocity =
+        range.frames.first().is_some_and(|&f| crate::io::velocity_likely(&patterns.at_frame(settings, f).sources));
+    let mut session = Session::opening(&settings.gpu, &sensor, velocity, report.clone());
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.
         let read = read_ahead(scope, jobs, shot, crate::pipeline::planner::sensor_camera, &stop, &priority);

@@ -62,7 +62,8 @@ pub fn render_single(
     report: Arc<dyn Report>,
 ) -> Result<(Session, Vec<PathBuf>)> {
     let outputs = settings.outputs()?;
-    let mut session = Session::opening(&settings.gpu, shot.base(), report);
+    let velocity = crate::io::velocity_likely(&settings.sources);
+    let mut session = Session::opening(&settings.gpu, shot.base(), velocity, report);
     let rendered = frame::render_image(settings, shot, frame, &mut session)?;
     let paths = write_outputs(settings, outputs, &rendered)?;
     Ok((session, paths))
@@ -96,9 +97,10 @@ impl Drop for Session {
 impl Session {
     /// A session whose GPU starts opening now, on another thread: loading the Vulkan driver
     /// and creating the device (about 30-100 ms on lavapipe) overlap the first frame's EXR read,
-    /// and so does creating the pipelines of the passes `camera` will likely run
-    /// ([`Renderer::create_likely`]; on lavapipe about 30 ms of CPU for the tiled depth of field).
-    pub fn opening(options: &GpuOptions, camera: &Camera, report: Arc<dyn Report>) -> Session {
+    /// and so does creating the pipelines of the passes `camera` will likely run on inputs with
+    /// (`velocity`, `io::velocity_likely`) or without a velocity pass ([`Renderer::create_likely`];
+    /// on lavapipe about 30 ms of CPU for the tiled depth of field, 65 ms for the motion blur).
+    pub fn opening(options: &GpuOptions, camera: &Camera, velocity: bool, report: Arc<dyn Report>) -> Session {
         let gpu_options = options.clone();
         let camera = camera.clone();
         let opening = std::thread::Builder::new().name("gpu-open".into()).spawn(move || {
@@ -106,7 +108,7 @@ impl Session {
             let renderer = Renderer::empty(&gpu);
             // Only a head start: a pipeline that fails here is created again, and its error
             // reported, once the frame's plan asks for it.
-            let _ = renderer.create_likely(&camera);
+            let _ = renderer.create_likely(&camera, velocity);
             Ok((gpu, renderer))
         });
         // Without a thread, the first frame opens the GPU itself.

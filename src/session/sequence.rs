@@ -35,6 +35,9 @@ pub fn render_sequence(
     if let Some(&first) = range.frames.first() {
         drop(patterns.at_frame(settings, first).outputs()?);
     }
+    // The first frame's headers: whether its passes likely hold a velocity pass.
+    let velocity =
+        range.frames.first().is_some_and(|&f| crate::io::velocity_likely(&patterns.at_frame(settings, f).sources));
     let started = Instant::now();
     let total = range.frames.len();
     // Each frame's settings and skip check are made as the reader comes to it: nothing per
@@ -53,7 +56,7 @@ pub fn render_sequence(
         let read = read_ahead(scope, jobs, shot, Camera::clone, &stop, &priority);
         let (finish, finished) = sync_channel(1);
         let writer = scope.spawn(|| write_behind(finished, total, fail_fast, &stop, &priority, &*report));
-        let mut session = Session::opening(&settings.gpu, shot.base(), report.clone());
+        let mut session = Session::opening(&settings.gpu, shot.base(), velocity, report.clone());
         for ReadFrame { frame, read_s, settings: one, loaded } in read {
             if stop.load(Ordering::Relaxed) {
                 break;

@@ -122,7 +122,45 @@ pub static DECODER_PANICS: std::sync::atomic::AtomicUsize = std::sync::atomic::A
 /// converted to f32 at a time.
 pub(super) const LOADED_BYTES_PER_PX: u64 = 4 * (4 + 1 + 2 + 1);
 
+/// A channel's name as realcam reads it: `part.channel` in a multi-part file (unless the
+/// stored name already starts with the part's), else as stored.
+fn qualified_name(part: Option<&str>, multi_part: bool, bare: &str) -> String {
+    match part {
+        Some(p) if multi_part && !bare.starts_with(&format!("{p}.")) => format!("{p}.{bare}"),
+        _ => bare.to_string(),
+    }
+}
+
 impl ExrFile {
+    /// The file's channels from its headers alone, with no samples: what the channel names say
+    /// before the pixels are read (None where the headers do not read).
+    pub(super) fn names_only(path: &Path) -> Option<ExrFile> {
+        let meta = exr::meta::MetaData::read_from_file(path, false).ok()?;
+        let multi_part = meta.headers.len() > 1;
+        let mut chans = Vec::new();
+        for header in &meta.headers {
+            let part = header.own_attributes.layer_name.as_ref().map(|t| t.to_string());
+            for ch in &header.channels.list {
+                let bare = ch.name.to_string();
+                chans.push(Chan {
+                    name: qualified_name(part.as_deref(), multi_part, &bare),
+                    bare,
+                    size: (header.layer_size.0, header.layer_size.1),
+                    origin: (header.own_attributes.layer_position.0, header.own_attributes.layer_position.1),
+                    samples: FlatSamples::F32(Vec::new()),
+                });
+            }
+        }
+        Some(ExrFile {
+            path: path.into(),
+            display_window: (0, 0, 0, 0),
+            chans,
+            focal_length_mm: None,
+            chromaticities: None,
+            header_attributes: Vec::new(),
+        })
+    }
+
     pub(super) fn open(path: &Path, what: &str, budget: &MemoryBudget) -> Result<ExrFile, IoError> {
         let read_err = |source: std::io::Error| {
             if source.kind() == std::io::ErrorKind::NotFound {
@@ -197,12 +235,7 @@ impl ExrFile {
             let pos = layer.attributes.layer_position;
             for ch in layer.channel_data.list {
                 let bare = ch.name.to_string();
-                let name = match &part {
-                    Some(p) if multi_part && !bare.starts_with(&format!("{p}.")) => {
-                        format!("{p}.{bare}")
-                    }
-                    _ => bare.clone(),
-                };
+                let name = qualified_name(part.as_deref(), multi_part, &bare);
                 if ch.sampling != exr::math::Vec2(1, 1) {
                     return Err(IoError::Unsupported {
                         what: what.into(),

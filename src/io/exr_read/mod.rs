@@ -72,6 +72,18 @@ pub fn read_exr_channel(path: &Path, channel: &str) -> Result<Image, IoError> {
     Ok(interleave(&c, 1, 0.0))
 }
 
+/// Whether `src` will likely give a velocity pass, judged from the files' headers alone (a few
+/// kB read; the pixels are not): a velocity file or channels named, or channels in the colour
+/// file's headers that name a velocity format. A session creates the motion blur's pipelines
+/// beside the read when so. A file whose headers do not read says no; its read reports why.
+pub fn velocity_likely(src: &PassSources) -> bool {
+    if src.velocity_path.is_some() || src.velocity_channels.is_some() {
+        return true;
+    }
+    file::ExrFile::names_only(&src.color_path)
+        .is_some_and(|f| !velocity::velocity_candidates(&f, src.layer.as_deref()).is_empty())
+}
+
 /// Loads color, depth and (when present or required) velocity; see the module docs for
 /// the channel names and conventions.
 pub fn load_passes(src: &PassSources) -> Result<ScenePasses, IoError> {
@@ -188,6 +200,36 @@ mod tests {
         assert!(r.contains("Blender multilayer ViewLayer.Combined"), "{r}");
         assert!(r.contains("ViewLayer.Depth.Z"), "{r}");
         assert!(r.contains("ViewLayer.Vector.Z, ViewLayer.Vector.W") && r.contains("next (-Z, +W)"), "{r}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_headers_alone_say_whether_a_velocity_pass_is_likely() {
+        // What velocity_likely reads before the pixels must agree with what the read finds: a
+        // Blender multilayer with and without its Vector pass, Nuke's forward vectors in a file
+        // of its own channels, a velocity file named, and a file that does not read.
+        let dir = test_dir("read-velocity-likely");
+        let path = dir.join("passes.exr");
+        let colour = [
+            ("ViewLayer.Combined.R", 0.5),
+            ("ViewLayer.Combined.G", 0.5),
+            ("ViewLayer.Combined.B", 0.5),
+            ("ViewLayer.Depth.Z", 2.0),
+        ];
+        write(&path, &colour, true);
+        assert!(!velocity_likely(&sources(&path)));
+        assert!(load_passes(&sources(&path)).unwrap().velocity_px.is_none());
+        let mut with_vector = colour.to_vec();
+        with_vector.extend([("ViewLayer.Vector.X", 1.0), ("ViewLayer.Vector.Y", 2.0)]);
+        write(&path, &with_vector, true);
+        assert!(velocity_likely(&sources(&path)));
+        assert!(load_passes(&sources(&path)).unwrap().velocity_px.is_some());
+        write(&path, &[("R", 0.5), ("G", 0.5), ("B", 0.5), ("Z", 2.0), ("forward.u", 1.0), ("forward.v", 0.0)], false);
+        assert!(velocity_likely(&sources(&path)));
+        assert!(load_passes(&sources(&path)).unwrap().velocity_px.is_some());
+        let named = PassSources { velocity_path: Some(dir.join("v.exr")), ..sources(&dir.join("c.exr")) };
+        assert!(velocity_likely(&named));
+        assert!(!velocity_likely(&sources(&dir.join("missing.exr"))));
         let _ = std::fs::remove_dir_all(&dir);
     }
 

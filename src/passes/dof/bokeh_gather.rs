@@ -232,7 +232,7 @@ impl Pass for BokehGather {
     }
 
     /// The method the camera chose.
-    fn likely(camera: &Camera) -> bool {
+    fn likely(camera: &Camera, _velocity: bool) -> bool {
         camera.bokeh == BokehMode::Reference
     }
 

@@ -171,7 +171,7 @@ impl Pass for Coc {
 
     /// A camera with a lens (not the focus processor, which maps depth itself) will likely
     /// find some pixel defocused.
-    fn likely(camera: &Camera) -> bool {
+    fn likely(camera: &Camera, _velocity: bool) -> bool {
         camera.bokeh != BokehMode::Diffraction
     }
 

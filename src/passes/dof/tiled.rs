@@ -185,7 +185,7 @@ impl Pass for TiledDof {
     }
 
     /// The method the camera chose.
-    fn likely(camera: &Camera) -> bool {
+    fn likely(camera: &Camera, _velocity: bool) -> bool {
         camera.bokeh == BokehMode::Tiled
     }
 

@@ -16,7 +16,7 @@ use super::tiles::MbTilesPush;
 use super::{edges, gather, neighbor, still, tiles};
 use crate::gpu::shaders::motion::{MB_TILE_ARGS_MOVING, MB_TILE_ARGS_STILL, MB_TILE_ARGS_WORDS};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
-use crate::model::camera::MotionBlurMode;
+use crate::model::camera::{Camera, MotionBlurMode};
 use crate::optics::shutter::ShutterCurve;
 use crate::passes::barriers::{
     after_compute_write, args_for_indirect, buffer_after_compute_write, overwrite, write_after_write,
@@ -242,6 +242,11 @@ impl Pass for MotionBlur {
             params.samples_per_line
         );
         Decision::run(params, why)
+    }
+
+    /// The fast path chosen and the input's headers naming a velocity pass.
+    fn likely(camera: &Camera, velocity: bool) -> bool {
+        velocity && camera.motion.mode == MotionBlurMode::Fast
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {

@@ -12,7 +12,7 @@ use super::edges::{self, EdgeKernels};
 use super::ref_resolve::{MbRefResolveBindings, MbRefResolvePush, MbRefResolveShader};
 use super::ref_splat::{MbRefSplatBindings, MbRefSplatPush, MbRefSplatShader};
 use crate::gpu::{Gpu, GpuResult, Kernel, Recorder};
-use crate::model::camera::MotionBlurMode;
+use crate::model::camera::{Camera, MotionBlurMode};
 use crate::passes::barriers::{after_compute_write, overwrite, write_after_write};
 use crate::passes::scene::PlanInput;
 use crate::passes::{groups_for, Decision, FrameImages, Input, Pass};
@@ -65,6 +65,11 @@ impl Pass for MotionReference {
             travel_px / times as f64
         );
         Decision::run(params, why)
+    }
+
+    /// The reference chosen and the input's headers naming a velocity pass.
+    fn likely(camera: &Camera, velocity: bool) -> bool {
+        velocity && camera.motion.mode == MotionBlurMode::Reference
     }
 
     fn new(gpu: &Gpu) -> GpuResult<Self> {
