@@ -30,7 +30,8 @@ use super::{
     sprites, tile_gather, tiles,
 };
 use crate::gpu::shaders::dof_tiles::{
-    ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_LEVEL1, LEVELS, LIST_BLURRED_LEVEL1, LIST_COUNT,
+    ARGS_BIN_DISPATCH, ARGS_WORDS, BIN_CAPACITY, CLASS_LEVEL1, EXACT_MAX_RADIUS_PX, LEVELS, LIST_BLURRED_LEVEL1,
+    LIST_COUNT,
 };
 use crate::gpu::{Gpu, GpuBuffer, GpuError, GpuImage, GpuResult, Kernel, Recorder, SpecializedKernel};
 use crate::model::aperture::ApertureShape;
@@ -173,7 +174,7 @@ impl Pass for TiledDof {
             shape_radius_for(max_abs_coc_px),
         );
         let why = format!(
-            "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {TILE_SIZE} px; in-focus tiles copied, CoC radius <= {} px gathered exactly, larger on a pyramid of 1/2 to 1/16 resolution with highlight sprites; {}",
+            "largest CoC {max_abs_coc_px:.1} px > {VISIBLE_COC_PX} px: {}x{} tiles of {TILE_SIZE} px; in-focus tiles copied, CoC radius <= {} px gathered exactly (up to {EXACT_MAX_RADIUS_PX} px where a tile's level is coarser than the pixel's CoC), larger on a pyramid of 1/2 to 1/16 resolution with highlight sprites; {}",
             base.tiles()[0],
             base.tiles()[1],
             base.small_radius_px,
