@@ -56,7 +56,8 @@ fn main() {
 
     let compiler = shaderc::Compiler::new().expect("shaderc compiler");
     let mut errors = Vec::new();
-    let mut variant_stems: Vec<String> = Vec::new();
+    // The modules' names so far: a variant may take neither one of them nor a shader's stem.
+    let mut built: Vec<String> = Vec::new();
     let mut table =
         String::from("/// Every embedded shader: (name, SPIR-V bytes).\npub static ALL: &[(&str, &[u8])] = &[\n");
     for name in &names {
@@ -67,10 +68,10 @@ fn main() {
         let mut builds = vec![(stem_of(name).to_string(), None)];
         builds.extend(variants(&source));
         for (stem, define) in builds {
-            if variant_stems.contains(&stem) || (define.is_some() && stems.contains(&stem.as_str())) {
+            if built.contains(&stem) || (define.is_some() && stems.contains(&stem.as_str())) {
                 errors.push(format!("{shown}: a second shader is named {stem}"));
             }
-            variant_stems.push(stem.clone());
+            built.push(stem.clone());
             match compile(&compiler, &include_dir, &source, &shown, define.as_deref()) {
                 Ok(spirv) => {
                     let spv = out.join(format!("{stem}.spv"));

@@ -61,8 +61,7 @@ pub(super) fn render(
     let jobs = range.frames.iter().zip(held).map(|(&f, held)| (f, patterns.at_frame(settings, f), held));
     let stop = AtomicBool::new(false);
     let priority = IoPriority::default();
-    let velocity =
-        range.frames.first().is_some_and(|&f| crate::io::velocity_likely(&patterns.at_frame(settings, f).sources));
+    let velocity = patterns.first_frame_has_velocity(settings, range);
     let mut session = Session::opening(&settings.gpu, &sensor, velocity, report.clone());
     std::thread::scope(|scope| {
         // The next frame is read while this one renders; accumulating is quick beside both.

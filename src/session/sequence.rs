@@ -35,9 +35,7 @@ pub fn render_sequence(
     if let Some(&first) = range.frames.first() {
         drop(patterns.at_frame(settings, first).outputs()?);
     }
-    // The first frame's headers: whether its passes likely hold a velocity pass.
-    let velocity =
-        range.frames.first().is_some_and(|&f| crate::io::velocity_likely(&patterns.at_frame(settings, f).sources));
+    let velocity = patterns.first_frame_has_velocity(settings, range);
     let started = Instant::now();
     let total = range.frames.len();
     // Each frame's settings and skip check are made as the reader comes to it: nothing per

@@ -160,6 +160,13 @@ impl Patterns {
         })
     }
 
+    /// Whether the first frame of `range` likely holds a velocity pass, from its files' headers
+    /// ([`crate::io::velocity_likely`]): the session then creates the motion blur's pipelines
+    /// while that frame is read.
+    pub(super) fn first_frame_has_velocity(&self, settings: &RenderSettings, range: &FrameRange) -> bool {
+        range.frames.first().is_some_and(|&f| crate::io::velocity_likely(&self.at_frame(settings, f).sources))
+    }
+
     /// Every file the frames of `range` read: each frame's passes, and the files all share.
     pub(super) fn input_files(&self, settings: &RenderSettings, range: &FrameRange) -> InputFiles {
         let mut inputs = InputFiles::new(settings.other_input_files());
